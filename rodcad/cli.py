@@ -1,0 +1,53 @@
+"""The ``rodcad`` command line.
+
+Every subcommand lives in its own module exposing ``register(subparsers)``; the
+module's handler receives the parsed arguments and returns an exit code:
+0 done, 1 the job ran but failed, 2 bad input (problems printed as
+``FILE:LINE:COL: key.path: message`` on stderr, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from rodcad import __version__
+from rodcad.errors import InputError
+
+#: Modules that register subcommands, in the order ``--help`` lists them.
+COMMAND_MODULES = ("rodcad.commands.demo",)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rodcad",
+        description="Design and 3D-print hanging rod chains that settle into a chosen shape.",
+    )
+    parser.add_argument("--version", action="version", version=f"rodcad {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "handler", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.handler(args))
+    except InputError as err:
+        for problem in err.problems:
+            print(problem, file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("rodcad: interrupted; outputs left as they were", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Subcommands of the ``rodcad`` CLI, one module each."""

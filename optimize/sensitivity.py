@@ -58,4 +58,5 @@ def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:
     dtheta = dpsi[groups.gid]  # (N rods, N masses)
     steps = (1j * chain.lengths * np.exp(1j * theta))[:, None] * dtheta
     dp = np.vstack([np.zeros((1, n), complex), np.cumsum(steps, axis=0)])
+    dp[-1] = 0.0  # B is fixed; the cumulative sum leaves only round-off there
     return np.stack([dp.real, dp.imag], axis=1)

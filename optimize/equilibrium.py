@@ -275,6 +275,29 @@ def _dual_newton(P, Q, d, lam, length_scale, max_iter=200):
     return lam, W, max_iter, abs(grad) <= 1e-9 * length_scale
 
 
+def _close_at_kink(chain: Chain, groups: _Groups, W: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Exact closure when the dual optimum sits next to a kink.
+
+    When one group carries almost no load (|W_G| -> 0, e.g. a bottom rod that spans a
+    slack chain exactly horizontally) Newton converges slowly and stops a little short.
+    That group's angle is then undetermined by statics; turn it so the chain closes.
+    """
+    chords = np.add.reduceat(chain.lengths * np.exp(1j * theta), groups.starts)
+    miss = chords.sum() - chain.d
+    if abs(miss) <= 1e-14 * chain.total_length:
+        return theta
+    load = np.abs(W) / np.maximum(groups.chords, 1e-300)
+    g = int(np.argmin(load))
+    need = chain.d - (chords.sum() - chords[g])
+    if abs(abs(need) - groups.chords[g]) > 1e-6 * chain.total_length:
+        return theta  # not a kink: leave it to the KKT check
+    turn = np.angle(need / chords[g])
+    in_g = groups.gid == g
+    out = theta.copy()
+    out[in_g] += turn
+    return np.unwrap(out)
+
+
 def _multipliers(chain: Chain, theta: np.ndarray, lam: complex):
     """Per-rod generalised force f_k, joint moments mu_j and the end moment mu_{N-1}."""
     z = lam - chain.sigma
@@ -324,9 +347,19 @@ def _is_stable(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray) 
     cols = 1j * chords  # d(closure)/d(psi_G)
     C = np.vstack([cols.real, cols.imag])
     scale = np.max(np.abs(D)) if D.size else 1.0
-    if np.any(np.abs(D) <= 1e-12 * scale):
-        return False
     rank = np.linalg.matrix_rank(C, tol=1e-12 * chain.total_length)
+    if np.any(np.abs(D) <= 1e-9 * scale):
+        # an unloaded group: the inertia identity needs D invertible, so project
+        # explicitly (dense, affordable for the few hundred groups where this occurs)
+        if D.size > 500:
+            return False
+        from scipy.linalg import null_space
+
+        Z = null_space(C, rcond=1e-12)
+        if Z.shape[1] == 0:
+            return True
+        eig = np.linalg.eigvalsh(Z.T @ (D[:, None] * Z))
+        return bool(eig.min() > 1e-9 * scale)
     if D.size <= rank:
         return True  # the closure leaves no freedom: an isolated configuration
     n_neg_d = int(np.count_nonzero(D < 0))
@@ -581,6 +614,11 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
         )
         nnewton += k
         if not converged:
+            # a kink where the unloaded group just fits the gap: closure decides its angle
+            theta_k = _close_at_kink(chain, groups, W, groups.angles(W))
+            if kkt_residual(chain, theta_k, lam_try, side) < 1e-10:
+                converged = True
+        if not converged:
             # the dual optimum sits on a kink: a rigid group with no net load, whose
             # minimum lies on another branch. Step back and change one joint at a time.
             if last is None or mode == "single":
@@ -595,7 +633,7 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
             side = new
             continue
         lam = lam_try
-        theta = groups.angles(W)
+        theta = _close_at_kink(chain, groups, W, groups.angles(W))
         primal, pside, dual = _violations(chain, theta, lam, side)
         last = (side, theta, lam, primal, pside, dual)
         if not primal.any() and not dual.any():

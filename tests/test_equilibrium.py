@@ -368,3 +368,16 @@ def test_large_chain_closure_to_round_off():
     r = solve_equilibrium(rng.uniform(0.5, 1.5, n), rng.uniform(0.1, 2, n), (0, 0), (6000, 500))
     assert r.success and r.kkt_residual < 1e-9
     assert r.closure_error < 1e-11 * 10000
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.2, -0.5])
+def test_slack_chain_whose_bottom_rod_spans_the_anchors(tilt):
+    # five unit rods, anchors one unit apart: two rods hang straight down from each
+    # anchor and the middle rod lies parallel to AB, unloaded (a kink of the dual)
+    a = np.array([0.3, -0.2])
+    b = a + np.array([np.cos(tilt), np.sin(tilt)])
+    r = solve_equilibrium(np.ones(5), np.ones(5), a, b)
+    assert r.success and r.stable
+    assert r.closure_error < 1e-11
+    np.testing.assert_allclose(r.points[2] - r.points[0], [0, -2], atol=1e-6)
+    np.testing.assert_allclose(r.points[3] - r.points[2], b - a, atol=1e-6)

@@ -1,0 +1,81 @@
+"""Choose a rod type for every position so the joints' limits supply what the target needs.
+
+A free joint can only hold a convex (sagging, phi > 0) bend; a straight run or a
+concave bend needs a moment that only a stop can supply, so there the pair of
+adjacent types must stop exactly at the target bend. Limits belong to pairs of
+types (the left rod's end meets the right rod's start), so the choice is a
+shortest path over positions x types (Viterbi), O(N T^2).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["assign_types"]
+
+_BIG = 1e6
+
+
+def assign_types(
+    bends,
+    allowed,
+    pair_limits,
+    *,
+    stop_below: float = np.radians(0.5),
+    margin: float = np.radians(3.0),
+    type_cost=None,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Rod types for a target with the given bends.
+
+    Args:
+        bends: (N-1,) target bends phi_j in radians.
+        allowed: (N, T) boolean: type t may be used at position k (length, user constraints).
+        pair_limits: (T, T, 2) bend limits [lo, hi] in radians for left type t, right type u
+            (-inf / inf where the rods never collide).
+        stop_below: a joint bending less than this needs a stop (straight or concave).
+        margin: a free joint should stay this far inside its limits.
+        type_cost: optional (T,) small preference cost per type (default: catalog order).
+
+    Returns:
+        (types (N,), limits (N-1, 2) of the chosen pairs, cost). The cost is 0 when every
+        stop joint's limit equals its target bend and every free joint is clear of its
+        limits; it counts radians of mismatch otherwise (>= 1e6 where impossible).
+
+    Raises:
+        ValueError: some position allows no type.
+    """
+    phi = np.asarray(bends, dtype=float)
+    allowed = np.asarray(allowed, dtype=bool)
+    lim = np.asarray(pair_limits, dtype=float)
+    n, t = allowed.shape
+    if phi.shape != (n - 1,):
+        raise ValueError(f"bends must have shape ({n - 1},), got {phi.shape}")
+    if lim.shape != (t, t, 2):
+        raise ValueError(f"pair_limits must have shape ({t}, {t}, 2), got {lim.shape}")
+    empty = np.flatnonzero(~allowed.any(axis=1))
+    if empty.size:
+        raise ValueError(f"no rod type is allowed at position {empty[0]}")
+    pref = 1e-6 * np.arange(t) if type_cost is None else np.asarray(type_cost, float)
+    lo, hi = lim[..., 0], lim[..., 1]
+    node = np.where(allowed, pref[None, :], np.inf)
+    cost = node[0].copy()
+    back = np.zeros((n, t), dtype=int)
+    for j in range(n - 1):
+        if phi[j] < stop_below:
+            # needs a stop at exactly phi: mismatch of the upper limit, or impossible
+            edge = np.where(np.isfinite(hi), np.abs(hi - phi[j]), _BIG)
+            edge = edge + np.where(phi[j] < lo, _BIG * (lo - phi[j] + 1), 0.0)
+        else:
+            over = np.maximum(phi[j] - (hi - margin), 0.0)
+            under = np.maximum((lo + margin) - phi[j], 0.0)
+            edge = 10.0 * (over + under) + np.where((phi[j] > hi) | (phi[j] < lo), _BIG, 0.0)
+        total = cost[:, None] + edge  # (left type, right type)
+        back[j + 1] = np.argmin(total, axis=0)
+        cost = total[back[j + 1], np.arange(t)] + node[j + 1]
+    types = np.zeros(n, dtype=int)
+    types[-1] = int(np.argmin(cost))
+    best = float(cost[types[-1]])
+    for k in range(n - 1, 0, -1):
+        types[k - 1] = back[k, types[k]]
+    limits = lim[types[:-1], types[1:]] if n > 1 else np.zeros((0, 2))
+    return types, limits, best - float(np.sum(pref[types]))

@@ -1,0 +1,270 @@
+"""Place rod joints on a target curve: chord walk with the catalog's rod lengths.
+
+The target is a dense polyline from anchor A to anchor B. Rods are rigid, so the
+joints can lie on the curve only where the lengths allow; corners of the target
+(a triangle's apex) become joints when the lengths between them can be mixed to
+fit, and a final least-squares step moves the joints as little as possible off
+the curve so that the chain closes exactly on B. The discretisation error (how
+far the chain polyline is from the curve) is reported apart from the physics error.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.spatial import cKDTree
+
+__all__ = ["Discretization", "discretize", "resample", "find_corners"]
+
+
+@dataclass
+class Discretization:
+    """Joints placed on a target curve.
+
+    Attributes:
+        points: (N+1, 2) joint positions, points[0] = A, points[-1] = B exactly.
+        lengths: (N,) rod lengths used (from the allowed set).
+        joint_error: max distance of a joint from the curve.
+        curve_error: max distance between the curve and the chain polyline (both ways).
+        corners: indices of joints placed on detected corners of the target.
+    """
+
+    points: np.ndarray
+    lengths: np.ndarray
+    joint_error: float
+    curve_error: float
+    corners: list[int]
+
+
+def resample(curve: np.ndarray, count: int = 4000) -> np.ndarray:
+    """The polyline resampled at `count` points evenly spaced in arc length."""
+    curve = np.asarray(curve, dtype=float)
+    seg = np.hypot(*np.diff(curve, axis=0).T)
+    keep = np.concatenate([[True], seg > 0])
+    curve = curve[keep]
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(curve, axis=0).T))])
+    t = np.linspace(0, s[-1], count)
+    return np.column_stack([np.interp(t, s, curve[:, 0]), np.interp(t, s, curve[:, 1])])
+
+
+def find_corners(curve: np.ndarray, angle_deg: float = 25.0) -> list[int]:
+    """Vertices of a polyline where it turns by more than `angle_deg` at one vertex."""
+    d = np.diff(curve, axis=0)
+    a = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+    turn = np.abs(np.diff(a))
+    return [int(i) + 1 for i in np.flatnonzero(turn > np.radians(angle_deg))]
+
+
+def _walk(curve: np.ndarray, s: np.ndarray, start_s: float, lengths) -> tuple[np.ndarray, float]:
+    """Chord walk along the polyline from arc length start_s; returns joints and end arc length."""
+    pts = [np.interp(start_s, s, curve[:, 0]), np.interp(start_s, s, curve[:, 1])]
+    p = np.array(pts)
+    i = int(np.searchsorted(s, start_s, side="right")) - 1
+    out = [p]
+    cur_s = start_s
+    for l in lengths:
+        # first polyline point beyond cur_s at distance >= l from p
+        dist = np.hypot(*(curve[i + 1:] - p).T)
+        j = np.flatnonzero(dist >= l)
+        if j.size == 0:  # past the end of the curve: carry on straight toward its end
+            direction = curve[-1] - p
+            norm = np.hypot(*direction)
+            direction = direction / norm if norm > 0 else np.array([1.0, 0.0])
+            p = p + l * direction
+            out.append(p)
+            cur_s = s[-1] + 1.0
+            i = len(curve) - 2
+            continue
+        j = int(j[0]) + i + 1
+        a, b = curve[j - 1], curve[j]
+        # solve |a + t (b - a) - p| = l on the segment
+        u = b - a
+        w = a - p
+        qa, qb, qc = u @ u, 2 * u @ w, w @ w - l * l
+        disc = max(qb * qb - 4 * qa * qc, 0.0)
+        t = (-qb + np.sqrt(disc)) / (2 * qa)
+        t = min(max(t, 0.0), 1.0)
+        p = a + t * u
+        cur_s = s[j - 1] + t * (s[j] - s[j - 1])
+        i = j - 1
+        out.append(p)
+    return np.array(out), cur_s
+
+
+def _piece_sequence(curve, s, s0, s1, allowed, preferred, max_candidates=400):
+    """Rod lengths whose chord walk from arc length s0 ends closest to arc length s1."""
+    arc = s1 - s0
+    end = np.array([np.interp(s1, s, curve[:, 0]), np.interp(s1, s, curve[:, 1])])
+    start = np.array([np.interp(s0, s, curve[:, 0]), np.interp(s0, s, curve[:, 1])])
+    chord = float(np.hypot(*(end - start)))
+    allowed = sorted(set(float(x) for x in allowed))
+    lmin = min(allowed)
+    nmax = int(np.ceil(arc / lmin)) + 1
+    cands = []
+    for counts in itertools.product(range(nmax + 1), repeat=len(allowed)):
+        total = sum(c * l for c, l in zip(counts, allowed))
+        if total <= 0 or total < chord - 0.5 * lmin or total > arc + 0.5 * lmin:
+            continue
+        cands.append((arc - total, counts))
+        if len(cands) > 20000:
+            break
+    if not cands:
+        return None
+    cands.sort(key=lambda c: (abs(c[0]), -c[1][allowed.index(preferred)] if preferred in allowed else 0))
+    best = None
+    for _, counts in cands[:max_candidates]:
+        seq = _spread(counts, allowed, preferred)
+        joints, _ = _walk(curve, s, s0, seq)
+        gap = float(np.hypot(*(joints[-1] - end)))
+        n_kinds = sum(1 for c in counts if c)
+        key = (round(gap, 9), n_kinds, -counts[allowed.index(preferred)] if preferred in allowed else 0)
+        if best is None or key < best[0]:
+            best = (key, seq)
+    return None if best is None else best[1]
+
+
+def _spread(counts, allowed, preferred) -> list[float]:
+    """A sequence with the given counts, each length spread evenly along the piece."""
+    items = []
+    for c, l in zip(counts, allowed):
+        for k in range(c):
+            items.append(((k + 0.5) / c, 0 if l == preferred else 1, l))
+    items.sort()
+    return [l for _, _, l in items]
+
+
+def discretize(
+    curve,
+    allowed_lengths,
+    *,
+    preferred: float | None = None,
+    corner_angle_deg: float = 25.0,
+) -> Discretization:
+    """Joints on the curve for a chain of rods with lengths from `allowed_lengths`.
+
+    Args:
+        curve: (M, 2) polyline from A (first point) to B (last point), dense or not.
+        allowed_lengths: rod lengths that may be used (e.g. the catalog's 20, 30, 40 mm).
+        preferred: the length to use most (default: the longest that gives at least
+            eight rods, else the shortest).
+        corner_angle_deg: a vertex of the given polyline turning more than this is a corner
+            that should carry a joint.
+
+    Returns:
+        Discretization with points[0] = A and points[-1] = B exactly.
+
+    Raises:
+        ValueError: the curve is degenerate or the anchors are farther apart than
+            any chain of these rods along the curve.
+    """
+    curve = np.asarray(curve, dtype=float)
+    if curve.ndim != 2 or curve.shape[1] != 2 or curve.shape[0] < 2 or not np.all(np.isfinite(curve)):
+        raise ValueError("curve must be a finite (M, 2) polyline with at least two points")
+    allowed = sorted(set(float(x) for x in np.atleast_1d(allowed_lengths)))
+    if not allowed or min(allowed) <= 0:
+        raise ValueError("allowed_lengths must be positive")
+    corners_in = find_corners(curve, corner_angle_deg)
+    # arc length of the given vertices, then a dense copy for walking
+    s_given = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(curve, axis=0).T))])
+    total = s_given[-1]
+    if total <= 0:
+        raise ValueError("the target curve has zero length")
+    dense = resample(curve, max(4000, 20 * len(curve)))
+    s = np.linspace(0, total, len(dense))
+    # keep corners exact in the dense copy
+    for c in corners_in:
+        k = int(np.argmin(np.abs(s - s_given[c])))
+        dense[k] = curve[c]
+        s[k] = s_given[c]
+    if preferred is None:
+        fits = [l for l in allowed if total / l >= 8]
+        preferred = max(fits) if fits else min(allowed)
+    breaks = [0.0] + [s_given[c] for c in corners_in] + [total]
+    seq: list[float] = []
+    corner_joints: list[int] = []
+    for s0, s1 in zip(breaks, breaks[1:]):
+        piece = _piece_sequence(dense, s, s0, s1, allowed, preferred)
+        if piece is None:
+            raise ValueError(
+                f"no combination of rod lengths {allowed} fits the piece of the target between "
+                f"arc lengths {s0:.4g} and {s1:.4g} (length {s1 - s0:.4g}); allow shorter rods"
+            )
+        seq.extend(piece)
+        corner_joints.append(len(seq))
+    corner_joints = corner_joints[:-1]
+    lengths = np.array(seq)
+    joints, _ = _walk(dense, s, 0.0, lengths)
+    a, b = curve[0], curve[-1]
+    if lengths.sum() < np.hypot(*(b - a)):
+        raise ValueError(
+            f"anchors are {np.hypot(*(b - a)) - lengths.sum():.4g} farther apart than the chain is long"
+        )
+    if np.hypot(*(joints[-1] - b)) <= 1e-9 * lengths.sum():
+        points = joints.copy()  # the walk already lands on B: keep the joints on the curve
+        points[-1] = b
+    else:
+        points = _close(joints, lengths, a, b, dense)
+    joint_err = float(_point_polyline_distance(points, curve).max())
+    curve_err = _polyline_distance(dense, points)
+    return Discretization(points, lengths, joint_err, curve_err, corner_joints)
+
+
+def _close(joints, lengths, a, b, dense) -> np.ndarray:
+    """Least-squares move of the joints toward the curve with exact closure on B."""
+    tree = cKDTree(dense)
+    d = np.diff(joints, axis=0)
+    theta0 = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+    span_scale = float(lengths.sum())
+
+    def pts(theta):
+        steps = lengths[:, None] * np.column_stack([np.cos(theta), np.sin(theta)])
+        return a + np.vstack([np.zeros(2), np.cumsum(steps, axis=0)])
+
+    def resid(theta):
+        p = pts(theta)
+        off = tree.query(p[1:-1])[0]
+        return np.concatenate([off, 1e3 * (p[-1] - b)]) / span_scale
+
+    sol = least_squares(resid, theta0, method="trf", xtol=1e-14, ftol=1e-14, gtol=1e-14,
+                        max_nfev=200 * len(lengths))
+    theta = sol.x
+    # exact closure: minimum-norm Newton steps on the two closure equations
+    for _ in range(50):
+        p_end = a + np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)])
+        r = p_end - b
+        if np.hypot(*r) <= 1e-13 * span_scale:
+            break
+        J = np.vstack([-lengths * np.sin(theta), lengths * np.cos(theta)])
+        theta = theta - np.linalg.lstsq(J, r, rcond=None)[0]
+    out = pts(theta)
+    miss = float(np.hypot(*(out[-1] - b)))
+    if miss > 1e-9 * span_scale:
+        raise ValueError(
+            f"the rods ({len(lengths)} of lengths {sorted(set(lengths.tolist()))}) cannot close "
+            f"on anchor B along this curve (they miss it by {miss:.4g}); allow other lengths"
+        )
+    out[-1] = b
+    return out
+
+
+def _point_polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarray:
+    """Exact distance from each point to the polyline (segments, not samples)."""
+    a, b = curve[:-1], curve[1:]
+    ab = b - a
+    denom = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    out = np.empty(len(points))
+    for i, p in enumerate(points):
+        t = np.clip(np.einsum("ij,ij->i", p - a, ab) / denom, 0.0, 1.0)
+        out[i] = np.min(np.hypot(*(a + t[:, None] * ab - p).T))
+    return out
+
+
+def _polyline_distance(curve: np.ndarray, chain: np.ndarray) -> float:
+    """Symmetric (Hausdorff) distance between the dense curve and the chain polyline."""
+    dense_chain = resample(chain, max(2000, 40 * len(chain)))
+    d1 = cKDTree(dense_chain).query(curve)[0].max()
+    d2 = cKDTree(curve).query(dense_chain)[0].max()
+    return float(max(d1, d2))

@@ -17,7 +17,7 @@ from rodcad import __version__
 from rodcad.errors import InputError
 
 #: Modules that register subcommands, in the order ``--help`` lists them.
-COMMAND_MODULES = ("rodcad.commands.demo",)
+COMMAND_MODULES = ("rodcad.commands.demo", "rodcad.commands.catalog")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,300 @@
+"""``rodcad catalog``: check, export and describe rod catalogs.
+
+* ``rodcad catalog check CATALOG [--json]`` validates a catalog and prints, per
+  rod type, its length, joint limits, solid mass, mass range and centre of mass,
+  then the limits of every ordered pair of types that can be joined.
+* ``rodcad catalog export CATALOG -o DIR`` writes ``DIR/<type>.step`` per type.
+* ``rodcad catalog schema [-o FILE]`` prints (or writes) the JSON Schema of
+  catalog files.
+
+CATALOG is a path or the name of a shipped catalog (e.g. ``pla-pinned``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from rodcad.cache import DiskCache
+from rodcad.catalog import Catalog, catalog_schema, load_catalog
+from rodcad.errors import InputError, Problem
+
+__all__ = ["check_report", "register", "schema_text"]
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``catalog`` command and its subcommands."""
+    parser = subparsers.add_parser(
+        "catalog",
+        help="check, export and describe rod catalogs",
+        description="Check, export and describe rod catalogs (YAML files of rod families).",
+    )
+    sub = parser.add_subparsers(dest="catalog_command", metavar="SUBCOMMAND")
+
+    def usage(args: argparse.Namespace) -> int:
+        parser.print_help(sys.stderr)
+        return 2
+
+    parser.set_defaults(handler=usage)
+
+    check = sub.add_parser(
+        "check",
+        help="validate a catalog; print limits, masses and mass ranges per rod type",
+        description="Validate a catalog and print, per rod type, its length, joint limits, solid mass, "
+        "mass range and centre of mass, and the joint limits of every ordered pair of types. "
+        "Results derived from the solids are cached on disk ($RODCAD_CACHE_DIR, default "
+        "~/.cache/rodcad).",
+    )
+    check.add_argument("catalog", metavar="CATALOG", help="catalog file, or name of a shipped catalog")
+    check.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    _common(check)
+    check.set_defaults(handler=_check)
+
+    export = sub.add_parser(
+        "export",
+        help="write one STEP file per rod type",
+        description="Write DIR/<type>.step for every rod type of the catalog, in the rod frame: first "
+        "hinge axis through the origin, second through (length, 0, 0), axes along +z (mm).",
+    )
+    export.add_argument("catalog", metavar="CATALOG", help="catalog file, or name of a shipped catalog")
+    export.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    export.set_defaults(handler=_export)
+
+    schema = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of catalog files",
+        description="Print the JSON Schema of catalog files (generated from the validator).",
+    )
+    schema.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    schema.set_defaults(handler=_schema)
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="worker processes for uncached computations (default: number of CPUs)")
+    p.add_argument("--no-cache", action="store_true", help="recompute everything, do not use the disk cache")
+
+
+# --------------------------------------------------------------------------- check
+
+
+def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache | None = None,
+                 progress: bool = False) -> dict[str, Any]:
+    """Everything ``catalog check --json`` prints, as a dict.
+
+    Args:
+        catalog: a loaded catalog.
+        jobs: worker processes for uncached work.
+        cache: disk cache (default location when None).
+        progress: report progress on stderr.
+
+    Returns:
+        ``{"catalog", "file", "units", "types": [...], "pairs": [...],
+        "problems": [...]}``; pairs that cannot be assembled (the rods
+        interfere at every angle) are listed under "problems", not "pairs".
+
+    Raises:
+        InputError: a rod type's parameters make no valid solid.
+    """
+    from rodcad import limits as _limits
+    from rodcad import massrange as _massrange
+    from rodcad.limits import all_pair_limits
+    from rodcad.massrange import mass_infos
+
+    cache = cache if cache is not None else DiskCache()
+    t0 = time.perf_counter()
+    # Build every solid that has work left before starting workers, so that
+    # parameters making no valid solid are reported as bad input (cached
+    # results were computed from solids that built fine).
+    needed = {t.name: t for t in catalog.types if not _massrange.is_cached(t, cache)}
+    for a, b in catalog.pairs():
+        if not _limits.is_cached(a, b, cache):
+            needed.setdefault(a.name, a)
+            needed.setdefault(b.name, b)
+    for t in needed.values():
+        t.solid()
+    masses = mass_infos(list(catalog.types), jobs=jobs, cache=cache,
+                        progress=_progress("mass ranges") if progress else None)
+    limits = all_pair_limits(catalog, jobs=jobs, cache=cache,
+                             progress=_progress("pair limits") if progress else None)
+    types = []
+    for t in catalog.types:
+        m = masses[t.name]
+        entry: dict[str, Any] = {
+            "name": t.name,
+            "family": t.family,
+            "length": t.length,
+            "scale": t.scale,
+            "curvature": t.curvature,
+            "volume": round(m.volume, 3),
+            "solid_mass": round(m.solid_mass, 4),
+            "mass_range": [round(m.m_min, 4), round(m.m_max, 4)],
+            "com": [round(m.com[0], 4), round(m.com[1], 4)],
+            "cavities": {"radius": round(m.cavity_radius, 4), "count": m.cavity_count},
+            "balls": ({"count": m.ball_count, "diameter": t.balls.diameter, "mass_each": round(t.balls.mass, 4)}
+                      if t.balls is not None else None),
+        }
+        self_pair = limits.get((t.name, t.name))
+        entry["self_limits_deg"] = _limits_json(self_pair) if self_pair and self_pair.assemblable else None
+        types.append(entry)
+    pairs = []
+    problems = []
+    for (left, right), r in limits.items():
+        if r.assemblable:
+            pairs.append({"left": left, "right": right, "limits_deg": _limits_json(r)})
+        else:
+            problems.append(f"rod types {left!r} and {right!r} interfere at every angle: they cannot be joined")
+    computed = sum(1 for r in limits.values() if not r.cached)
+    return {
+        "catalog": catalog.name,
+        "file": str(catalog.path) if catalog.path else None,
+        "units": {"length": "mm", "mass": "g", "angle": "deg", "volume": "mm^3"},
+        "types": types,
+        "pairs": pairs,
+        "problems": problems,
+        "stats": {"pairs_computed": computed, "pairs_cached": len(limits) - computed,
+                  "seconds": round(time.perf_counter() - t0, 3)},
+    }
+
+
+def _limits_json(r: Any) -> list[float | None]:
+    return [None if x is None else round(x, 3) for x in r.limits_deg]
+
+
+def _progress(what: str) -> Any:
+    def report(done: int, total: int) -> None:
+        end = "\n" if done == total else ""
+        print(f"\rrodcad: computing {what}: {done}/{total}", end=end, file=sys.stderr, flush=True)
+
+    return report
+
+
+def _check(args: argparse.Namespace) -> int:
+    catalog = load_catalog(args.catalog)
+    cache = DiskCache(enabled=not args.no_cache)
+    report = check_report(catalog, jobs=args.jobs, cache=cache, progress=sys.stderr.isatty())
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        print(_format_report(report))
+    for problem in report["problems"]:
+        print(f"rodcad: {problem}", file=sys.stderr)
+    return 1 if report["problems"] else 0
+
+
+def _fmt_limit(x: float | None) -> str:
+    if x is None:
+        return "none"
+    text = f"{x:.2f}"
+    return "0.00" if text == "-0.00" else text
+
+
+def _fmt_limits(lims: list[float | None] | None) -> str:
+    if lims is None:
+        return "-"
+    return f"[{_fmt_limit(lims[0])}, {_fmt_limit(lims[1])}]"
+
+
+def _format_report(report: dict[str, Any]) -> str:
+    """The human-readable form of :func:`check_report`."""
+    types = report["types"]
+    lines = [
+        f"catalog {report['catalog']} ({report['file']}): {len(types)} rod types, "
+        f"{len(report['pairs'])} joinable ordered pairs",
+        "",
+    ]
+    header = ["type", "length", "solid mass", "mass range", "com (along, perp)", "limits with itself",
+              "cavities", "balls"]
+    rows = []
+    for t in types:
+        balls = t["balls"]
+        rows.append([
+            t["name"],
+            f"{t['length']:g} mm",
+            f"{t['solid_mass']:.3f} g",
+            f"[{t['mass_range'][0]:.3f}, {t['mass_range'][1]:.3f}] g",
+            f"({t['com'][0]:.2f}, {t['com'][1]:.2f}) mm",
+            _fmt_limits(t["self_limits_deg"]) + " deg" if t["self_limits_deg"] else "-",
+            f"{t['cavities']['count']} x r{t['cavities']['radius']:.2f}" if t["cavities"]["count"] else "none",
+            f"{balls['count']} x {balls['diameter']:g} mm" if balls else "none",
+        ])
+    widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
+    lines.append("  ".join(h.ljust(w) for h, w in zip(header, widths)).rstrip())
+    for r in rows:
+        lines.append("  ".join(str(c).ljust(w) for c, w in zip(r, widths)).rstrip())
+    lines.append("")
+    lines.append("joint limits [lo, hi] in degrees (bend phi > 0 sags; 'none': no collision up to 180),")
+    lines.append("per ordered pair left -> right:")
+    by_left: dict[str, dict[str, list[str]]] = {}
+    for p in report["pairs"]:
+        group = by_left.setdefault(p["left"], {})
+        group.setdefault(_fmt_limits(p["limits_deg"]), []).append(p["right"])
+    name_w = max((len(n) for n in by_left), default=0)
+    for left, groups in by_left.items():
+        for lims, rights in groups.items():
+            lines.append(f"  {left.ljust(name_w)} -> {lims}: {' '.join(rights)}")
+    stats = report["stats"]
+    lines.append("")
+    lines.append(f"({stats['pairs_computed']} pairs computed, {stats['pairs_cached']} from cache, "
+                 f"{stats['seconds']:.1f} s)")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- export
+
+
+def _export(args: argparse.Namespace) -> int:
+    from rodcad import geometry
+
+    catalog = load_catalog(args.catalog)
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise InputError([Problem(str(out), 0, 0, "", "exists and is not a directory")])
+    solids = [(t, t.solid()) for t in catalog.types]  # all or nothing: build before writing
+    created = not out.exists()
+    staged: list[tuple[Path, Path]] = []
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=out, prefix=".rodcad-export-") as tmp:
+            for t, solid in solids:
+                part = Path(tmp) / f"{t.name}.step"
+                geometry.export_step(solid, part, t.name)
+                staged.append((part, out / f"{t.name}.step"))
+            for part, final in staged:
+                os.replace(part, final)
+    except OSError as err:
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        print(f"rodcad: cannot write {out}: {err.strerror or err}", file=sys.stderr)
+        return 1
+    for t, solid in solids:
+        print(f"{out / (t.name + '.step')}: {t.name}, length {t.length:g} mm, volume {solid.volume:.3f} mm^3")
+    return 0
+
+
+# --------------------------------------------------------------------------- schema
+
+
+def schema_text() -> str:
+    """The catalog JSON Schema as written to ``catalogs/catalog.schema.json``."""
+    return json.dumps(catalog_schema(), indent=2) + "\n"
+
+
+def _schema(args: argparse.Namespace) -> int:
+    text = schema_text()
+    if args.output:
+        try:
+            Path(args.output).write_text(text, encoding="utf-8")
+        except OSError as err:
+            print(f"rodcad: cannot write {args.output}: {err.strerror or err}", file=sys.stderr)
+            return 1
+    else:
+        sys.stdout.write(text)
+    return 0

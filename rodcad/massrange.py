@@ -1,0 +1,395 @@
+"""Mass properties and the achievable mass range of a rod type.
+
+A rod's mass is tuned by removing plastic (closed spherical cavities) or by
+adding metal (balls in closed sockets, inserted at a print pause). This module
+computes, from the exact B-rep:
+
+* the plain solid's volume, mass and centre of mass;
+* ``m_min``: the solid less the most plastic that equal spherical cavities can
+  remove while keeping the catalog's minimum wall from every face (outer faces
+  and pin holes) and between cavities;
+* ``m_max``: the solid with the most balls it can hold (socket = ball diameter
+  + fit clearance, minimum wall around every socket), plus the plastic left.
+
+Layouts are deterministic: sphere centres on a lattice (cubic, or hexagonal
+rows in the chain plane) of pitch ``2 r + wall`` centred on the rod's centre of
+mass, keeping a site only when all its mirror images fit too (mirror planes through the centre of mass across x, y
+and z, or the point reflection through the com axis combined with the z
+mirror; whichever keeps more). The removed or added volume is then centred on
+the centre of mass, so **the com does not move across the mass range**.
+
+The building blocks (:func:`lattice_sites`, :func:`symmetric_subset`,
+:func:`sphere_layout`, :func:`max_cavity_layout`, :func:`max_ball_layout`,
+:class:`rodcad.geometry.Clearance`) are meant to be reused by the fabrication
+step that places the real cavities (e.g. Poisson-disk sampling in the same core
+with a tuned radius). Units: mm, mm^3, g; densities g/cm^3.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rodcad.cache import DiskCache, make_key
+from rodcad.parallel import default_jobs, worker_pool
+
+if TYPE_CHECKING:  # pragma: no cover
+    from rodcad.catalog import RodType
+
+__all__ = [
+    "MASSRANGE_VERSION",
+    "MIN_CAVITY_RADIUS",
+    "LATTICES",
+    "SYMMETRIES",
+    "MassInfo",
+    "SphereLayout",
+    "lattice_sites",
+    "mass_info",
+    "mass_infos",
+    "max_ball_layout",
+    "max_cavity_layout",
+    "sphere_layout",
+    "symmetric_subset",
+]
+
+#: Bump when results change (invalidates cached mass ranges).
+MASSRANGE_VERSION = "1"
+
+#: Smallest cavity radius considered (mm): 1 mm cavities still print as voids.
+MIN_CAVITY_RADIUS = 0.5
+
+#: Radii tried for cavities shrink by this factor from the largest that could fit.
+RADIUS_STEP = 0.93
+
+#: Symmetry groups a layout may have, each keeping its centroid on the com:
+#: 'mirror-xyz' (mirrors across x, y and z through the com) and 'point-xy'
+#: (half turn about the com axis parallel to z, plus the z mirror).
+SYMMETRIES = ("mirror-xyz", "point-xy")
+
+Clearance = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class SphereLayout:
+    """Equal spheres inside a rod.
+
+    Attributes:
+        radius: sphere radius (mm); 0 for an empty layout.
+        centers: (n, 3) centres in the rod frame (mm).
+        symmetry: the symmetry group kept (one of :data:`SYMMETRIES`) or ''.
+        lattice: the lattice kind (one of :data:`LATTICES`) or ''.
+    """
+
+    radius: float
+    centers: np.ndarray = field(repr=False)
+    symmetry: str = ""
+    lattice: str = ""
+
+    @property
+    def count(self) -> int:
+        return int(len(self.centers))
+
+    @property
+    def sphere_volume(self) -> float:
+        """Volume of one sphere (mm^3)."""
+        return 4.0 / 3.0 * math.pi * self.radius**3
+
+    @property
+    def volume(self) -> float:
+        """Total volume of the spheres (mm^3)."""
+        return self.count * self.sphere_volume
+
+    @classmethod
+    def empty(cls) -> SphereLayout:
+        return cls(0.0, np.zeros((0, 3)), "")
+
+
+#: Lattices tried: 'cubic', and 'hex' (hexagonal rows in the chain plane,
+#: stacked along z), which fits two staggered rows where a square grid fits one.
+LATTICES = ("cubic", "hex")
+
+
+def lattice_sites(bounds: tuple[Sequence[float], Sequence[float]], center: Sequence[float], pitch: float,
+                  offset: Sequence[float], kind: str = "cubic") -> np.ndarray:
+    """Points of a lattice of nearest-neighbour distance ``pitch`` inside ``bounds``.
+
+    The lattice is ``center + (i + ox) a1 + (j + oy) a2 + (k + oz) a3`` with
+    a1 = (p, 0, 0), a3 = (0, 0, p) and a2 = (0, p, 0) ('cubic') or
+    (p/2, p sqrt(3)/2, 0) ('hex'). With offsets 0 or 0.5 it is symmetric under
+    the half turn about ``center`` (and, for some offsets, under mirrors).
+
+    Args:
+        bounds: ((xmin, ymin, zmin), (xmax, ymax, zmax)) in mm.
+        center: the lattice's centre of symmetry (mm).
+        pitch: nearest-neighbour distance (mm).
+        offset: (ox, oy, oz) in lattice units.
+        kind: 'cubic' or 'hex'.
+
+    Returns:
+        (n, 3) array of points.
+    """
+    if kind not in LATTICES:
+        raise ValueError(f"unknown lattice {kind!r} (expected one of {', '.join(LATTICES)})")
+    lo = np.asarray(bounds[0], dtype=float)
+    hi = np.asarray(bounds[1], dtype=float)
+    c = np.asarray(center, dtype=float)
+    if np.any(hi < lo):
+        return np.zeros((0, 3))
+    a2y = pitch * (math.sqrt(3) / 2 if kind == "hex" else 1.0)
+    a2x = pitch / 2 if kind == "hex" else 0.0
+
+    def span(lo_: float, hi_: float, step: float, off: float) -> np.ndarray:
+        return np.arange(math.floor(lo_ / step - off) - 1, math.ceil(hi_ / step - off) + 2) + off
+
+    js = span(lo[1] - c[1], hi[1] - c[1], a2y, offset[1])
+    ks = span(lo[2] - c[2], hi[2] - c[2], pitch, offset[2])
+    shift = abs(a2x) * (np.abs(js).max() if len(js) else 0)
+    is_ = span(lo[0] - c[0] - shift, hi[0] - c[0] + shift, pitch, offset[0])
+    ii, jj, kk = np.meshgrid(is_, js, ks, indexing="ij")
+    pts = np.stack([c[0] + ii * pitch + jj * a2x, c[1] + jj * a2y, c[2] + kk * pitch], axis=-1).reshape(-1, 3)
+    inside = np.all((pts >= lo - 1e-9) & (pts <= hi + 1e-9), axis=1)
+    return pts[inside]
+
+
+def _images(points: np.ndarray, center: Sequence[float], symmetry: str) -> list[np.ndarray]:
+    c = np.asarray(center, dtype=float)
+    flips = {
+        "mirror-xyz": [(-1, 1, 1), (1, -1, 1), (-1, -1, 1), (1, 1, -1), (-1, 1, -1), (1, -1, -1), (-1, -1, -1)],
+        "point-xy": [(-1, -1, 1), (1, 1, -1), (-1, -1, -1)],
+    }
+    if symmetry not in flips:
+        raise ValueError(f"unknown symmetry {symmetry!r} (expected one of {', '.join(SYMMETRIES)})")
+    return [(points - c) * np.asarray(f) + c for f in flips[symmetry]]
+
+
+def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[float], symmetry: str,
+                     tol: float = 1e-6) -> np.ndarray:
+    """Mask of the feasible points whose every image under ``symmetry`` is a
+    feasible point too; the kept set is invariant, so its centroid is ``center``.
+
+    Args:
+        points: (n, 3) candidate points.
+        feasible: (n,) bool, which points may hold a sphere.
+        center: the centre of symmetry (mm).
+        symmetry: one of :data:`SYMMETRIES`.
+        tol: distance within which an image matches a point (mm).
+    """
+    from scipy.spatial import cKDTree
+
+    feasible = np.asarray(feasible, dtype=bool)
+    if len(points) == 0:
+        return np.zeros(0, dtype=bool)
+    tree = cKDTree(points)
+    keep = feasible.copy()
+    for img in _images(points, center, symmetry):
+        dist, idx = tree.query(img, distance_upper_bound=tol)
+        found = np.isfinite(dist)
+        keep &= found & feasible[np.where(found, idx, 0)]
+    return keep
+
+
+def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
+                  center: Sequence[float], radius: float, wall: float,
+                  symmetries: Iterable[str] = SYMMETRIES, lattices: Iterable[str] = LATTICES) -> SphereLayout:
+    """Most equal spheres of ``radius`` that fit with ``wall`` everywhere, in a
+    symmetric lattice layout centred on ``center``.
+
+    Tries each lattice kind with offsets 0 and half a lattice step on each axis,
+    and each symmetry group; returns the layout with the most spheres (ties:
+    the first found, so the result is deterministic).
+
+    Args:
+        clearance: signed distance to the solid's boundary (mm), vectorised.
+        bounds: the solid's bounding box.
+        center: centre of mass (mm), the centre of symmetry.
+        radius: sphere radius (mm).
+        wall: minimum wall to the boundary and between spheres (mm).
+        symmetries: symmetry groups to try.
+        lattices: lattice kinds to try.
+    """
+    need = radius + wall
+    inner = (tuple(b + need for b in bounds[0]), tuple(b - need for b in bounds[1]))
+    pitch = 2 * radius + wall
+    best = SphereLayout.empty()
+    symmetries = tuple(symmetries)
+    for kind in lattices:
+        for offset in ((ox, oy, oz) for ox in (0.0, 0.5) for oy in (0.0, 0.5) for oz in (0.0, 0.5)):
+            pts = lattice_sites(inner, center, pitch, offset, kind)
+            if len(pts) <= best.count:
+                continue
+            feasible = clearance(pts) >= need
+            if feasible.sum() <= best.count:
+                continue
+            for sym in symmetries:
+                keep = symmetric_subset(pts, feasible, center, sym)
+                if keep.sum() > best.count:
+                    best = SphereLayout(radius, pts[keep], sym, kind)
+    return best
+
+
+def max_cavity_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
+                      center: Sequence[float], wall: float, *, r_min: float = MIN_CAVITY_RADIUS,
+                      r_max: float | None = None) -> SphereLayout:
+    """The symmetric lattice layout of equal cavities removing the most volume.
+
+    Radii from ``r_max`` (default: half the smallest bounding-box side less a
+    wall) down to ``r_min`` by factors of :data:`RADIUS_STEP` are tried.
+    """
+    if r_max is None:
+        r_max = min(hi - lo for lo, hi in zip(*bounds)) / 2 - wall
+    best = SphereLayout.empty()
+    r = r_max
+    while r >= r_min - 1e-12:
+        layout = sphere_layout(clearance, bounds, center, r, wall)
+        if layout.volume > best.volume + 1e-9:
+            best = layout
+        r *= RADIUS_STEP
+    return best
+
+
+def max_ball_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
+                    center: Sequence[float], socket_diameter: float, wall: float) -> SphereLayout:
+    """The symmetric lattice layout with the most ball sockets."""
+    return sphere_layout(clearance, bounds, center, socket_diameter / 2, wall)
+
+
+# --------------------------------------------------------------------------- per type
+
+
+@dataclass(frozen=True)
+class MassInfo:
+    """Mass properties and mass range of a rod type.
+
+    Attributes:
+        volume: plastic volume of the plain solid (mm^3).
+        solid_mass: mass of the plain solid (g).
+        com: centre of mass (along, perp) in the rod frame (mm); the same over
+            the whole mass range (layouts are symmetric about it).
+        m_min: lightest achievable mass, with the most cavities (g).
+        m_max: heaviest achievable mass, with the most balls (g).
+        cavity_radius: radius of the cavities at m_min (mm), 0 if none fit.
+        cavity_count: number of cavities at m_min.
+        ball_count: number of balls at m_max.
+    """
+
+    volume: float
+    solid_mass: float
+    com: tuple[float, float]
+    m_min: float
+    m_max: float
+    cavity_radius: float
+    cavity_count: int
+    ball_count: int
+
+    def to_json(self) -> dict[str, object]:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: dict[str, object]) -> MassInfo:
+        data = dict(data)
+        data["com"] = tuple(data["com"])  # type: ignore[arg-type]
+        return cls(**data)  # type: ignore[arg-type]
+
+
+def _key(rod: RodType) -> str:
+    from rodcad.catalog import GEOMETRY_VERSION
+
+    return make_key("mass", MASSRANGE_VERSION, GEOMETRY_VERSION, MIN_CAVITY_RADIUS, RADIUS_STEP,
+                    asdict(rod.geometry), asdict(rod.material),
+                    asdict(rod.balls) if rod.balls is not None else None)
+
+
+def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
+    """The cavity layout at m_min and the ball layout at m_max of a rod type."""
+    from rodcad.geometry import Clearance as _Clearance
+    from rodcad.geometry import mass_properties
+
+    solid = rod.solid()
+    props = mass_properties(solid)
+    clearance = _Clearance(solid)
+    wall = rod.material.min_wall
+    cavities = max_cavity_layout(clearance, clearance.bounds, props.center, wall)
+    balls = (max_ball_layout(clearance, clearance.bounds, props.center, rod.balls.socket_diameter, wall)
+             if rod.balls is not None else SphereLayout.empty())
+    return cavities, balls
+
+
+def compute_mass_info(rod: RodType) -> MassInfo:
+    """Compute :class:`MassInfo` from the B-rep (no cache)."""
+    from rodcad.geometry import mass_properties
+
+    props = mass_properties(rod.solid())
+    cavities, balls = layouts(rod)
+    rho = rod.material.density / 1000.0  # g/mm^3
+    solid_mass = props.volume * rho
+    m_min = (props.volume - cavities.volume) * rho
+    if rod.balls is not None and balls.count:
+        m_max = (props.volume - balls.volume) * rho + balls.count * rod.balls.mass
+    else:
+        m_max = solid_mass
+    return MassInfo(props.volume, solid_mass, (props.center[0], props.center[1]), m_min,
+                    max(m_max, solid_mass), cavities.radius, cavities.count, balls.count)
+
+
+def is_cached(rod: RodType, cache: DiskCache) -> bool:
+    """Whether the mass information of ``rod`` is in the disk cache."""
+    return cache.get("mass", _key(rod)) is not None
+
+
+def mass_info(rod: RodType, *, cache: DiskCache | None = None) -> MassInfo:
+    """:class:`MassInfo` of a rod type, from the disk cache when possible."""
+    cache = cache if cache is not None else DiskCache()
+    key = _key(rod)
+    hit = cache.get("mass", key)
+    if hit is not None:
+        try:
+            return MassInfo.from_json(hit)
+        except (TypeError, KeyError, ValueError):
+            pass
+    info = compute_mass_info(rod)
+    cache.put("mass", key, info.to_json())
+    return info
+
+
+def _compute_star(rod: RodType) -> dict[str, object]:
+    return compute_mass_info(rod).to_json()
+
+
+def mass_infos(rods: Sequence[RodType], *, jobs: int | None = None, cache: DiskCache | None = None,
+               progress: Callable[[int, int], None] | None = None) -> dict[str, MassInfo]:
+    """:class:`MassInfo` of several rod types (name -> info), computing the
+    uncached ones in ``jobs`` processes (default: the number of CPUs)."""
+    cache = cache if cache is not None else DiskCache()
+    out: dict[str, MassInfo] = {}
+    todo: list[tuple[str, RodType]] = []
+    for rod in rods:
+        key = _key(rod)
+        hit = cache.get("mass", key)
+        if hit is not None:
+            try:
+                out[rod.name] = MassInfo.from_json(hit)
+                continue
+            except (TypeError, KeyError, ValueError):
+                pass
+        todo.append((key, rod))
+    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
+    if len(todo) <= 1 or jobs == 1:
+        results: Iterable[dict[str, object]] = (_compute_star(r) for _, r in todo)
+        pool = None
+    else:
+        pool = worker_pool(jobs)
+        results = pool.map(_compute_star, [r for _, r in todo], chunksize=1)
+    try:
+        for i, ((key, rod), res) in enumerate(zip(todo, results)):
+            cache.put("mass", key, res)
+            out[rod.name] = MassInfo.from_json(res)
+            if progress:
+                progress(i + 1, len(todo))
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    return {r.name: out[r.name] for r in rods}

@@ -63,7 +63,10 @@ def assign_types(
     for j in range(n - 1):
         if phi[j] < stop_below:
             # needs a stop at exactly phi: mismatch of the upper limit, or impossible
-            edge = np.where(np.isfinite(hi), np.abs(hi - phi[j]), _BIG)
+            # a stop above the bend lets the joint sag past it (masses may compensate);
+            # one below it forces a bend the target does not have: ten times worse
+            gap = hi - phi[j]
+            edge = np.where(np.isfinite(hi), np.where(gap >= 0, gap, -10.0 * gap), _BIG)
             edge = edge + np.where(phi[j] < lo, _BIG * (lo - phi[j] + 1), 0.0)
         else:
             over = np.maximum(phi[j] - (hi - margin), 0.0)

@@ -167,6 +167,15 @@ def discretize(
     if not allowed or min(allowed) <= 0:
         raise ValueError("allowed_lengths must be positive")
     corners_in = find_corners(curve, corner_angle_deg)
+    # a corner closer than half the shortest rod to the ends or to the previous corner
+    # cannot carry a joint of its own: keep the first of such a cluster
+    s_vert = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(curve, axis=0).T))])
+    kept, last = [], 0.0
+    for c in corners_in:
+        if s_vert[c] - last >= 0.5 * min(allowed) and s_vert[-1] - s_vert[c] >= 0.5 * min(allowed):
+            kept.append(c)
+            last = s_vert[c]
+    corners_in = kept
     # arc length of the given vertices, then a dense copy for walking
     s_given = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(curve, axis=0).T))])
     total = s_given[-1]

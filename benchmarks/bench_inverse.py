@@ -1,0 +1,125 @@
+"""Inverse design methods side by side (issue 4): error vs wall time and vs simulator calls.
+
+Targets: the paper's Fig. 7 shapes (semicircle, triangle, regular polygon) and
+its heart (Fig. 9), laid on the shipped catalog pla-pinned, plus a convex target
+reachable within the catalog's mass bounds (a catenary). Every method works on the
+same InverseProblem; the particle swarms get the same wall-time budget as each
+other (--pso-time), refine runs until it converges. Prints a table and writes
+benchmarks/inverse_convergence.png.
+
+Run:  python benchmarks/bench_inverse.py [--pso-time 3] [--seeds 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from optimize import design
+from rodcad import targets as T
+from rodcad.catalog import load_catalog
+from rodcad.chain_design import catalog_arrays, plan_chain
+
+A, B = (0.0, 0.0), (200.0, 0.0)
+TARGETS = {
+    "catenary (reachable)": ("catenary", {"length": 300}),
+    "semicircle": ("semicircle", {}),
+    "triangle": ("triangle", {"depth": 120}),
+    "polygon (3 sides)": ("polygon", {"sides": 3}),
+    "heart": ("heart", {}),
+}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pso-time", type=float, default=3.0, help="seconds per PSO run")
+    ap.add_argument("--seeds", type=int, default=3, help="PSO seeds per target")
+    ap.add_argument("--png", default=str(Path(__file__).with_name("inverse_convergence.png")))
+    args = ap.parse_args()
+
+    cat = load_catalog("pla-pinned")
+    arrays = catalog_arrays(cat)
+    rows, curves = [], {}
+    print(f"{'target':<22} {'N':>3} {'method':<11} {'max err/span':>13} {'time s':>8} "
+          f"{'sim calls':>9}  note")
+    for label, (form, params) in TARGETS.items():
+        plan = plan_chain(cat, T.make_target(form, A, B, **params), arrays=arrays)
+        prob = plan.problem
+        curves[label] = {}
+        for method in ("exact", "refine", "guided-pso", "pso"):
+            seeds = range(args.seeds) if method.endswith("pso") else [0]
+            errs, times, calls = [], [], []
+            for seed in seeds:
+                t0 = time.perf_counter()
+                r = design(prob, method, seed=seed, max_nfev=10**9 if method.endswith("pso") else 400,
+                           max_time=args.pso_time if method.endswith("pso") else None)
+                times.append(time.perf_counter() - t0)
+                errs.append(r.distance.max_rel_span)
+                calls.append(r.nfev)
+                if seed == 0:
+                    curves[label][method] = r.history or [(r.nfev, r.time_s, r.distance.max_rel_span)]
+            note = "exact" if method in ("exact", "refine") and errs[0] < 1e-9 else ""
+            if len(errs) > 1:
+                note = f"median of {len(errs)} seeds, best {min(errs):.2e}"
+            err = float(np.median(errs))
+            rows.append((label, method, err, float(np.median(times)), int(np.median(calls))))
+            print(f"{label:<22} {prob.n:>3} {method:<11} {err:>13.3e} {np.median(times):>8.3f} "
+                  f"{int(np.median(calls)):>9}  {note}")
+        print(f"{'':<22} discretisation error {plan.discretization.curve_error:.2f} mm; "
+              f"stop mismatch {np.degrees(min(plan.assign_cost, 1e3)):.1f} deg")
+
+    print("\nrefine vs guided PSO at the same wall time (guided PSO's best error when it had used "
+          "as much time as refine took, and at its full budget):")
+    for label in TARGETS:
+        ref = next(r for r in rows if r[0] == label and r[1] == "refine")
+        hist = curves[label]["guided-pso"]
+        at_same = min((e for _, t, e in hist if t <= ref[3]), default=float("nan"))
+        full = next(r for r in rows if r[0] == label and r[1] == "guided-pso")[2]
+        ratio_same = at_same / ref[2] if ref[2] > 0 else float("inf")
+        ratio_full = full / ref[2] if ref[2] > 0 else float("inf")
+        print(f"  {label:<22} refine {ref[2]:.2e} in {ref[3]:.3f} s; guided PSO {at_same:.2e} "
+              f"(x{ratio_same:.3g}) then {full:.2e} after {args.pso_time:g} s (x{ratio_full:.3g})")
+    print("\nguided PSO vs plain PSO (median final error, same time):")
+    for label in TARGETS:
+        g = next(r for r in rows if r[0] == label and r[1] == "guided-pso")[2]
+        p = next(r for r in rows if r[0] == label and r[1] == "pso")[2]
+        print(f"  {label:<22} guided {g:.3e}  plain {p:.3e}  -> "
+              f"{'guided better' if g < p else 'plain better or equal'}")
+    _plot(curves, args.png)
+    print(f"\nwrote {args.png}")
+
+
+def _plot(curves, path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, len(curves), figsize=(4 * len(curves), 7), squeeze=False)
+    colors = {"exact": "k", "refine": "tab:blue", "guided-pso": "tab:red", "pso": "tab:orange"}
+    for col, (label, methods) in enumerate(curves.items()):
+        for method, hist in methods.items():
+            h = np.array(hist, dtype=float)
+            floor = np.maximum(h[:, 2], 1e-17)
+            axes[0, col].step(np.maximum(h[:, 1], 1e-4), floor, where="post", color=colors[method], label=method)
+            axes[1, col].step(h[:, 0], floor, where="post", color=colors[method], label=method)
+        axes[0, col].set_title(label)
+        for row, xl in enumerate(("wall time (s)", "simulator calls")):
+            ax = axes[row, col]
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(xl)
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0, col].set_ylabel("best max joint error / span")
+        axes[1, col].set_ylabel("best max joint error / span")
+    axes[0, 0].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()

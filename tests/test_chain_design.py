@@ -1,0 +1,59 @@
+"""Target curve + shipped catalog -> rod types and masses (the catalog-facing inverse design)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rodcad import targets as T
+from rodcad.catalog import load_catalog
+from rodcad.chain_design import catalog_arrays, design_chain, plan_chain
+
+
+@pytest.fixture(scope="module")
+def catalog_and_arrays(tmp_path_factory):
+    import os
+
+    old = os.environ.get("RODCAD_CACHE_DIR")
+    os.environ["RODCAD_CACHE_DIR"] = str(tmp_path_factory.mktemp("cache"))
+    cat = load_catalog("pla-pinned")
+    yield cat, catalog_arrays(cat, jobs=2)
+    if old is None:
+        os.environ.pop("RODCAD_CACHE_DIR", None)
+    else:
+        os.environ["RODCAD_CACHE_DIR"] = old
+
+
+def test_reachable_catenary_is_designed_exactly_and_uniquely(catalog_and_arrays):
+    cat, arrays = catalog_and_arrays
+    plan = plan_chain(cat, T.catenary((0, 0), (200, 0), length=300), arrays=arrays)
+    d = design_chain(plan, "refine", n_starts=6)
+    assert d.result.exact and d.unique
+    assert d.result.distance.max_rel_span < 1e-6 and d.result.time_s < 0.1
+    lo, hi = plan.problem.mass_bounds.T
+    assert np.all((d.result.masses >= lo) & (d.result.masses <= hi))
+    assert all(name.startswith("free-") for name in plan.type_names)
+
+
+def test_straight_run_gets_straight_stop_types(catalog_and_arrays):
+    cat, arrays = catalog_and_arrays
+    # a flat-bottomed U: sloping sides, a straight 120 mm run at the bottom
+    curve = np.array([[0, 0], [48, -64], [168, -64], [216, 0]], float)  # sides 80, 120, 80
+    plan = plan_chain(cat, curve, arrays=arrays, lengths=[20, 40])
+    bends = np.diff(plan.problem.angles)
+    flat = np.flatnonzero(np.abs(bends) < 1e-6)
+    # the straight joints rest on stops at straight, except next to a corner: the corner
+    # rods must bend freely, and the shipped types have the same end shape at both ends
+    stopped = flat[np.abs(plan.problem.limits[flat, 1]) < np.radians(0.01)]
+    assert stopped.size >= 5
+    assert all(plan.type_names[j].startswith("straight") for j in stopped)
+    d = design_chain(plan, "refine", n_starts=4)
+    assert d.result.success
+    eq = d.result.equilibrium
+    assert np.all(eq.active[stopped] == 1) and np.all(eq.moments[stopped] < 0)
+
+
+def test_bad_constraints_explained(catalog_and_arrays):
+    cat, arrays = catalog_and_arrays
+    with pytest.raises(ValueError, match="no rod type of the catalog is allowed"):
+        plan_chain(cat, T.semicircle((0, 0), (200, 0)), arrays=arrays, allowed_types=["nope"])

@@ -140,6 +140,9 @@ class Chain:
         self.sigma = self.g * (m * perp / l + 1j * (after + m * along / l))
         self.fixed = self.limits[:, 0] == self.limits[:, 1]
         self.moment_scale = self.g * self.total_mass * self.total_length
+        # U(theta) = sum(c_sin sin theta + c_cos cos theta) + const
+        self.c_sin = self.g * (after * l + m * along)
+        self.c_cos = self.g * m * perp
 
     @classmethod
     def from_args(cls, lengths, masses, anchor_a, anchor_b, com=None, limits=None, g=9.81):
@@ -434,10 +437,8 @@ def _nlp_point(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
     """SLSQP on the angles: a feasible local minimum to restart from when exchanges fail."""
     from scipy.optimize import minimize
 
-    l, m, g = chain.lengths, chain.masses, chain.g
-    after = np.cumsum(m[::-1])[::-1] - m
-    c_sin = g * (after * l + m * chain.com[:, 0])
-    c_cos = g * m * chain.com[:, 1]
+    l = chain.lengths
+    c_sin, c_cos = chain.c_sin, chain.c_cos
     dx, dy = chain.d.real, chain.d.imag
     lo, hi = chain.limits[:, 0], chain.limits[:, 1]
     n = chain.n

@@ -176,6 +176,12 @@ def statics_matrix(problem: InverseProblem):
     return A, stops, signs
 
 
+def _moment_signs(signs: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> None:
+    """Sign bounds on stop moments, in place: >= 0 on a lo stop, <= 0 on a hi stop."""
+    lb[signs > 0] = 0.0
+    ub[signs < 0] = 0.0
+
+
 def _scaled(problem: InverseProblem, A: np.ndarray):
     """Row scaling (per rod: l_k g m_ref) and column scaling for conditioning."""
     m_ref = float(np.exp(np.mean(np.log(problem.mass_bounds))))
@@ -201,11 +207,7 @@ def _exact_masses(problem: InverseProblem):
     lb = np.full(nvar, -np.inf)
     ub = np.full(nvar, np.inf)
     lb[:n], ub[:n] = lo_m / col[:n], hi_m / col[:n]
-    for col_j, sgn in enumerate(signs):
-        if sgn > 0:
-            lb[n + 2 + col_j] = 0.0
-        elif sgn < 0:
-            ub[n + 2 + col_j] = 0.0
+    _moment_signs(signs, lb[n + 2:], ub[n + 2:])
     # LP: maximise t, the smallest relative distance of a mass from its bounds
     rng_m = (hi_m - lo_m) / col[:n]
     c = np.zeros(nvar + 1)
@@ -280,11 +282,7 @@ def _statics_residual(problem: InverseProblem, masses: np.ndarray) -> float:
     rhs = -As[:, :n] @ (masses / col[:n])
     lb = np.full(rest.shape[1], -np.inf)
     ub = np.full(rest.shape[1], np.inf)
-    for j, sgn in enumerate(signs):
-        if sgn > 0:
-            lb[2 + j] = 0.0
-        elif sgn < 0:
-            ub[2 + j] = 0.0
+    _moment_signs(signs, lb[2:], ub[2:])
     sol = lsq_linear(rest, rhs, bounds=(lb, ub))
     return float(np.max(np.abs(rest @ sol.x - rhs)))
 

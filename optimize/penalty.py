@@ -52,10 +52,8 @@ def solve_penalty(chain: Chain, penalty_weight: float, collision_weight: float) 
     weight = chain.g * chain.total_mass
     lam1 = penalty_weight * weight / chain.total_length
     lam2 = collision_weight * weight * chain.total_length
-    l, m, g = chain.lengths, chain.masses, chain.g
-    after = np.cumsum(m[::-1])[::-1] - m
-    c_sin = g * (after * l + m * chain.com[:, 0])
-    c_cos = g * m * chain.com[:, 1]
+    l = chain.lengths
+    c_sin, c_cos = chain.c_sin, chain.c_cos
 
     def smooth(theta):
         c, s = np.cos(theta), np.sin(theta)

@@ -311,7 +311,9 @@ def _multipliers(chain: Chain, theta: np.ndarray, lam: complex):
     return cum[:-1], float(cum[-1]), curvature
 
 
-def kkt_residual(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray) -> float:
+def kkt_residual(
+    chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray, mult=None
+) -> float:
     """Relative KKT residual of a configuration for a given active set.
 
     The largest of: closure error / total length; moments at free joints and the
@@ -319,7 +321,7 @@ def kkt_residual(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray
     moments at active limits (same scale).
     """
     closure = abs(np.sum(chain.lengths * np.exp(1j * theta)) - chain.d) / chain.total_length
-    mu, mu_end, _ = _multipliers(chain, theta, lam)
+    mu, mu_end, _ = mult if mult is not None else _multipliers(chain, theta, lam)
     scale = chain.moment_scale
     free = side == 0
     stat = max(np.max(np.abs(mu[free]), initial=0.0), abs(mu_end)) / scale
@@ -334,7 +336,7 @@ def kkt_residual(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray
     return float(max(closure, stat, feas, max(sign, 0.0)))
 
 
-def _is_stable(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray) -> bool:
+def _is_stable(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray, mult=None) -> bool:
     """Second-order check on the tangent space of closure and the binding limits.
 
     Joints at a limit with a vanishing moment are treated as free (a conservative
@@ -342,7 +344,7 @@ def _is_stable(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray) 
     closure Jacobian C (2 x n) the inertia identity
     In(Z'DZ) = In(D) + In(-C D^-1 C') - (m, m, 0) decides it in O(n).
     """
-    mu, _, curv = _multipliers(chain, theta, lam)
+    mu, _, curv = mult if mult is not None else _multipliers(chain, theta, lam)
     binding = (side != 0) & (chain.fixed | (np.abs(mu) > 1e3 * _MOMENT_TOL * chain.moment_scale))
     starts = np.flatnonzero(np.concatenate([[True], ~binding]))
     D = np.add.reduceat(curv, starts)
@@ -710,15 +712,15 @@ def _reach_hint(chain: Chain) -> str:
 
 
 def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp) -> EquilibriumResult:
-    mu, _, _ = _multipliers(chain, theta, lam)
-    moments = np.where(side != 0, mu, 0.0)
+    mult = _multipliers(chain, theta, lam)
+    moments = np.where(side != 0, mult[0], 0.0)
     pts = chain.points(theta)
     closure = float(np.hypot(*(pts[-1] - chain.anchor_b)))
-    kkt = kkt_residual(chain, theta, lam, side)
+    kkt = kkt_residual(chain, theta, lam, side, mult)
     success = status == 0 and kkt < 1e-9
     if status == 0 and not success:
         status = 1
-    stable = _is_stable(chain, theta, lam, side) if status in (0, 1) else False
+    stable = _is_stable(chain, theta, lam, side, mult) if status in (0, 1) else False
     message = MESSAGES[status]
     if status == 3:
         message += _reach_hint(chain)

@@ -89,18 +89,18 @@ def solve_penalty(chain: Chain, penalty_weight: float, collision_weight: float) 
         f"({closure / chain.total_length:.2e} of the chain length); "
         f"{violated} joint(s) outside their limits."
     )
-    mu, _, _ = _multipliers(chain, theta, lam)
+    mult = _multipliers(chain, theta, lam)
     return EquilibriumResult(
         points=pts,
         angles=theta,
         reaction=np.array([lam.real, lam.imag]),
         reaction_a=np.array([-lam.real, weight - lam.imag]),
-        moments=np.where(side != 0, mu, 0.0),
+        moments=np.where(side != 0, mult[0], 0.0),
         active=side,
-        kkt_residual=kkt_residual(chain, theta, lam, side),
+        kkt_residual=kkt_residual(chain, theta, lam, side, mult),
         closure_error=closure,
         energy=chain.energy(theta),
-        stable=_is_stable(chain, theta, lam, side),
+        stable=_is_stable(chain, theta, lam, side, mult),
         success=converged,
         status=status,
         message=message,

@@ -17,7 +17,13 @@ from rodcad import __version__
 from rodcad.errors import InputError
 
 #: Modules that register subcommands, in the order ``--help`` lists them.
-COMMAND_MODULES = ("rodcad.commands.demo", "rodcad.commands.catalog")
+COMMAND_MODULES = (
+    "rodcad.commands.build",
+    "rodcad.commands.simulate",
+    "rodcad.commands.catalog",
+    "rodcad.commands.schema",
+    "rodcad.commands.demo",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

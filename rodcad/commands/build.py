@@ -1,0 +1,65 @@
+"""``rodcad build DESIGN.yaml``: design, check and fabricate a hanging chain.
+
+Writes OUTDIR (default ``outputs/<design name>``): design.json, report.md,
+preview.png and preview.svg, and unless ``--no-cad`` assembly.step plus
+rods/*.step and rods/*.stl. Everything is written to a temporary folder first
+and renamed into place at the end, so a failed or interrupted run leaves OUTDIR
+as it was. When the design sets a ``tolerance`` that the result misses, OUTDIR
+is left alone, the best achievable design goes to ``OUTDIR.best-fit`` and the
+exit code is 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rodcad.design import METHOD_NAMES, load_design
+from rodcad.progress import Progress
+
+__all__ = ["register", "run"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "build",
+        help="design a chain for a target shape, check it and write STEP/STL files and a report",
+        description="Choose rod types and masses so the chain hangs in the design's target shape, "
+        "check the equilibrium (stability, other equilibria), cut cavities and ball sockets for every "
+        "rod's mass and write the printable files, a report and previews.",
+    )
+    p.add_argument("design", metavar="DESIGN.yaml", help="design file")
+    p.add_argument("-o", "--outdir", metavar="OUTDIR", help="output folder (default outputs/<design name>)")
+    p.add_argument("--no-cad", action="store_true", help="design and check only: no solids, no STEP/STL")
+    p.add_argument("--method", choices=METHOD_NAMES, help="inverse-design method (default: the design's)")
+    p.add_argument("--seed", type=int, metavar="N", help="random seed (default: the design's)")
+    p.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: number of CPUs)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress, only the summary")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from rodcad import pipeline, report
+
+    progress = Progress(quiet=args.quiet)
+    design = load_design(args.design)
+    outdir = Path(args.outdir) if args.outdir else Path("outputs") / design.name
+    if args.seed is not None and args.seed < 0:
+        print("rodcad: --seed must be 0 or more", file=sys.stderr)
+        return 2
+    result = pipeline.build(design, method=args.method, seed=args.seed,
+                            cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
+    code = 0
+    target = outdir
+    if not result.meets_tolerance:
+        target = outdir.with_name(outdir.name + ".best-fit")
+        code = 1
+    pipeline.write_outputs(result, target, progress=progress)
+    data = report.design_json(result)
+    print(report.summary_text(result, target, data))
+    if code:
+        err = result.distance.max_rel_span
+        print(f"rodcad: the design misses its tolerance ({err:.3g} of the span > {design.tolerance:g}); "
+              f"{outdir} left as it was, the best achievable design is in {target}", file=sys.stderr)
+    return code

@@ -1,0 +1,367 @@
+"""The pipeline: a design file in, a designed, checked and fabricated chain out.
+
+One function per step of the data flow (style.md)::
+
+    design.yaml + catalog -> load_design()         (rodcad.design)
+    -> joint limits and mass ranges from the rods  catalog_arrays()
+    -> rod positions and types on the target       plan()
+    -> masses by inverse design                    design_masses()
+    -> equilibrium check from scratch              check_equilibrium()
+    -> cavities, sockets, exact B-rep              fabricate()
+    -> as-built re-simulation                      as_built()
+    -> design.json, report.md, previews, STEP/STL  rodcad.report, write_outputs()
+
+Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from optimize import EquilibriumResult, find_equilibria, shape_distance, solve_equilibrium
+from optimize.distance import ShapeDistance
+from rodcad.chain_design import ChainDesign, ChainPlan, catalog_arrays, design_chain, plan_chain
+from rodcad.design import Design
+from rodcad.errors import InputError
+from rodcad.progress import Progress
+
+__all__ = ["AsBuilt", "BuildResult", "build", "simulate", "write_outputs"]
+
+#: Multi-start count of the uniqueness check.
+N_STARTS = 12
+
+
+@dataclass
+class AsBuilt:
+    """The chain as it will really be printed, re-simulated.
+
+    Attributes:
+        masses: (N,) rod masses from the final B-rep plus metal (g).
+        com: (N, 2) centres of mass from the final B-rep (mm, rod frame).
+        equilibrium: its equilibrium.
+        distance: its joints against the target joints.
+    """
+
+    masses: np.ndarray
+    com: np.ndarray
+    equilibrium: EquilibriumResult
+    distance: ShapeDistance
+
+
+@dataclass
+class BuildResult:
+    """Everything one run found, for the report and the output files.
+
+    Attributes:
+        design: the validated design.
+        method: inverse-design method used ('' for an explicit chain).
+        seed: seed used.
+        type_names: rod type per position.
+        lengths, masses, com: per rod (mm, g, mm in the rod frame).
+        limits: (N-1, 2) joint limits (rad), (-inf, inf) where nothing collides.
+        target_points: (N+1, 2) target joints (None for an explicit chain).
+        equilibrium: the designed chain, solved from scratch.
+        distance: simulated vs target joints (None without a target).
+        n_stable, unique: multi-start check (other stable equilibria?).
+        plan, chain_design: the planning and inverse-design results (None for an explicit chain).
+        fabrication: the fabricated rods (None without CAD).
+        as_built: the as-built re-simulation (None without CAD).
+        notes: things the user should know (infeasibility, bounds, stops).
+        time_s: wall time of the run.
+    """
+
+    design: Design
+    method: str
+    seed: int
+    type_names: list[str]
+    lengths: np.ndarray
+    masses: np.ndarray
+    com: np.ndarray
+    limits: np.ndarray
+    target_points: np.ndarray | None
+    equilibrium: EquilibriumResult
+    distance: ShapeDistance | None
+    n_stable: int
+    unique: bool
+    plan: ChainPlan | None = None
+    chain_design: ChainDesign | None = None
+    fabrication: Any = None
+    as_built: AsBuilt | None = None
+    notes: list[str] = field(default_factory=list)
+    time_s: float = 0.0
+
+    @property
+    def n(self) -> int:
+        return len(self.type_names)
+
+    @property
+    def meets_tolerance(self) -> bool:
+        """True unless the design sets a tolerance the result misses."""
+        tol = self.design.tolerance
+        return tol is None or self.distance is None or self.distance.max_rel_span <= tol
+
+
+# --------------------------------------------------------------------------- steps
+
+
+def _limits_of(names: list[str], index: dict[str, int], pair: np.ndarray) -> np.ndarray:
+    """(N-1, 2) joint limits of a sequence of types; (-inf, inf) for free sides."""
+    lim = np.array([pair[index[a], index[b]] for a, b in zip(names[:-1], names[1:])]).reshape(-1, 2)
+    return np.where(np.isfinite(lim), lim, np.array([-np.inf, np.inf]))
+
+
+def plan(design: Design, arrays: tuple, progress: Progress | None = None) -> ChainPlan:
+    """Lay rods on the design's target, honouring its constraints.
+
+    Raises:
+        InputError: the constraints cannot be met (pointing at the key).
+    """
+    c = design.constraints
+    lengths = c.lengths
+    candidates: list[float | None] = [c.preferred_length]
+    if c.rods is not None and c.preferred_length is None:
+        types, t_len = arrays[0], arrays[1]
+        allowed = {float(x) for x, t in zip(t_len, types) if c.types is None or t.name in c.types}
+        if lengths is not None:
+            allowed &= {float(x) for x in lengths}
+        candidates = [None, *sorted(allowed)]
+    counts: dict[int, ChainPlan] = {}
+    for pref in candidates:
+        try:
+            p = plan_chain(design.catalog, design.target_curve, allowed_types=c.types, lengths=lengths,
+                           preferred_length=pref, arrays=arrays)
+        except ValueError as err:
+            raise InputError([design.problem("target", str(err))]) from None
+        counts.setdefault(len(p.type_names), p)
+        if c.rods is None or len(p.type_names) == c.rods:
+            break
+    if c.rods is not None and c.rods not in counts:
+        have = ", ".join(str(k) for k in sorted(counts))
+        raise InputError([design.problem(
+            "constraints.rods", f"the allowed rod lengths lay {have} rods on this target, not {c.rods}; "
+            "change the rod count, the lengths allowed or preferred_length")])
+    p = counts[c.rods] if c.rods is not None else next(iter(counts.values()))
+    if c.fixed:
+        _apply_fixed(design, p, arrays)
+    return p
+
+
+def _apply_fixed(design: Design, p: ChainPlan, arrays: tuple) -> None:
+    """Impose the design's fixed rods on a plan (types, then masses)."""
+    types, t_len, t_com, t_bounds, t_lim = arrays
+    index = {t.name: i for i, t in enumerate(types)}
+    n = len(p.type_names)
+    problems = []
+    for i, f in enumerate(design.constraints.fixed):
+        key = f"constraints.fixed[{i}]"
+        if f.index >= n:
+            problems.append(design.problem(f"{key}.index", f"the chain has {n} rods (indices 0 to {n - 1})"))
+            continue
+        need = float(p.problem.lengths[f.index])
+        k = index[f.type]
+        if not np.isclose(t_len[k], need):
+            problems.append(design.problem(f"{key}.type", f"rod {f.index} is {need:g} mm long on this target "
+                                           f"but {f.type!r} is {t_len[k]:g} mm"))
+            continue
+        p.type_names[f.index] = f.type
+        p.problem.com[f.index] = t_com[k]
+        lo, hi = t_bounds[k]
+        if f.mass is not None:
+            lo, hi = f.mass * (1 - 1e-9), f.mass * (1 + 1e-9)
+        p.problem.mass_bounds[f.index] = (lo, hi)
+    if problems:
+        raise InputError(problems)
+    lim = _limits_of(p.type_names, index, t_lim)
+    bad = [j for j in range(n - 1) if not lim[j, 0] <= lim[j, 1]]
+    if bad:
+        j = bad[0]
+        raise InputError([design.problem("constraints.fixed", f"rods {j} ({p.type_names[j]}) and {j + 1} "
+                                         f"({p.type_names[j + 1]}) cannot be joined")])
+    if n > 1:
+        p.problem.limits = lim
+    p.notes.append(f"{len(design.constraints.fixed)} rod(s) fixed by the design")
+
+
+def check_equilibrium(lengths, masses, a, b, *, com, limits, g, seed: int):
+    """Solve from scratch and look for other stable equilibria (multi-start)."""
+    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None, g=g)
+    multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None,
+                            g=g, n_starts=N_STARTS, seed=seed)
+    return eq, multi.n_distinct, multi.unique
+
+
+def build(design: Design, *, method: str | None = None, seed: int | None = None, cad: bool | None = None,
+          jobs: int | None = None, progress: Progress | None = None) -> BuildResult:
+    """Design the chain for the design's target, check it and (optionally) fabricate it.
+
+    Args:
+        design: a validated design with a target.
+        method: inverse-design method (default: the design's).
+        seed: seed (default: the design's).
+        cad: build the solids (default: the design's fabrication.cad).
+        jobs: worker processes for the solids and joint limits.
+        progress: where to report progress (default: silent).
+
+    Raises:
+        InputError: the design has no target, or its constraints cannot be met.
+    """
+    progress = progress or Progress(quiet=True)
+    t0 = time.perf_counter()
+    if design.target_curve is None:
+        raise InputError([design.problem("", "this design has no 'target' to build a chain for "
+                                         "(use `rodcad simulate` for an explicit chain)")])
+    method = method or design.method
+    seed = design.seed if seed is None else seed
+    cad = design.cad if cad is None else cad
+    with progress.step("joint limits and mass ranges of the catalog's rods") as st:
+        arrays = catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
+    with progress.step("laying rods on the target"):
+        p = plan(design, arrays)
+    with progress.step(f"inverse design ({method}, {len(p.type_names)} rods)"):
+        cd = design_chain(p, method, seed=seed, n_starts=N_STARTS)
+    pr = cd.plan.problem
+    a, b = design.anchors
+    with progress.step("equilibrium check from scratch"):
+        eq, n_stable, unique = check_equilibrium(pr.lengths, cd.result.masses, a, b, com=pr.com,
+                                                 limits=pr.limits, g=design.g, seed=seed)
+    result = BuildResult(
+        design=design, method=method, seed=seed, type_names=list(p.type_names),
+        lengths=np.asarray(pr.lengths, float), masses=np.asarray(cd.result.masses, float),
+        com=np.asarray(pr.com, float), limits=_as_limits(pr.limits, len(p.type_names)),
+        target_points=np.asarray(pr.target, float), equilibrium=eq,
+        distance=shape_distance(eq.points, pr.target), n_stable=n_stable, unique=unique,
+        plan=p, chain_design=cd, notes=list(p.notes),
+    )
+    result.notes += _design_notes(result)
+    if cad:
+        fabricate(result, jobs=jobs, progress=progress)
+    result.time_s = time.perf_counter() - t0
+    return result
+
+
+def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult:
+    """The equilibrium of the design's explicit chain (types and masses as given).
+
+    Raises:
+        InputError: the design has no explicit chain, or two of its rods cannot be joined.
+    """
+    progress = progress or Progress(quiet=True)
+    t0 = time.perf_counter()
+    if design.chain is None:
+        raise InputError([design.problem("", "this design has no explicit 'chain' to simulate")])
+    with progress.step("joint limits of the catalog's rods") as st:
+        arrays = catalog_arrays(design.catalog, progress=st.count)
+    types, t_len, t_com, _, t_lim = arrays
+    index = {t.name: i for i, t in enumerate(types)}
+    names = [r.type for r in design.chain]
+    lim = _limits_of(names, index, t_lim)
+    bad = [j for j in range(len(names) - 1) if not lim[j, 0] <= lim[j, 1]]
+    if bad:
+        raise InputError([design.problem(f"chain[{j + 1}].type", f"{names[j]!r} and {names[j + 1]!r} "
+                                         "cannot be joined (the rods interfere at every angle)") for j in bad])
+    lengths = t_len[[index[n] for n in names]]
+    com = t_com[[index[n] for n in names]]
+    masses = np.array([r.mass for r in design.chain], float)
+    a, b = design.anchors
+    try:
+        eq, n_stable, unique = check_equilibrium(lengths, masses, a, b, com=com, limits=lim, g=design.g,
+                                                 seed=design.seed)
+    except ValueError as err:
+        raise InputError([design.problem("anchors", str(err))]) from None
+    target = None
+    dist = None
+    if design.target_curve is not None and len(design.target_curve) == len(names) + 1:
+        target = design.target_curve
+        dist = shape_distance(eq.points, target)
+    res = BuildResult(design=design, method="", seed=design.seed, type_names=names, lengths=lengths,
+                      masses=masses, com=com, limits=lim, target_points=target, equilibrium=eq,
+                      distance=dist, n_stable=n_stable, unique=unique)
+    res.notes += _design_notes(res)
+    res.time_s = time.perf_counter() - t0
+    return res
+
+
+def _as_limits(limits, n: int) -> np.ndarray:
+    if limits is None or n < 2:
+        return np.tile([-np.inf, np.inf], (max(n - 1, 0), 1))
+    return np.asarray(limits, float).reshape(-1, 2)
+
+
+def _design_notes(r: BuildResult) -> list[str]:
+    notes = []
+    eq = r.equilibrium
+    if not eq.success:
+        notes.append(f"the equilibrium solver did not converge: {eq.message}")
+    if not eq.stable:
+        notes.append("the designed shape is an equilibrium but NOT a stable one: the printed chain "
+                     "would fall into another shape")
+    if not r.unique:
+        notes.append(f"{r.n_stable} distinct stable equilibria were found from {N_STARTS} starts: the "
+                     "chain may settle in another shape if hung carelessly (hang it from A, guide it "
+                     "into shape, then attach B)")
+    cd = r.chain_design
+    if cd is not None:
+        res = cd.result
+        lo = int(np.sum(res.at_bounds < 0))
+        hi = int(np.sum(res.at_bounds > 0))
+        if not res.exact and (lo or hi):
+            notes.append(f"the target is not reachable with the catalog's mass ranges: {lo} rod(s) at "
+                         f"their lightest and {hi} at their heaviest; this is the best fit within what can "
+                         "be printed (a catalog with wider mass ranges would get closer)")
+    return notes
+
+
+def fabricate(result: BuildResult, *, jobs: int | None = None, progress: Progress | None = None) -> None:
+    """Build every rod's solid with its designed mass, then re-simulate the as-built chain."""
+    from rodcad.fabricate import fabricate_chain
+
+    progress = progress or Progress(quiet=True)
+    types = [result.design.catalog[n] for n in result.type_names]
+    with progress.step(f"building {result.n} rods (cavities, ball sockets, exact B-rep)") as st:
+        fab = fabricate_chain(types, result.masses, seed=result.design.fabrication_seed, jobs=jobs,
+                              progress=st.count)
+    result.fabrication = fab
+    result.notes += list(fab.problems)
+    masses = np.array([r.mass for r in fab.rods], float)
+    com = np.array([r.com for r in fab.rods], float)
+    a, b = result.design.anchors
+    with progress.step("as-built check (masses and centres of mass from the solids)"):
+        eq = solve_equilibrium(result.lengths, masses, a, b, com=com,
+                               limits=result.limits if result.n > 1 else None, g=result.design.g)
+    target = result.target_points if result.target_points is not None else result.equilibrium.points
+    result.as_built = AsBuilt(masses, com, eq, shape_distance(eq.points, target))
+
+
+def write_outputs(result: BuildResult, outdir: str | Path, *, progress: Progress | None = None) -> Path:
+    """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files.
+
+    Everything goes to a temporary folder first, renamed to ``outdir`` at the
+    end: a failed or interrupted run leaves ``outdir`` as it was.
+    """
+    from rodcad import report
+    from rodcad.outdir import staged_output
+    from rodcad.preview import plot_chain
+
+    progress = progress or Progress(quiet=True)
+    outdir = Path(outdir)
+    with staged_output(outdir) as tmp:
+        if result.fabrication is not None:
+            from rodcad.fabricate import write_assembly, write_rod_files
+
+            with progress.step("writing and checking rods/*.step, rods/*.stl"):
+                write_rod_files(result.fabrication, tmp)
+            with progress.step("writing assembly.step"):
+                write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
+                               name=result.design.name)
+        with progress.step("writing design.json, report.md, preview.png/.svg"):
+            data = report.design_json(result)
+            report.write_json(tmp / "design.json", data)
+            plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
+            (tmp / "report.md").write_text(report.report_markdown(result, data), encoding="utf-8")
+    return outdir

@@ -1,0 +1,316 @@
+"""What a run reports: design.json (contract.md), report.md and the terminal summary."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rodcad import __version__
+
+__all__ = ["design_json", "report_markdown", "summary_text", "write_json"]
+
+
+def _f(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _pts(p: np.ndarray) -> list[list[float]]:
+    return [[float(x), float(y)] for x, y in np.asarray(p, float)]
+
+
+def _error(d) -> dict[str, Any]:
+    return {"max_mm": _f(d.max), "mean_mm": _f(d.mean), "sum_mm": _f(d.sum),
+            "max_rel_span": _f(d.max_rel_span), "deviation_mm": [float(v) for v in d.deviation]}
+
+
+def _limits_deg(lim: np.ndarray) -> list[float | None]:
+    return [_f(math.degrees(v)) for v in lim]
+
+
+def design_json(r) -> dict[str, Any]:
+    """The machine-readable result of a run (contract.md's design.json, plus extras).
+
+    Args:
+        r: a :class:`rodcad.pipeline.BuildResult`.
+    """
+    d = r.design
+    eq = r.equilibrium
+    rods = []
+    for i, name in enumerate(r.type_names):
+        rod = {
+            "index": i,
+            "type": name,
+            "length": float(r.lengths[i]),
+            "mass": float(r.masses[i]),
+            "com": [float(v) for v in r.com[i]],
+            "limits_deg": _limits_deg(r.limits[i]) if i < r.n - 1 else None,
+            "mass_range": [float(v) for v in d.catalog[name].mass_range],
+        }
+        if r.fabrication is not None:
+            f = r.fabrication.rods[i]
+            rod["fabrication"] = {
+                "mass": float(f.mass), "com": [float(v) for v in f.com],
+                "filament_g": float(f.filament_mass), "cavities": int(f.cavity_count),
+                "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
+                "ball_diameter_mm": None if f.ball_diameter is None else float(f.ball_diameter),
+                "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
+                "in_range": bool(f.in_range), "message": f.message,
+            }
+        rods.append(rod)
+    out: dict[str, Any] = {
+        "name": d.name,
+        "units": {"length": "mm", "mass": "g", "angle": "deg", "force": "N"},
+        "rodcad": __version__,
+        "design_file": str(d.path),
+        "catalog": d.catalog.name,
+        "method": r.method or None,
+        "seed": int(r.seed),
+        "time_s": float(r.time_s),
+        "anchors": _pts(d.anchors),
+        "target": {"form": d.target_form, "params": d.target_params,
+                   "points": _pts(r.target_points) if r.target_points is not None else None},
+        "rods": rods,
+        "simulated": {
+            "points": _pts(eq.points),
+            "angles_deg": [float(math.degrees(v)) for v in eq.angles],
+            # g * m/s^2 = mN -> N
+            "reaction": [float(v) * 1e-3 for v in eq.reaction],
+            "reaction_a": [float(v) * 1e-3 for v in eq.reaction_a],
+            "kkt_residual": _f(eq.kkt_residual),
+            "stable": bool(eq.stable),
+            "success": bool(eq.success),
+            "stable_equilibria_found": int(r.n_stable),
+            "unique": bool(r.unique),
+        },
+        "error": _error(r.distance) if r.distance is not None else None,
+        "tolerance": d.tolerance,
+        "meets_tolerance": r.meets_tolerance,
+        "notes": list(r.notes),
+    }
+    if r.plan is not None:
+        out["discretisation"] = {"curve_error_mm": _f(r.plan.discretization.curve_error),
+                                 "joint_error_mm": _f(r.plan.discretization.joint_error),
+                                 "stop_mismatch_deg": _f(math.degrees(r.plan.assign_cost))}
+    if r.chain_design is not None:
+        res = r.chain_design.result
+        out["inverse"] = {"exact": bool(res.exact), "statics_residual": _f(res.statics_residual),
+                          "at_bounds": [int(v) for v in res.at_bounds], "nfev": int(res.nfev),
+                          "time_s": float(res.time_s), "message": res.message}
+    if r.as_built is not None:
+        ab = r.as_built
+        out["as_built"] = {"masses": [float(v) for v in ab.masses], "com": _pts(ab.com),
+                           "points": _pts(ab.equilibrium.points), "error": _error(ab.distance),
+                           "stable": bool(ab.equilibrium.stable)}
+    out["bill_of_materials"] = bill_of_materials(r)
+    return out
+
+
+def bill_of_materials(r) -> dict[str, Any]:
+    """Rods by type, filament, metal balls by size and pins."""
+    d = r.design
+    by_type = Counter(r.type_names)
+    thick = max(d.catalog[n].geometry.thickness for n in r.type_names)
+    pin_d = d.catalog[r.type_names[0]].geometry.hinge.pin_diameter
+    bom: dict[str, Any] = {
+        "rods": dict(sorted(by_type.items())),
+        "pins": {"count": r.n + 1, "diameter_mm": pin_d, "length_mm": round(thick + 1.0, 2),
+                 "note": "one per joint plus one at each anchor"},
+    }
+    if r.fabrication is not None:
+        rods = r.fabrication.rods
+        balls: Counter[float] = Counter()
+        for f in rods:
+            if f.ball_count:
+                balls[float(f.ball_diameter)] += int(f.ball_count)
+        bom["filament_g"] = float(sum(f.filament_mass for f in rods))
+        bom["metal_balls"] = [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]
+        bom["total_mass_g"] = float(sum(f.mass for f in rods))
+    else:
+        bom["total_mass_g"] = float(np.sum(r.masses))
+    return bom
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+
+
+# --------------------------------------------------------------------------- report.md
+
+
+def _fmt_err(e: dict[str, Any] | None) -> str:
+    if not e:
+        return "n/a"
+    rel = e["max_rel_span"]
+    return (f"max {e['max_mm']:.3g} mm ({100 * rel:.3g} % of the span), mean {e['mean_mm']:.3g} mm, "
+            f"sum {e['sum_mm']:.3g} mm")
+
+
+def report_markdown(r, data: dict[str, Any]) -> str:
+    """report.md: inputs, method, error, stability, per-rod table, bill of materials, assembly."""
+    d = r.design
+    L: list[str] = []
+    add = L.append
+    add(f"# {d.name}: hanging chain report")
+    add("")
+    if d.description:
+        add(d.description.strip())
+        add("")
+    add(f"Made by rodcad {__version__} from `{d.path}` in {r.time_s:.1f} s.")
+    add("")
+    add("## Inputs")
+    add("")
+    a, b = d.anchors
+    add(f"- Catalog: `{d.catalog.name}` ({len(d.catalog)} rod types)")
+    add(f"- Anchors: A = ({a[0]:g}, {a[1]:g}) mm, B = ({b[0]:g}, {b[1]:g}) mm, span {d.span:.4g} mm")
+    if d.target_form:
+        params = ", ".join(f"{k} = {v}" for k, v in d.target_params.items() if k != "points")
+        add(f"- Target: {d.target_form}" + (f" ({params})" if params else ""))
+    else:
+        add("- Explicit chain (no target)")
+    c = d.constraints
+    cons = []
+    if c.types:
+        cons.append("types " + ", ".join(c.types))
+    if c.lengths:
+        cons.append("lengths " + ", ".join(f"{x:g}" for x in c.lengths) + " mm")
+    if c.rods:
+        cons.append(f"{c.rods} rods")
+    if c.fixed:
+        cons.append(f"{len(c.fixed)} fixed rod(s)")
+    if cons:
+        add("- Constraints: " + "; ".join(cons))
+    add(f"- Method: {r.method or 'simulate (explicit chain)'}, seed {r.seed}")
+    add("")
+    add("## Result")
+    add("")
+    add(f"- Shape error (simulated vs target joints): {_fmt_err(data['error'])}")
+    if "discretisation" in data:
+        disc = data["discretisation"]
+        add(f"- Discretisation (rods laid on the curve): curve error {disc['curve_error_mm']:.3g} mm, "
+            f"stop mismatch {disc['stop_mismatch_deg']:.3g} deg (reported apart from the physics error)")
+    if "as_built" in data:
+        add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
+    if "inverse" in data:
+        inv = data["inverse"]
+        add(f"- Inverse design: {'exact' if inv['exact'] else 'best fit within the mass bounds'}; "
+            f"{inv['nfev']} simulations in {inv['time_s']:.2f} s ({inv['message']})")
+    sim = data["simulated"]
+    add(f"- Equilibrium: KKT residual {sim['kkt_residual']:.1e}, "
+        f"{'stable' if sim['stable'] else 'NOT stable'}; "
+        f"{sim['stable_equilibria_found']} distinct stable equilibri{'um' if sim['stable_equilibria_found'] == 1 else 'a'} "
+        f"found from 12 starts ({'unique' if sim['unique'] else 'not unique'})")
+    add(f"- Reactions: A ({sim['reaction_a'][0]:.4g}, {sim['reaction_a'][1]:.4g}) N, "
+        f"B ({sim['reaction'][0]:.4g}, {sim['reaction'][1]:.4g}) N")
+    if d.tolerance is not None:
+        add(f"- Tolerance {d.tolerance:g} of the span: {'met' if r.meets_tolerance else 'MISSED'}")
+    for note in r.notes:
+        add(f"- Note: {note}")
+    add("")
+    add("![preview](preview.png)")
+    add("")
+    add("## Rods")
+    add("")
+    fab = r.fabrication
+    head = "| # | type | length mm | mass g | range g | joint after (deg) | x, y of first pin (mm) |"
+    rule = "|---|---|---|---|---|---|---|"
+    if fab is not None:
+        head += " as built g | filament g | cavities | balls | pause at Z mm | file |"
+        rule += "---|---|---|---|---|---|"
+    add(head)
+    add(rule)
+    pts = r.equilibrium.points
+    for i, rod in enumerate(data["rods"]):
+        lim = rod["limits_deg"]
+        lim_s = "-" if lim is None else f"{_deg(lim[0])} .. {_deg(lim[1])}"
+        lo, hi = rod["mass_range"]
+        row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['mass']:.3f} | {lo:.2f}-{hi:.2f} | {lim_s} "
+               f"| {pts[i][0]:.1f}, {pts[i][1]:.1f} |")
+        if fab is not None:
+            f = fab.rods[i]
+            cav = f"{f.cavity_count} x r {f.cavity_radius:.2f}" if f.cavity_count else "-"
+            balls = f"{f.ball_count} x {f.ball_diameter:g} mm" if f.ball_count else "-"
+            pause = f"{f.pause_z:.2f}" if f.pause_z is not None else "-"
+            row += (f" {f.mass:.3f} | {f.filament_mass:.2f} | {cav} | {balls} | {pause} "
+                    f"| {_rod_file(f)} |")
+        add(row)
+    add("")
+    add("## Bill of materials")
+    add("")
+    bom = data["bill_of_materials"]
+    for name, count in bom["rods"].items():
+        add(f"- {count} x rod `{name}`")
+    pins = bom["pins"]
+    add(f"- {pins['count']} pins, {pins['diameter_mm']:g} mm diameter, cut to {pins['length_mm']:g} mm "
+        f"({pins['note']})")
+    if "filament_g" in bom:
+        add(f"- Filament: {bom['filament_g']:.1f} g in all ({d.catalog[r.type_names[0]].material.name})")
+        for b in bom["metal_balls"]:
+            add(f"- {b['count']} metal balls of {b['diameter_mm']:g} mm")
+    else:
+        add("- Filament and metal balls: run with CAD (without --no-cad) for exact figures")
+    add(f"- Total chain mass: {bom['total_mass_g']:.1f} g")
+    add("")
+    add("## Printing and assembly")
+    add("")
+    if fab is not None:
+        add("1. Print each file of `rods/` as it lies (it is already in print orientation on the bed, "
+            "no support needed).")
+        add("2. Rods with balls: pause the print at the Z height in the table (e.g. PrusaSlicer: "
+            "right-click the layer in the preview slider, 'Add pause print'), drop the balls in, resume.")
+    else:
+        add("1. Build the solids first: run `rodcad build` without `--no-cad`.")
+    add(f"3. Lay the rods out in order 0 to {r.n - 1} (the number leads each file name). Rod k's "
+        "second joint takes rod k+1's first joint; push a pin through both.")
+    add(f"4. Pin rod 0's first joint to anchor A and rod {r.n - 1}'s second joint to anchor B, "
+        f"{d.span:.1f} mm apart (B at ({b[0] - a[0]:+.1f}, {b[1] - a[1]:+.1f}) mm from A).")
+    add("5. Let go gently: the chain settles into the shape of preview.png" +
+        ("." if r.unique else "; several stable shapes exist, so guide it into the designed one."))
+    add("")
+    return "\n".join(L)
+
+
+def _deg(x: float | None) -> str:
+    return "free" if x is None else f"{x:.1f}"
+
+
+def _rod_file(f) -> str:
+    name = getattr(f, "file_stem", None)
+    return f"`rods/{name}.step`" if name else "-"
+
+
+# --------------------------------------------------------------------------- terminal
+
+
+def summary_text(r, outdir: Path | None, data: dict[str, Any]) -> str:
+    """The one-screen summary printed at the end of ``rodcad build``."""
+    L = [f"rodcad: {r.design.name}: {r.n} rods from catalog {r.design.catalog.name}, "
+         f"method {r.method or 'simulate'}, {r.time_s:.1f} s"]
+    if data.get("error"):
+        L.append(f"  shape error   {_fmt_err(data['error'])}")
+    if "as_built" in data:
+        L.append(f"  as built      {_fmt_err(data['as_built']['error'])}")
+    sim = data["simulated"]
+    L.append(f"  equilibrium   {'stable' if sim['stable'] else 'NOT STABLE'}, "
+             f"{'unique' if sim['unique'] else str(sim['stable_equilibria_found']) + ' stable shapes found'}, "
+             f"KKT {sim['kkt_residual']:.1e}")
+    bom = data["bill_of_materials"]
+    rods = ", ".join(f"{v} x {k}" for k, v in bom["rods"].items())
+    L.append(f"  rods          {rods}")
+    if "filament_g" in bom:
+        balls = ", ".join(f"{b['count']} x {b['diameter_mm']:g} mm" for b in bom["metal_balls"]) or "none"
+        L.append(f"  filament      {bom['filament_g']:.1f} g; metal balls: {balls}; "
+                 f"pins: {bom['pins']['count']} x {bom['pins']['diameter_mm']:g} mm")
+    for note in r.notes:
+        L.append(f"  note: {note}")
+    if outdir is not None:
+        files = "design.json, report.md, preview.png"
+        if r.fabrication is not None:
+            files += ", assembly.step, rods/*.step|stl"
+        L.append(f"  files         {outdir}/ ({files})")
+    return "\n".join(L)

@@ -1,0 +1,24 @@
+"""Shared test set-up: one disk cache per test session, never the user's.
+
+Joint limits and mass ranges computed from the B-rep are cached on disk; the
+session cache keeps tests independent of ~/.cache/rodcad while computing each
+catalog once per session. Modules that need a cold cache set their own.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+
+@pytest.fixture(scope="session", autouse=True)
+def session_cache(tmp_path_factory):
+    old = os.environ.get("RODCAD_CACHE_DIR")
+    folder = tmp_path_factory.mktemp("rodcad-cache")
+    os.environ["RODCAD_CACHE_DIR"] = str(folder)
+    yield folder
+    if old is None:
+        os.environ.pop("RODCAD_CACHE_DIR", None)
+    else:
+        os.environ["RODCAD_CACHE_DIR"] = old

@@ -1,0 +1,163 @@
+"""`rodcad build` and `rodcad simulate` end to end (without CAD; CAD is in test_build_cad.py)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from optimize import solve_equilibrium
+from rodcad import pipeline
+from rodcad.cli import main
+from rodcad.design import load_design
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem != "chain")
+
+
+def check_contract(data: dict, n_rods: int | None = None) -> None:
+    """design.json has contract.md's keys and shapes, and its numbers agree with each other."""
+    for key in ("name", "units", "method", "seed", "time_s", "anchors", "target", "rods", "simulated", "error"):
+        assert key in data, key
+    assert data["units"]["length"] == "mm" and data["units"]["mass"] == "g"
+    n = len(data["rods"])
+    if n_rods is not None:
+        assert n == n_rods
+    assert len(data["target"]["points"]) == n + 1 and len(data["simulated"]["points"]) == n + 1
+    for i, rod in enumerate(data["rods"]):
+        assert rod["index"] == i and set(rod) >= {"type", "length", "mass", "com", "limits_deg"}
+        assert (rod["limits_deg"] is None) == (i == n - 1)
+    sim = data["simulated"]
+    assert len(sim["angles_deg"]) == n and len(sim["reaction"]) == 2
+    assert isinstance(sim["stable"], bool) and sim["kkt_residual"] < 1e-8
+    pts = np.array(sim["points"])
+    np.testing.assert_allclose(pts[[0, -1]], data["anchors"], atol=1e-8)
+    # rods have their lengths in the simulated shape
+    np.testing.assert_allclose(np.hypot(*np.diff(pts, axis=0).T), [r["length"] for r in data["rods"]],
+                               rtol=1e-9)
+    err = np.hypot(*(pts - np.array(data["target"]["points"])).T)
+    assert data["error"]["max_mm"] == pytest.approx(err.max(), rel=1e-9, abs=1e-12)
+    assert data["error"]["mean_mm"] == pytest.approx(err.mean(), rel=1e-9, abs=1e-12)
+    span = math.dist(*data["anchors"])
+    assert data["error"]["max_rel_span"] == pytest.approx(err.max() / span, rel=1e-9, abs=1e-15)
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
+def test_every_example_builds_without_cad(example, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["build", str(example), "-o", str(out), "--no-cad", "-q"]) == 0
+    assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg"}
+    data = json.loads((out / "design.json").read_text())
+    check_contract(data)
+    # the simulated shape is the equilibrium of the rods listed, re-solved independently
+    d = load_design(example)
+    rods = data["rods"]
+    lim = np.array([[-np.inf if r["limits_deg"][0] is None else math.radians(r["limits_deg"][0]),
+                     np.inf if r["limits_deg"][1] is None else math.radians(r["limits_deg"][1])]
+                    for r in rods[:-1]]).reshape(-1, 2)
+    eq = solve_equilibrium([r["length"] for r in rods], [r["mass"] for r in rods], *d.anchors,
+                           com=[r["com"] for r in rods], limits=lim if len(rods) > 1 else None)
+    np.testing.assert_allclose(eq.points, data["simulated"]["points"], atol=1e-6 * d.span)
+    # masses are within what the catalog can make
+    for r in rods:
+        lo, hi = d.catalog[r["type"]].mass_range
+        assert lo * (1 - 1e-9) <= r["mass"] <= hi * (1 + 1e-9)
+    report = (out / "report.md").read_text()
+    for heading in ("## Inputs", "## Result", "## Rods", "## Bill of materials", "## Printing and assembly"):
+        assert heading in report
+    assert (out / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "<svg" in (out / "preview.svg").read_text()[:500]
+    summary = capsys.readouterr().out
+    assert "shape error" in summary and str(out) in summary
+
+
+def test_reachable_catenary_example_is_exact():
+    d = load_design(ROOT / "examples" / "catenary.yaml")
+    r = pipeline.build(d, cad=False)
+    assert r.distance.max_rel_span < 1e-6 and r.chain_design.result.exact
+    assert r.equilibrium.stable and r.unique
+
+
+def test_same_seed_same_design_json(tmp_path):
+    ex = ROOT / "examples" / "semicircle.yaml"
+    outs = []
+    for k in range(2):
+        out = tmp_path / f"o{k}"
+        assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q", "--method", "pso", "--seed", "3"]) == 0
+        data = json.loads((out / "design.json").read_text())
+        data.pop("time_s")
+        data["inverse"].pop("time_s")
+        outs.append(data)
+    assert outs[0] == outs[1]
+    assert outs[0]["method"] == "pso" and outs[0]["seed"] == 3
+
+
+def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
+    ex = ROOT / "examples" / "semicircle.yaml"
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mine.txt").write_text("keep me")
+
+    def boom(*a, **k):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr("rodcad.preview.plot_chain", boom)
+    with pytest.raises(RuntimeError):
+        main(["build", str(ex), "-o", str(out), "--no-cad", "-q"])
+    assert [p.name for p in out.iterdir()] == ["mine.txt"]
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary folder left behind
+    monkeypatch.undo()
+    assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0
+    assert not (out / "mine.txt").exists() and (out / "design.json").exists()
+
+
+def test_missed_tolerance_exits_1_and_keeps_outdir(tmp_path, capsys):
+    design = tmp_path / "d.yaml"
+    design.write_text((ROOT / "examples" / "semicircle.yaml").read_text() + "tolerance: 0.001\n")
+    out = tmp_path / "out"
+    assert main(["build", str(design), "-o", str(out), "--no-cad", "-q"]) == 1
+    assert not out.exists()
+    best = tmp_path / "out.best-fit"
+    data = json.loads((best / "design.json").read_text())
+    assert data["meets_tolerance"] is False and data["error"]["max_rel_span"] > 0.001
+    assert "misses its tolerance" in capsys.readouterr().err
+
+
+def test_rod_count_constraint_and_fixed_rod(tmp_path):
+    base = (ROOT / "examples" / "semicircle.yaml").read_text()
+    d = load_design(tmp_path / "d.yaml", text=base + "constraints:\n  lengths: [30]\n"
+                    "  fixed:\n    - {index: 2, type: free-30, mass: 3.0}\n")
+    r = pipeline.build(d, cad=False)
+    assert set(r.lengths) == {30.0}
+    assert r.type_names[2] == "free-30" and r.masses[2] == pytest.approx(3.0, rel=1e-6)
+    with pytest.raises(Exception) as err:
+        pipeline.build(load_design(tmp_path / "d.yaml", text=base + "constraints:\n  rods: 3\n"), cad=False)
+    assert "constraints.rods" in str(err.value) and "not 3" in str(err.value)
+
+
+def test_simulate_json_matches_the_solver(capsys):
+    ex = ROOT / "examples" / "chain.yaml"
+    assert main(["simulate", str(ex), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    d = load_design(ex)
+    assert [r["type"] for r in data["rods"]] == [r.type for r in d.chain]
+    pts = np.array(data["simulated"]["points"])
+    np.testing.assert_allclose(pts[[0, -1]], d.anchors, atol=1e-9)
+    # joints 3 and 4 (between straight-30 rods) rest on their straight stops (computed from the
+    # solids to 0.005 deg): the middle hangs as one bar
+    ang = np.array(data["simulated"]["angles_deg"])
+    for j in (3, 4):
+        hi = data["rods"][j]["limits_deg"][1]
+        assert abs(hi) < 0.01 and ang[j + 1] - ang[j] == pytest.approx(hi, abs=1e-7)
+    assert data["simulated"]["stable"]
+
+
+def test_simulate_table_and_build_needs_a_target(tmp_path, capsys):
+    ex = ROOT / "examples" / "chain.yaml"
+    assert main(["simulate", str(ex)]) == 0
+    assert "straight-30" in capsys.readouterr().out
+    assert main(["build", str(ex), "-o", str(tmp_path / "o")]) == 2
+    assert "no 'target'" in capsys.readouterr().err

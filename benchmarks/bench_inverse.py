@@ -1,8 +1,12 @@
 """Inverse design methods side by side (issue 4): error vs wall time and vs simulator calls.
 
 Targets: the paper's Fig. 7 shapes (semicircle, triangle, regular polygon) and
-its heart (Fig. 9), laid on the shipped catalog pla-pinned, plus a convex target
-reachable within the catalog's mass bounds (a catenary). Every method works on the
+its heart (Fig. 9, the lower outline: see rodcad.targets.heart), laid on the
+shipped catalog pla-weighted (straight stops that meet free corners, wider mass
+ranges), plus a convex target reachable within the catalog's mass bounds (a
+catenary). The triangle comes twice: with sides of 150 mm (five 30 mm rods fit
+each side, so its apex is a joint) and 120 mm deep (sides of 156.2 mm, which no
+combination of 30 and 40 mm rods tiles). Every method works on the
 same InverseProblem; the particle swarms get the same wall-time budget as each
 other (--pso-time), refine runs until it converges. Prints a table and writes
 benchmarks/inverse_convergence.png.
@@ -27,7 +31,8 @@ A, B = (0.0, 0.0), (200.0, 0.0)
 TARGETS = {
     "catenary (reachable)": ("catenary", {"length": 300}),
     "semicircle": ("semicircle", {}),
-    "triangle": ("triangle", {"depth": 120}),
+    "triangle (sides 150)": ("triangle", {"depth": float(np.sqrt(150**2 - 100**2))}),
+    "triangle (depth 120)": ("triangle", {"depth": 120}),
     "polygon (3 sides)": ("polygon", {"sides": 3}),
     "heart": ("heart", {}),
 }
@@ -37,12 +42,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pso-time", type=float, default=3.0, help="seconds per PSO run")
     ap.add_argument("--seeds", type=int, default=3, help="PSO seeds per target")
+    ap.add_argument("--catalog", default="pla-weighted", help="catalog name or file")
     ap.add_argument("--png", default=str(Path(__file__).with_name("inverse_convergence.png")))
     args = ap.parse_args()
 
-    cat = load_catalog("pla-pinned")
+    cat = load_catalog(args.catalog)
     arrays = catalog_arrays(cat)
     rows, curves = [], {}
+    print(f"catalog {cat.name}")
     print(f"{'target':<22} {'N':>3} {'method':<11} {'max err/span':>13} {'time s':>8} "
           f"{'sim calls':>9}  note")
     for label, (form, params) in TARGETS.items():
@@ -68,20 +75,33 @@ def main() -> None:
             rows.append((label, method, err, float(np.median(times)), int(np.median(calls))))
             print(f"{label:<22} {prob.n:>3} {method:<11} {err:>13.3e} {np.median(times):>8.3f} "
                   f"{int(np.median(calls)):>9}  {note}")
+        unmet = (f"; {len(plan.unmet_joints)} joint(s) no pair of types can hold: "
+                 f"{plan.unmet_joints}" if plan.unmet_joints else "")
         print(f"{'':<22} discretisation error {plan.discretization.curve_error:.2f} mm; "
-              f"stop mismatch {np.degrees(min(plan.assign_cost, 1e3)):.1f} deg")
+              f"stop mismatch {np.degrees(plan.assign_cost):.1f} deg{unmet}")
+        print(f"{'':<22} types: {_types_summary(plan.type_names)}")
 
     print("\nrefine vs guided PSO at the same wall time (guided PSO's best error when it had used "
           "as much time as refine took, and at its full budget):")
     for label in TARGETS:
         ref = next(r for r in rows if r[0] == label and r[1] == "refine")
         hist = curves[label]["guided-pso"]
-        at_same = min((e for _, t, e in hist if t <= ref[3]), default=float("nan"))
+        early = [e for _, t, e in hist if t <= ref[3]]
+        at_same = min(early) if early else hist[0][2]
+        first = "" if early else f" (its first result, at {hist[0][1]:.3f} s)"
         full = next(r for r in rows if r[0] == label and r[1] == "guided-pso")[2]
         ratio_same = at_same / ref[2] if ref[2] > 0 else float("inf")
         ratio_full = full / ref[2] if ref[2] > 0 else float("inf")
-        print(f"  {label:<22} refine {ref[2]:.2e} in {ref[3]:.3f} s; guided PSO {at_same:.2e} "
+        print(f"  {label:<22} refine {ref[2]:.2e} in {ref[3]:.3f} s; guided PSO {at_same:.2e}{first} "
               f"(x{ratio_same:.3g}) then {full:.2e} after {args.pso_time:g} s (x{ratio_full:.3g})")
+    print("\nrefine vs guided PSO at the same number of simulator calls (guided PSO's best error "
+          "after as many calls as refine used):")
+    for label in TARGETS:
+        ref = next(r for r in rows if r[0] == label and r[1] == "refine")
+        hist = curves[label]["guided-pso"]
+        at_same = min((e for n, _, e in hist if n <= ref[4]), default=float("nan"))
+        ratio = at_same / ref[2] if ref[2] > 0 else float("inf")
+        print(f"  {label:<22} refine {ref[2]:.2e} in {ref[4]} calls; guided PSO {at_same:.2e} (x{ratio:.3g})")
     print("\nguided PSO vs plain PSO (median final error, same time):")
     for label in TARGETS:
         g = next(r for r in rows if r[0] == label and r[1] == "guided-pso")[2]
@@ -90,6 +110,18 @@ def main() -> None:
               f"{'guided better' if g < p else 'plain better or equal'}")
     _plot(curves, args.png)
     print(f"\nwrote {args.png}")
+
+
+def _types_summary(names) -> str:
+    """Rod types along the chain, runs collapsed: 'straight-30 x4, straight-free-30, ...'."""
+    out, k = [], 0
+    while k < len(names):
+        j = k
+        while j + 1 < len(names) and names[j + 1] == names[k]:
+            j += 1
+        out.append(names[k] + (f" x{j - k + 1}" if j > k else ""))
+        k = j + 1
+    return ", ".join(out)
 
 
 def _plot(curves, path) -> None:

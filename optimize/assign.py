@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["assign_types"]
+__all__ = ["assign_types", "joint_mismatch"]
 
 _BIG = 1e6
 
@@ -61,17 +61,7 @@ def assign_types(
     cost = node[0].copy()
     back = np.zeros((n, t), dtype=int)
     for j in range(n - 1):
-        if phi[j] < stop_below:
-            # needs a stop at exactly phi: mismatch of the upper limit, or impossible
-            # a stop above the bend lets the joint sag past it (masses may compensate);
-            # one below it forces a bend the target does not have: ten times worse
-            gap = hi - phi[j]
-            edge = np.where(np.isfinite(hi), np.where(gap >= 0, gap, -10.0 * gap), _BIG)
-            edge = edge + np.where(phi[j] < lo, _BIG * (lo - phi[j] + 1), 0.0)
-        else:
-            over = np.maximum(phi[j] - (hi - margin), 0.0)
-            under = np.maximum((lo + margin) - phi[j], 0.0)
-            edge = 10.0 * (over + under) + np.where((phi[j] > hi) | (phi[j] < lo), _BIG, 0.0)
+        edge = _edge_cost(phi[j], lo, hi, stop_below, margin)
         total = cost[:, None] + edge  # (left type, right type)
         back[j + 1] = np.argmin(total, axis=0)
         cost = total[back[j + 1], np.arange(t)] + node[j + 1]
@@ -82,3 +72,58 @@ def assign_types(
         types[k - 1] = back[k, types[k]]
     limits = lim[types[:-1], types[1:]] if n > 1 else np.zeros((0, 2))
     return types, limits, best - float(np.sum(pref[types]))
+
+
+def _edge_cost(phi: float, lo, hi, stop_below: float, margin: float):
+    """Cost of bending ``phi`` at joints with limits [lo, hi] (arrays broadcast).
+
+    A joint bending less than ``stop_below`` needs a stop at exactly phi: a stop above the
+    bend lets the joint sag past it (the masses may compensate), one below it forces a bend
+    the target does not have (ten times worse); no stop at all on the sagging side, or a
+    lower limit above the bend, is impossible. A free joint should stay ``margin`` inside
+    its limits (ten times the intrusion) and is impossible outside them.
+    """
+    if phi < stop_below:
+        gap = hi - phi
+        edge = np.where(np.isfinite(hi), np.where(gap >= 0, gap, -10.0 * gap), _BIG)
+        return edge + np.where(phi < lo, _BIG * (lo - phi + 1), 0.0)
+    over = np.maximum(phi - (hi - margin), 0.0)
+    under = np.maximum((lo + margin) - phi, 0.0)
+    return 10.0 * (over + under) + np.where((phi > hi) | (phi < lo), _BIG, 0.0)
+
+
+def joint_mismatch(
+    bends,
+    limits,
+    *,
+    stop_below: float = np.radians(0.5),
+    margin: float = np.radians(3.0),
+) -> np.ndarray:
+    """Per joint, how far the chosen limits are from what the target needs (radians).
+
+    Args:
+        bends: (N-1,) target bends in radians.
+        limits: (N-1, 2) limits [lo, hi] of the chosen pairs (radians; -inf / inf where
+            nothing collides; (inf, -inf) marks a pair that cannot be joined).
+        stop_below, margin: as in :func:`assign_types`.
+
+    Returns:
+        (N-1,) array: for a joint needing a stop, |hi - bend| (0 when the stop sits exactly
+        at the bend); for a free joint, how far the bend intrudes into the margin at its
+        limits (0 when clear). ``inf`` where the target bend is impossible with that pair:
+        a stop needed and none on the sagging side, the bend outside the limits, or a pair
+        that cannot be joined.
+    """
+    phi = np.asarray(bends, dtype=float)
+    lim = np.asarray(limits, dtype=float).reshape(-1, 2)
+    out = np.zeros(phi.size)
+    for j, (p, (lo, hi)) in enumerate(zip(phi, lim)):
+        if not lo <= hi:
+            out[j] = np.inf
+        elif p < stop_below:
+            out[j] = abs(hi - p) if np.isfinite(hi) and p >= lo else np.inf
+        elif p > hi or p < lo:
+            out[j] = np.inf
+        else:
+            out[j] = max(p - (hi - margin), 0.0) + max((lo + margin) - p, 0.0)
+    return out

@@ -181,13 +181,13 @@ def discretize(
     total = s_given[-1]
     if total <= 0:
         raise ValueError("the target curve has zero length")
-    dense = resample(curve, max(4000, 20 * len(curve)))
-    s = np.linspace(0, total, len(dense))
-    # keep corners exact in the dense copy
-    for c in corners_in:
-        k = int(np.argmin(np.abs(s - s_given[c])))
-        dense[k] = curve[c]
-        s[k] = s_given[c]
+    # a dense copy for walking that keeps every given vertex exactly (corners, and the
+    # gentler bends of a sparse polyline, such as a concave stop's vertex)
+    keep = np.concatenate([[True], np.diff(s_given) > 0])
+    s = np.union1d(np.linspace(0, total, max(4000, 20 * len(curve))), s_given[keep])
+    dense = np.column_stack([np.interp(s, s_given[keep], curve[keep, 0]),
+                             np.interp(s, s_given[keep], curve[keep, 1])])
+    dense[np.searchsorted(s, s_given[keep])] = curve[keep]
     if preferred is None:
         fits = [l for l in allowed if total / l >= 8]
         preferred = max(fits) if fits else min(allowed)

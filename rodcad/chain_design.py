@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize import InverseProblem, InverseResult, design, find_equilibria
-from optimize.assign import assign_types
+from optimize.assign import assign_types, joint_mismatch
 from optimize.discretize import Discretization, discretize
 
 __all__ = ["ChainPlan", "ChainDesign", "plan_chain", "design_chain", "catalog_arrays"]
@@ -36,7 +36,14 @@ class ChainPlan:
         discretization: joints on the curve and the discretisation error.
         type_names: rod type per position.
         problem: the inverse problem handed to :mod:`optimize`.
-        assign_cost: radians of mismatch between needed and available stops (0 = all met).
+        assign_cost: radians of mismatch between needed and available stops, summed over
+            the joints where the target bend is possible with the chosen pair (0 = all met).
+        notes: what the plan could not do, in words.
+        joint_mismatch: (N-1,) per joint mismatch in radians (see
+            :func:`optimize.assign.joint_mismatch`); inf where the chosen pair cannot hold
+            the target bend at all.
+        unmet_joints: joints whose target bend no allowed pair of types can hold (a straight
+            or concave bend with no stop there, or a bend beyond every limit).
     """
 
     curve: np.ndarray
@@ -45,6 +52,8 @@ class ChainPlan:
     problem: InverseProblem
     assign_cost: float
     notes: list[str] = field(default_factory=list)
+    joint_mismatch: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    unmet_joints: list[int] = field(default_factory=list)
 
 
 @dataclass
@@ -87,6 +96,7 @@ def plan_chain(
     lengths: Sequence[float] | None = None,
     preferred_length: float | None = None,
     arrays=None,
+    snap_stops: float = np.radians(0.01),
 ) -> ChainPlan:
     """Lay a chain of the catalog's rods on the target curve.
 
@@ -97,6 +107,11 @@ def plan_chain(
         lengths: restrict rod lengths to these values (default: the allowed types' lengths).
         preferred_length: the length to use most (default: chosen by the chord walk).
         arrays: precomputed :func:`catalog_arrays` (to share between chains).
+        snap_stops: a stop whose computed limit lies within this many radians of the target
+            bend it must hold is taken to sit exactly at the bend (default 0.01 deg). Limits
+            come from a search on the B-rep to 0.005 deg (:data:`rodcad.limits.TOLERANCE_DEG`),
+            so a flush stop designed for 0 deg reads -0.0006 deg; without snapping, the
+            straight run would be 0.0006 deg from its stop and the exact statics would fail.
 
     Raises:
         ValueError: the rods cannot be laid on the curve (explained).
@@ -119,12 +134,34 @@ def plan_chain(
     joinable = np.where(np.isnan(t_lim), 0.0, t_lim)
     # unjoinable pairs: limits that exclude every bend
     joinable[np.isnan(t_lim[..., 0])] = [np.inf, -np.inf]
-    chosen, limits, cost = assign_types(np.diff(theta), allowed, joinable)
+    bends = np.diff(theta)
+    chosen, limits, _ = assign_types(bends, allowed, joinable)
+    limits = np.array(limits, dtype=float)
+    if limits.size:
+        stop = (bends < np.radians(0.5)) & (np.abs(limits[:, 1] - bends) <= snap_stops)
+        limits[stop, 1] = bends[stop]
+    mismatch = joint_mismatch(bends, limits)
+    unmet = [int(j) for j in np.flatnonzero(~np.isfinite(mismatch))]
+    cost = float(np.sum(mismatch[np.isfinite(mismatch)]))
     notes = []
-    if cost > 1e-3:
+    for j in np.flatnonzero(mismatch > np.radians(0.5)):
+        need = np.degrees(bends[j])
+        lo, hi = np.degrees(limits[j])
+        pair = f"{names[chosen[j]]} -> {names[chosen[j + 1]]}"
+        if not lo <= hi:
+            have = "no pair of allowed types joins there"
+        elif bends[j] < np.radians(0.5):
+            have = f"the nearest stop of the allowed types ({pair}) is at {hi:.1f} deg"
+        else:
+            have = f"the best pair of allowed types ({pair}) bends within [{lo:.1f}, {hi:.1f}] deg"
+        kind = "a stop at" if bends[j] < np.radians(0.5) else "a free bend of"
+        notes.append(f"joint {j} needs {kind} {need:.1f} deg, but {have}")
+    if notes:
         notes.append(
-            f"the catalog's stops match the target's straight and concave bends only to "
-            f"{np.degrees(cost):.1f} degrees in all; the masses will fit as well as they can"
+            f"the catalog's stops and limits miss what the target needs by "
+            f"{np.degrees(cost):.1f} degrees in all"
+            + (f" and cannot hold joint(s) {unmet} at all" if unmet else "")
+            + "; the masses will fit the target as well as they can"
         )
     problem = InverseProblem(
         target=disc.points,
@@ -133,7 +170,8 @@ def plan_chain(
         com=t_com[chosen],
         limits=limits if n > 1 else np.zeros((0, 2)),
     )
-    return ChainPlan(np.asarray(curve, float), disc, [names[i] for i in chosen], problem, cost, notes)
+    return ChainPlan(np.asarray(curve, float), disc, [names[i] for i in chosen], problem, cost, notes,
+                     mismatch, unmet)
 
 
 def design_chain(

@@ -105,23 +105,41 @@ def polygon(a, b, sides: int) -> np.ndarray:
 
 
 def heart(a, b, samples: int = 600) -> np.ndarray:
-    """The classic heart outline, hung from the tops of its two lobes (A and B).
+    """The lower outline of a heart, hung from the widest points of its lobes (A and B).
 
-    Uses x = 16 sin^3 t, y = 13 cos t - 5 cos 2t - 2 cos 3t - cos 4t, traversed from the
-    left lobe's top round its outside, the bottom tip and the right lobe to its top; the
-    cusp between the lobes is left open. The heart is about 2.3 times as tall as A and B
-    are apart. Its lobes turn back over the anchors, which a hanging chain reaches only
-    with stops (rigid runs), so it is a bounded best-fit target.
+    The heart is the classic geometric one: a square standing on a corner (the tip), with a
+    half circle on each of its two upper sides (the lobes). The target runs from the left
+    lobe's widest point down its outside (an eighth of a circle), along the straight left
+    side to the tip (a 90 degree corner), and back up the other side to the right lobe's
+    widest point. A and B are 1.71 times the square's side apart; the tip hangs 1.06 sides
+    below them.
+
+    Why only the lower outline: a chain between two anchors is one open curve, and a hanging
+    chain is in tension, so every rod whose joints are free points from A toward B (its
+    chord has a positive x component). The rest of the outline (the lobes' tops and the dip
+    between them) lies above the widest points and turns back toward the anchors: as part
+    of the chain it would be in compression. The paper's Fig. 9 heart prints that "central"
+    part as one rigid body; here it is the mount that holds A and B. What the chain must do
+    is still more than a curve of free joints can: straight sides (stops at straight) that
+    meet a freely bending tip and freely bending lobe arcs, and near-vertical ends (mass
+    ratios beyond fabrication bounds), so it is a bounded best-fit target.
     """
-    t0 = 0.9081  # parameter of the lobe tops (where y is largest)
-    t = np.linspace(-t0, -2 * np.pi + t0, samples)  # clockwise from left of the cusp
-    x = 16 * np.sin(t) ** 3
-    y = 13 * np.cos(t) - 5 * np.cos(2 * t) - 2 * np.cos(3 * t) - np.cos(4 * t)
-    pts = np.column_stack([x, y])
-    # similarity map sending the first point to A and the last to B
-    p0, p1 = pts[0], pts[-1]
-    scale = 1.0 / np.hypot(*(p1 - p0))
-    local = (pts - p0) * scale
+    _, _, _, span = _frame(a, b)
+    c = np.sqrt(0.5)
+    s = 1.0 / (1.0 + c)  # square side in span units: span = (1 + 1/sqrt 2) s
+    r = s / 2
+    # frame: A at (0, 0), B at (1, 0); lobe centres at the anchors' height
+    centre_l = np.array([r, 0.0])
+    centre_r = np.array([1.0 - r, 0.0])
+    tip = np.array([0.5, -1.5 * c * s])  # the lobe's lowest side end is c*s/2 below A
+    k = max(8, samples // 6)
+    t = np.linspace(np.pi, 1.25 * np.pi, k)  # widest point down to where the side leaves
+    arc_l = centre_l + r * np.column_stack([np.cos(t), np.sin(t)])
+    arc_r = (centre_r + r * np.column_stack([np.cos(-t + np.pi), np.sin(-t + np.pi)]))[::-1]
+    m = max(2, samples // 3)
+    side_l = arc_l[-1] + np.linspace(0, 1, m)[1:, None] * (tip - arc_l[-1])
+    side_r = tip + np.linspace(0, 1, m)[1:, None] * (arc_r[0] - tip)
+    local = np.vstack([arc_l, side_l, side_r[:-1], arc_r])
     return _place(a, b, local)
 
 

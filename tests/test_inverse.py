@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from optimize import solve_equilibrium
-from optimize.assign import assign_types
+from optimize.assign import assign_types, joint_mismatch
 from optimize.discretize import discretize
 from optimize.inverse import InverseProblem, design, statics_matrix
 
@@ -144,3 +144,31 @@ def test_bad_problem_input():
     prob, _ = reachable_problem()
     with pytest.raises(ValueError, match="method must be one of"):
         design(prob, "annealing")
+
+
+def test_mixed_end_types_let_stops_meet_free_corners_and_concave_stops():
+    # ends: F free (top chamfer 50), S stop (0), C concave (-20); types (first, second)
+    ends = {"F": 50.0, "S": 0.0, "C": -20.0}
+    kinds = [("F", "F"), ("S", "S"), ("S", "F"), ("F", "S"), ("C", "S")]
+    t = len(kinds)
+    lim = np.zeros((t, t, 2))
+    for i, (_, second) in enumerate(kinds):
+        for k, (first, _) in enumerate(kinds):
+            lim[i, k] = [-np.radians(100), np.radians(ends[second] + ends[first])]
+    # a straight run, a 90 degree corner, a straight run bending -20 into another
+    bends = np.radians([0, 0, 90, 0, 0, -20, 0])
+    types, limits, cost = assign_types(bends, np.ones((8, t), bool), lim)
+    assert cost < 1e-9
+    assert [kinds[k] for k in types[2:4]] == [("S", "F"), ("F", "S")]  # free ends at the corner
+    assert kinds[types[6]] == ("C", "S")
+    np.testing.assert_allclose(np.degrees(limits[:, 1]), [0, 0, 100, 0, 0, -20, 0], atol=1e-9)
+    np.testing.assert_array_equal(joint_mismatch(bends, limits), 0.0)
+
+
+def test_joint_mismatch_counts_degrees_and_flags_the_impossible():
+    bends = np.radians([0.0, -20.0, 30.0, 0.0, 40.0])
+    limits = np.radians([[-100, 0.0], [-100, 0.0], [-100, 100], [-100, 100], [-100, 38]])
+    limits = np.vstack([limits, [np.inf, -np.inf]])  # a pair that cannot be joined
+    out = np.degrees(joint_mismatch(np.append(bends, 0.0), limits))
+    np.testing.assert_allclose(out[:4], [0.0, 20.0, 0.0, 100.0])
+    assert np.isinf(out[4]) and np.isinf(out[5])  # beyond the limit; unjoinable

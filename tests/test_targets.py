@@ -73,3 +73,14 @@ def test_svg_is_mapped_onto_the_anchors():
 def test_bad_target_parameters(form, params, match):
     with pytest.raises(ValueError, match=match):
         T.make_target(form, A, B, **params)
+
+
+def test_heart_is_a_hangable_lower_outline():
+    c = T.heart(A, B)
+    d = np.diff(c, axis=0)
+    assert np.all(d[:, 0] > 0)  # every chord points from A toward B: a chain in tension
+    turn = np.degrees(np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0]))))
+    assert turn.min() > -1e-9  # no concave bend: the lobes' tops and the dip are the mount
+    assert turn.max() == pytest.approx(90.0, abs=1e-6)  # the tip of a square heart
+    assert c[np.argmin(c[:, 1])] == pytest.approx([100.0, -200 * 1.5 / (np.sqrt(2) + 1)], abs=1e-9)
+    assert np.degrees(np.arctan2(d[0, 1], d[0, 0])) < -85  # vertical at the widest point

@@ -18,6 +18,11 @@ and z, or the point reflection through the com axis combined with the z
 mirror; whichever keeps more). The removed or added volume is then centred on
 the centre of mass, so **the com does not move across the mass range**.
 
+The voids are the printable shapes :mod:`rodcad.fabricate` cuts (see
+:data:`VOIDS`): cavities are spheres capped flat at 45 degrees, sockets are
+"silos" (half sphere + cylinder with a bridged roof) standing on one print
+layer, raised slightly so socket and ball together keep the com.
+
 The building blocks (:func:`lattice_sites`, :func:`symmetric_subset`,
 :func:`sphere_layout`, :func:`max_cavity_layout`, :func:`max_ball_layout`,
 :class:`rodcad.geometry.Clearance`) are meant to be reused by the fabrication
@@ -45,6 +50,11 @@ __all__ = [
     "MIN_CAVITY_RADIUS",
     "LATTICES",
     "SYMMETRIES",
+    "UP",
+    "VOIDS",
+    "ball_offset",
+    "silo_rim_points",
+    "void_volume",
     "MassInfo",
     "SphereLayout",
     "lattice_sites",
@@ -57,7 +67,8 @@ __all__ = [
 ]
 
 #: Bump when results change (invalidates cached mass ranges).
-MASSRANGE_VERSION = "1"
+#: 2: printable void shapes (capped cavities, silo sockets on one print layer).
+MASSRANGE_VERSION = "2"
 
 #: Smallest cavity radius considered (mm): 1 mm cavities still print as voids.
 MIN_CAVITY_RADIUS = 0.5
@@ -72,6 +83,68 @@ SYMMETRIES = ("mirror-xyz", "point-xy")
 
 Clearance = Callable[[np.ndarray], np.ndarray]
 
+#: Print "up" in the rod frame: every rod prints on its side, the -y face on
+#: the bed, so the rod frame's +y is the printer's +Z.
+UP = np.array([0.0, 1.0, 0.0])
+
+#: Void shapes, all of "radius" r around a centre c (the print's up is :data:`UP`):
+#:
+#: * 'sphere': the plain sphere (layout search only; not printable without
+#:   support when large).
+#: * 'capped': the sphere cut flat at +-r/sqrt(2) along up. Its walls overhang
+#:   at most 45 degrees and its roof is a flat disc of diameter r sqrt(2),
+#:   bridged; it lies inside the sphere, so wherever a sphere fits it does.
+#:   Cavities have this shape.
+#: * 'silo': a ball socket: the lower half sphere plus a vertical cylinder of
+#:   the same radius up to c + r, closed by a flat bridged roof. The print
+#:   pauses just below the roof and the ball drops in (its top stays below the
+#:   roof). Its top rim reaches past the sphere, so fits are checked there too.
+VOIDS = ("sphere", "capped", "silo")
+
+_CAPPED = 4.0 / 3.0 * math.pi - 2.0 * math.pi * (1 - 1 / math.sqrt(2)) ** 2 * (2 + 1 / math.sqrt(2)) / 3
+
+
+def void_volume(kind: str, radius: float) -> float:
+    """Volume (mm^3) of one void of shape ``kind`` (see :data:`VOIDS`) and radius (mm)."""
+    r3 = radius**3
+    if kind == "sphere":
+        return 4.0 / 3.0 * math.pi * r3
+    if kind == "capped":
+        return _CAPPED * r3
+    if kind == "silo":
+        return 5.0 / 3.0 * math.pi * r3
+    raise ValueError(f"unknown void shape {kind!r} (expected one of {', '.join(VOIDS)})")
+
+
+def void_centroid(kind: str, radius: float) -> float:
+    """Height (mm, along :data:`UP`) of a void's centroid above its centre."""
+    # silo: half sphere below (-3r/8, volume 2/3 pi r^3) + cylinder above (r/2, pi r^3)
+    return 0.15 * radius if kind == "silo" else 0.0
+
+
+def ball_offset(socket_radius: float, ball_mass: float, density: float) -> float:
+    """How far (mm, along :data:`UP`) to raise a silo socket above the site it
+    stands for, so that socket (plastic removed) and ball (at the socket centre)
+    together act as a point mass at the site: a symmetric set of sites then
+    leaves the rod's centre of mass where it was.
+
+    Args:
+        socket_radius: mm.
+        ball_mass: g.
+        density: plastic density (g/cm^3).
+    """
+    removed = void_volume("silo", socket_radius) * density / 1000.0
+    return removed * void_centroid("silo", socket_radius) / (ball_mass - removed)
+
+
+def silo_rim_points(centers: np.ndarray, radius: float, n: int = 16) -> np.ndarray:
+    """Points on the top rims of silo sockets, where they reach past the sphere:
+    (len(centers) * 2 n, 3), the rim at c + r up and the ring at c + 0.6 r up."""
+    th = np.linspace(0, 2 * math.pi, n, endpoint=False)
+    ring = np.stack([np.cos(th), np.zeros(n), np.sin(th)], axis=1) * radius
+    rims = np.concatenate([ring + UP * radius, ring * 0.8 + UP * 0.6 * radius])
+    return (np.asarray(centers, dtype=float)[:, None, :] + rims[None]).reshape(-1, 3)
+
 
 @dataclass(frozen=True)
 class SphereLayout:
@@ -82,12 +155,14 @@ class SphereLayout:
         centers: (n, 3) centres in the rod frame (mm).
         symmetry: the symmetry group kept (one of :data:`SYMMETRIES`) or ''.
         lattice: the lattice kind (one of :data:`LATTICES`) or ''.
+        void: the shape of each void (one of :data:`VOIDS`).
     """
 
     radius: float
     centers: np.ndarray = field(repr=False)
     symmetry: str = ""
     lattice: str = ""
+    void: str = "sphere"
 
     @property
     def count(self) -> int:
@@ -95,12 +170,12 @@ class SphereLayout:
 
     @property
     def sphere_volume(self) -> float:
-        """Volume of one sphere (mm^3)."""
-        return 4.0 / 3.0 * math.pi * self.radius**3
+        """Volume of one void (mm^3), of shape :attr:`void`."""
+        return void_volume(self.void, self.radius)
 
     @property
     def volume(self) -> float:
-        """Total volume of the spheres (mm^3)."""
+        """Total volume of the voids (mm^3)."""
         return self.count * self.sphere_volume
 
     @classmethod
@@ -194,57 +269,74 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
 
 def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
                   center: Sequence[float], radius: float, wall: float,
-                  symmetries: Iterable[str] = SYMMETRIES, lattices: Iterable[str] = LATTICES) -> SphereLayout:
-    """Most equal spheres of ``radius`` that fit with ``wall`` everywhere, in a
+                  symmetries: Iterable[str] = SYMMETRIES, lattices: Iterable[str] = LATTICES, *,
+                  void: str = "sphere", raise_by: float = 0.0) -> SphereLayout:
+    """Most equal voids of ``radius`` that fit with ``wall`` everywhere, in a
     symmetric lattice layout centred on ``center``.
 
     Tries each lattice kind with offsets 0 and half a lattice step on each axis,
-    and each symmetry group; returns the layout with the most spheres (ties:
+    and each symmetry group; returns the layout with the most voids (ties:
     the first found, so the result is deterministic).
 
     Args:
         clearance: signed distance to the solid's boundary (mm), vectorised.
         bounds: the solid's bounding box.
         center: centre of mass (mm), the centre of symmetry.
-        radius: sphere radius (mm).
-        wall: minimum wall to the boundary and between spheres (mm).
+        radius: void radius (mm).
+        wall: minimum wall to the boundary and between voids (mm).
         symmetries: symmetry groups to try.
         lattices: lattice kinds to try.
+        void: void shape (:data:`VOIDS`). 'silo' sockets use the cubic
+            lattice only (a silo's rim reaches past its sphere, so neighbours
+            may only sit beside, above or diagonal to it) and their top rims
+            are checked against the boundary too.
+        raise_by: the voids sit this far (mm) above their symmetric sites along
+            :data:`UP` (see :func:`ball_offset`); the returned centres are the
+            raised ones.
     """
+    void_volume(void, radius)  # validates the kind
     need = radius + wall
     inner = (tuple(b + need for b in bounds[0]), tuple(b - need for b in bounds[1]))
     pitch = 2 * radius + wall
+    lift = UP * raise_by
     best = SphereLayout.empty()
     symmetries = tuple(symmetries)
+    if void == "silo":
+        lattices = [k for k in lattices if k == "cubic"]
     for kind in lattices:
         for offset in ((ox, oy, oz) for ox in (0.0, 0.5) for oy in (0.0, 0.5) for oz in (0.0, 0.5)):
             pts = lattice_sites(inner, center, pitch, offset, kind)
             if len(pts) <= best.count:
                 continue
-            feasible = clearance(pts) >= need
+            feasible = clearance(pts + lift) >= need
+            if void == "silo" and feasible.any():
+                idx = np.flatnonzero(feasible)
+                rim = clearance(silo_rim_points(pts[idx] + lift, radius)).reshape(len(idx), -1)
+                feasible[idx] = rim.min(axis=1) >= wall
             if feasible.sum() <= best.count:
                 continue
             for sym in symmetries:
                 keep = symmetric_subset(pts, feasible, center, sym)
                 if keep.sum() > best.count:
-                    best = SphereLayout(radius, pts[keep], sym, kind)
+                    best = SphereLayout(radius, pts[keep] + lift, sym, kind, void)
     return best
 
 
 def max_cavity_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
                       center: Sequence[float], wall: float, *, r_min: float = MIN_CAVITY_RADIUS,
-                      r_max: float | None = None) -> SphereLayout:
+                      r_max: float | None = None, void: str = "sphere") -> SphereLayout:
     """The symmetric lattice layout of equal cavities removing the most volume.
 
     Radii from ``r_max`` (default: half the smallest bounding-box side less a
     wall) down to ``r_min`` by factors of :data:`RADIUS_STEP` are tried.
+    ``void`` is the cavity shape (:data:`VOIDS`).
     """
     if r_max is None:
         r_max = min(hi - lo for lo, hi in zip(*bounds)) / 2 - wall
     best = SphereLayout.empty()
     r = r_max
     while r >= r_min - 1e-12:
-        layout = sphere_layout(clearance, bounds, center, r, wall)
+        layout = sphere_layout(clearance, bounds, center, r, wall, void=void)
         if layout.volume > best.volume + 1e-9:
             best = layout
         r *= RADIUS_STEP
@@ -252,9 +344,12 @@ def max_cavity_layout(clearance: Clearance, bounds: tuple[Sequence[float], Seque
 
 
 def max_ball_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
-                    center: Sequence[float], socket_diameter: float, wall: float) -> SphereLayout:
-    """The symmetric lattice layout with the most ball sockets."""
-    return sphere_layout(clearance, bounds, center, socket_diameter / 2, wall)
+                    center: Sequence[float], socket_diameter: float, wall: float, *,
+                    void: str = "sphere", raise_by: float = 0.0) -> SphereLayout:
+    """The symmetric lattice layout with the most ball sockets (``void``
+    'silo' for the printable sockets, raised by ``raise_by``, see
+    :func:`ball_offset`)."""
+    return sphere_layout(clearance, bounds, center, socket_diameter / 2, wall, void=void, raise_by=raise_by)
 
 
 # --------------------------------------------------------------------------- per type
@@ -304,7 +399,8 @@ def _key(rod: RodType) -> str:
 
 
 def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
-    """The cavity layout at m_min and the ball layout at m_max of a rod type."""
+    """The cavity layout at m_min ('capped' voids) and the ball socket layout
+    at m_max ('silo' voids, raised by :func:`ball_offset`) of a rod type."""
     from rodcad.geometry import Clearance as _Clearance
     from rodcad.geometry import mass_properties
 
@@ -312,9 +408,13 @@ def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
     props = mass_properties(solid)
     clearance = _Clearance(solid)
     wall = rod.material.min_wall
-    cavities = max_cavity_layout(clearance, clearance.bounds, props.center, wall)
-    balls = (max_ball_layout(clearance, clearance.bounds, props.center, rod.balls.socket_diameter, wall)
-             if rod.balls is not None else SphereLayout.empty())
+    cavities = max_cavity_layout(clearance, clearance.bounds, props.center, wall, void="capped")
+    if rod.balls is None:
+        return cavities, SphereLayout.empty()
+    rs = rod.balls.socket_diameter / 2
+    lift = ball_offset(rs, rod.balls.mass, rod.material.density)
+    balls = max_ball_layout(clearance, clearance.bounds, props.center, rod.balls.socket_diameter, wall,
+                            void="silo", raise_by=lift)
     return cavities, balls
 
 

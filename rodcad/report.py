@@ -250,8 +250,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         f"({pins['note']})")
     if "filament_g" in bom:
         add(f"- Filament: {bom['filament_g']:.1f} g in all ({d.catalog[r.type_names[0]].material.name})")
-        for b in bom["metal_balls"]:
-            add(f"- {b['count']} metal balls of {b['diameter_mm']:g} mm")
+        for ball in bom["metal_balls"]:
+            add(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
     else:
         add("- Filament and metal balls: run with CAD (without --no-cad) for exact figures")
     add(f"- Total chain mass: {bom['total_mass_g']:.1f} g")

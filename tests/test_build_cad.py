@@ -1,0 +1,74 @@
+"""`rodcad build` with CAD on a shipped example: the files a person prints from."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodcad.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "semicircle.yaml"
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("build") / "semicircle"
+    assert main(["build", str(EXAMPLE), "-o", str(out), "--jobs", "2", "-q"]) == 0
+    return out, json.loads((out / "design.json").read_text())
+
+
+def test_cad_outputs_exist_and_design_json_has_as_built(built):
+    out, data = built
+    n = len(data["rods"])
+    assert (out / "assembly.step").stat().st_size > 0
+    steps = sorted((out / "rods").glob("*.step"))
+    stls = sorted((out / "rods").glob("*.stl"))
+    assert len(steps) == len(stls) >= 1
+    assert {p.stem for p in steps} == {p.stem for p in stls}
+    ab = data["as_built"]
+    assert len(ab["masses"]) == n and len(ab["points"]) == n + 1
+    # every rod's printed mass is its designed mass within 0.1 %
+    np.testing.assert_allclose(ab["masses"], [r["mass"] for r in data["rods"]], rtol=1e-3)
+    # the as-built chain hangs where the design does: within 0.2 % of the span of the target
+    assert ab["error"]["max_rel_span"] <= data["error"]["max_rel_span"] + 2e-3
+    sim = np.array(data["simulated"]["points"])
+    span = np.hypot(*np.subtract(*data["anchors"]))
+    assert np.max(np.hypot(*(np.array(ab["points"]) - sim).T)) / span < 2e-3
+
+
+def test_rod_files_are_valid_and_watertight(built):
+    import trimesh
+
+    from rodcad.geometry import import_step, is_valid_solid, mass_properties
+
+    out, data = built
+    for step in sorted((out / "rods").glob("*.step")):
+        solid = import_step(step)
+        assert is_valid_solid(solid)
+        mesh = trimesh.load_mesh(step.with_suffix(".stl"))
+        assert mesh.is_watertight
+        vol = mass_properties(solid).volume
+        assert mesh.volume == pytest.approx(vol, rel=1e-3)
+        # print orientation: lying on the bed
+        assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_assembly_step_holds_a_named_solid_per_rod(built):
+    from rodcad.geometry import read_assembly
+
+    out, data = built
+    parts = read_assembly(out / "assembly.step")
+    names = [name for name, _ in parts]
+    for rod in data["rods"]:
+        assert any(name.startswith(f"{rod['index']:02d}_") and rod["type"] in name for name in names), names
+
+
+def test_report_lists_fabrication(built):
+    out, data = built
+    report = (out / "report.md").read_text()
+    assert "as built" in report.lower() and "Filament:" in report
+    assert data["bill_of_materials"]["filament_g"] > 0

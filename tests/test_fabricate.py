@@ -1,0 +1,192 @@
+"""Fabrication (issue 5): masses, centres of mass, walls, printability and the files.
+
+Everything is measured on the solids and files written, not taken from the plan.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+
+from rodcad import geometry
+from rodcad.cache import DiskCache
+from rodcad.catalog import load_catalog
+from rodcad.fabricate import fabricate_chain, fabricate_rod, write_assembly, write_rod_files
+from rodcad.massrange import void_volume
+
+
+@pytest.fixture(scope="module")
+def cache_dir(tmp_path_factory: pytest.TempPathFactory):
+    old = os.environ.get("RODCAD_CACHE_DIR")
+    path = tmp_path_factory.mktemp("cache")
+    os.environ["RODCAD_CACHE_DIR"] = str(path)
+    yield path
+    if old is None:
+        os.environ.pop("RODCAD_CACHE_DIR", None)
+    else:
+        os.environ["RODCAD_CACHE_DIR"] = old
+
+
+@pytest.fixture(scope="module")
+def catalog(cache_dir: Path):
+    return load_catalog("pla-pinned")
+
+
+@pytest.fixture(scope="module")
+def chain(catalog):
+    """Light (catalog minimum, mid), solid, heavy (catalog maximum), a duplicate, one above range."""
+    f20, s20 = catalog["free-20"], catalog["straight-20"]
+    lo, hi = f20.mass_range
+    types = [f20, f20, s20, s20, f20, f20]
+    masses = [lo, (lo + f20.solid_mass) / 2, s20.solid_mass, s20.mass_range[1], (lo + f20.solid_mass) / 2,
+              hi * 1.05]
+    return types, masses, fabricate_chain(types, masses, seed=3, jobs=2)
+
+
+def _measured(rod, f) -> tuple[float, np.ndarray]:
+    """Mass (g) and com (x, y) from the final B-rep plus balls."""
+    props = geometry.mass_properties(f.solid)
+    rho = rod.material.density / 1000
+    m = props.volume * rho
+    c = np.array(props.center) * m
+    if f.ball_count:
+        c += rod.balls.mass * f.socket_centers.sum(axis=0)
+        m += f.ball_count * rod.balls.mass
+    return m, (c / m)[:2]
+
+
+def test_masses_and_centres_of_mass(chain) -> None:
+    types, masses, fab = chain
+    assert len(fab.rods) == len(types)
+    kinds = set()
+    for rod, m, f in zip(types, masses, fab.rods):
+        lo, hi = rod.mass_range
+        goal = min(max(m, lo), hi)
+        mass, com = _measured(rod, f)
+        assert mass == pytest.approx(f.mass, rel=1e-9)
+        assert abs(mass - goal) <= 1e-3 * goal
+        assert np.allclose(com, rod.com, atol=1e-6), (f.index, com, rod.com)
+        assert np.allclose(f.com, rod.com, atol=1e-6)
+        kinds.add("light" if f.cavity_count and not f.ball_count else "heavy" if f.ball_count else "solid")
+        assert geometry.is_valid_solid(f.solid)
+    assert kinds == {"light", "solid", "heavy"}
+    assert fab.rods[0].cavity_count > 0 and fab.rods[3].ball_count > 0
+
+
+def test_walls_measured_on_the_final_solid(chain) -> None:
+    types, _, fab = chain
+    checked = 0
+    for rod, f in zip(types, fab.rods):
+        shells = f.solid.shells()
+        voids = f.cavity_count + f.ball_count
+        assert len(shells) == 1 + voids
+        if not voids:
+            continue
+        sizes = [s.bounding_box().diagonal for s in shells]
+        outer = shells[int(np.argmax(sizes))]
+        inner = [s for i, s in enumerate(shells) if i != int(np.argmax(sizes))]
+        wall = rod.material.min_wall
+        for s in inner:
+            d = BRepExtrema_DistShapeShape(outer.wrapped, s.wrapped).Value()
+            assert d >= wall - 1e-6
+            checked += 1
+        for i in range(len(inner)):
+            for j in range(i + 1, len(inner)):
+                assert BRepExtrema_DistShapeShape(inner[i].wrapped, inner[j].wrapped).Value() >= wall - 1e-6
+        assert f.min_wall >= wall - 1e-6
+    assert checked >= 3
+
+
+def test_out_of_range_is_reported_and_clipped(chain) -> None:
+    types, masses, fab = chain
+    last = fab.rods[-1]
+    assert not last.in_range and "above the heaviest" in last.message
+    assert last.mass == pytest.approx(types[-1].mass_range[1], rel=1e-3)
+    assert len(fab.problems) == 1 and fab.problems[0].startswith("Rod 5 (free-20)")
+    assert all(r.in_range for r in fab.rods[:-1])
+
+
+def test_identical_rods_are_built_once(chain) -> None:
+    _, _, fab = chain
+    assert fab.rods[1].solid is fab.rods[4].solid
+    assert fab.distinct == 5
+    assert [r.file_stem for r in fab.rods][:2] == ["00_free-20", "01_free-20"]
+
+
+def test_same_input_same_layout(catalog) -> None:
+    rod = catalog["free-30"]
+    m = (rod.mass_range[0] + rod.solid_mass) / 2
+    a = fabricate_rod(rod, m, seed=7, cache=DiskCache(enabled=False))
+    b = fabricate_rod(rod, m, seed=7, cache=DiskCache(enabled=False))
+    assert a.cavity_count > 0 and np.array_equal(a.cavity_centers, b.cavity_centers)
+    assert a.cavity_radius == b.cavity_radius and a.layout.startswith("poisson/")
+
+
+def test_void_shapes_are_printable_and_exact() -> None:
+    r = 2.0
+    for kind in ("sphere", "capped", "silo"):
+        assert geometry.void_template(kind, r).volume == pytest.approx(void_volume(kind, r), rel=1e-6)
+    capped = geometry.void_template("capped", r)
+    ys = [v.Y for v in capped.vertices()]  # flat roof and floor where the sphere reaches 45 deg
+    assert max(ys) == pytest.approx(r / math.sqrt(2)) and min(ys) == pytest.approx(-r / math.sqrt(2))
+    assert sorted(f.geom_type.name for f in capped.faces()) == ["PLANE", "PLANE", "SPHERE"]
+    silo = geometry.void_template("silo", r)
+    assert max(v.Y for v in silo.vertices()) == pytest.approx(r)  # flat roof at the sphere's top
+
+
+def test_rod_files(chain, tmp_path: Path) -> None:
+    import trimesh
+
+    _, _, fab = chain
+    paths = write_rod_files(fab, tmp_path)
+    assert len(paths) == 2 * len(fab.rods)
+    for f in fab.rods:
+        step = tmp_path / "rods" / f"{f.file_stem}.step"
+        back = geometry.import_step(step)
+        assert geometry.is_valid_solid(back)
+        assert back.volume == pytest.approx(f.plastic_volume, rel=1e-6)
+        bb = back.bounding_box()
+        assert bb.min.Z == pytest.approx(0, abs=1e-6)  # on the bed
+        assert bb.max.Z == pytest.approx(12.0, abs=1e-6)  # on its side: the section height is up
+        mesh = trimesh.load(str(tmp_path / "rods" / f"{f.file_stem}.stl"), force="mesh")
+        assert mesh.is_watertight
+        assert mesh.volume == pytest.approx(f.plastic_volume, rel=1e-3)
+        if f.ball_count:
+            assert f.socket_radius < f.pause_z <= bb.max.Z - 1.2 + 1e-6  # the roof, a wall under the top
+            z_centres = f.socket_centers[:, 1] + f.print_matrix[2, 3]
+            assert np.allclose(f.pause_z, z_centres + f.socket_radius)
+
+
+def test_assembly(chain, tmp_path: Path) -> None:
+    _, _, fab = chain
+    n = len(fab.rods)
+    lengths = [20.0] * n
+    ang = np.linspace(-0.6, 0.6, n)
+    pts = np.concatenate([[[0.0, 0.0]], np.cumsum(np.c_[np.cos(ang), np.sin(ang)] * np.array(lengths)[:, None], 0)])
+    path = write_assembly(fab, pts, tmp_path / "assembly.step", name="test chain")
+    parts = geometry.read_assembly(path)
+    names = [p[0] for p in parts]
+    assert names[:n] == [f.file_stem for f in fab.rods]
+    assert names[n:] == [f"pin_{j:02d}" for j in range(n + 1)]
+    for (_, vol), f in zip(parts, fab.rods):
+        assert vol == pytest.approx(f.plastic_volume, rel=1e-6)
+    from build123d import import_step
+
+    root = import_step(path)
+    solids = root.solids()
+    assert len(solids) == 2 * n + 1
+    # rod i's first hinge axis sits on joint i
+    rods = [c for c in root.children if c.label.endswith("free-20") or c.label.endswith("straight-20")]
+    colors = [tuple(round(v, 3) for v in tuple(c.color)[:3]) for c in rods]
+    masses = [f.mass for f in fab.rods]
+    assert colors[int(np.argmin(masses))][2] > colors[int(np.argmin(masses))][0]  # lightest is blue
+    assert colors[int(np.argmax(masses))][0] > colors[int(np.argmax(masses))][2]  # heaviest is red
+    pins = [s for s in solids[n:]]
+    for j, pin in enumerate(pins):
+        c = pin.center()
+        assert (c.X, c.Y) == pytest.approx(tuple(pts[j]), abs=1e-6)

@@ -167,6 +167,9 @@ class Design:
     cad: bool
     fabrication_seed: int
     source: Checked | None = field(default=None, repr=False)
+    chandelier: dict[str, Any] | None = None
+    placements: list[Any] | None = None
+    chain_targets: list[dict[str, Any]] | None = None
 
     @property
     def span(self) -> float:
@@ -216,6 +219,75 @@ def target_spec() -> Obj:
     )
 
 
+def _point3() -> ListOf:
+    return ListOf(Num(unit="mm"), min_items=3, description="[x, y, z] in mm (z up)")
+
+
+#: Chandelier patterns and the parameters each needs (required, optional).
+PATTERNS = {
+    "ring": (("count", "radius"), ("height", "start_deg", "gap")),
+    "two-rings": (("count", "r_top", "z_top", "r_bottom", "z_bottom"), ("twist_deg", "start_deg")),
+    "polygon": (("vertices",), ("gap",)),
+    "explicit": (("chains",), ()),
+}
+
+#: Frame kind used by default for each pattern.
+FRAME_OF_PATTERN = {"ring": "ring", "two-rings": "two_rings", "polygon": "bars", "explicit": "bars"}
+
+
+def chandelier_spec() -> Obj:
+    """Spec of the ``chandelier`` mapping: several chains in 3D and their frame."""
+    mm = {"unit": "mm"}
+    return Obj(
+        {
+            "pattern": Field(Str(choices=tuple(PATTERNS)), required=True,
+                             description="ring: a chain below each side of a regular polygon on a "
+                             "horizontal ring; two-rings: chains from a top hub down to a lower ring; "
+                             "polygon: a chain below each edge of a polygon frame; explicit: anchors "
+                             "given per chain."),
+            "count": Field(Num(integer=True, minimum=1, maximum=64), description="Number of chains."),
+            "radius": Field(Num(exclusive_minimum=0, **mm), description="ring: radius through the anchors."),
+            "height": Field(Num(**mm), description="ring: z of the anchors (default 0)."),
+            "start_deg": Field(Num(unit="deg"), description="Angle of the first anchor from +x."),
+            "gap": Field(Num(exclusive_minimum=0, **mm),
+                         description="ring/polygon: distance between neighbouring chains' anchors at a "
+                         "vertex (default 20 mm)."),
+            "r_top": Field(Num(exclusive_minimum=0, **mm), description="two-rings: radius of the top anchors."),
+            "z_top": Field(Num(**mm), description="two-rings: height of the top anchors."),
+            "r_bottom": Field(Num(exclusive_minimum=0, **mm),
+                              description="two-rings: radius of the bottom anchors."),
+            "z_bottom": Field(Num(**mm), description="two-rings: height of the bottom anchors."),
+            "twist_deg": Field(Num(unit="deg"), description="two-rings: angle from each top anchor to its "
+                               "bottom anchor."),
+            "vertices": Field(ListOf(_point3(), min_items=2), description="polygon: the frame's vertices."),
+            "chains": Field(
+                ListOf(Obj({
+                    "anchors": Field(ListOf(_point3(), min_items=2),
+                                     description="explicit: anchor A and B [[x, y, z], [x, y, z]] (mm)."),
+                    "target": Field(target_spec(), description="This chain's target (in its own "
+                                    "vertical plane: x from A toward B, y up)."),
+                }), min_items=1),
+                description="Per chain: anchors (explicit pattern) and/or its own target; one entry per chain.",
+            ),
+            "target": Field(target_spec(), description="The target shared by every chain without its own."),
+            "frame": Field(
+                Obj({
+                    "kind": Field(Str(choices=("ring", "two_rings", "bars")),
+                                  description="Frame members (default: ring for ring, two_rings for "
+                                  "two-rings, bars otherwise)."),
+                    "width": Field(Num(exclusive_minimum=0, **mm), default=16.0, description="Member width."),
+                    "thickness": Field(Num(exclusive_minimum=0, **mm), default=5.0,
+                                       description="Member thickness."),
+                }),
+                default={"width": 16.0, "thickness": 5.0},
+                description="The printed frame the chains hang from (hinge lugs match the catalog).",
+            ),
+        },
+        description="Several chains in 3D (z up) hanging from one frame; each chain hangs in the vertical "
+        "plane through its anchors.",
+    )
+
+
 def design_spec() -> Obj:
     """The spec of a whole design file."""
     fixed = Obj(
@@ -245,12 +317,14 @@ def design_spec() -> Obj:
             "catalog": Field(Str(), required=True,
                              description="Rod catalog: a shipped catalog's name (e.g. pla-pinned) or a "
                              "path relative to this file."),
-            "anchors": Field(ListOf(_point(), min_items=2), required=True,
-                             description="Anchor A and anchor B: [[x, y], [x, y]] in mm, y up."),
+            "anchors": Field(ListOf(_point(), min_items=2),
+                             description="Anchor A and anchor B: [[x, y], [x, y]] in mm, y up "
+                             "(required unless the design is a chandelier)."),
             "target": Field(target_spec()),
             "chain": Field(ListOf(rod, min_items=1),
                            description="An explicit chain (for `rodcad simulate`): rod types and masses "
                            "from anchor A to anchor B."),
+            "chandelier": Field(chandelier_spec()),
             "constraints": Field(
                 Obj(
                     {
@@ -363,7 +437,14 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
                 v.report_at("anchors", "the two anchors coincide")
                 anchors = None
 
-    if "target" not in data and "chain" not in data and v.ok("", schema_ok):
+    if "anchors" not in data and "chandelier" not in data and v.ok("", schema_ok):
+        v.report_at("", "missing required key 'anchors' (or describe a 'chandelier')")
+    placements = chain_targets = None
+    if "chandelier" in data and v.ok("chandelier", schema_ok):
+        placements, chain_targets = _chandelier(data["chandelier"], v)
+        if placements is not None:
+            anchors = np.array([[0.0, 0.0], [1.0, 0.0]])  # unused for a chandelier
+    if "target" not in data and "chain" not in data and "chandelier" not in data and v.ok("", schema_ok):
         v.report_at("", "give a 'target' to design a chain for, or an explicit 'chain' to simulate")
 
     names = catalog.names if catalog is not None else None
@@ -463,7 +544,87 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         cad=bool(fab.get("cad", True)),
         fabrication_seed=int(fab.get("seed", 0)),
         source=doc,
+        chandelier=data.get("chandelier"),
+        placements=placements,
+        chain_targets=chain_targets,
     )
+
+
+def _chandelier(c: dict[str, Any], v: Any) -> tuple[list[Any] | None, list[dict[str, Any]] | None]:
+    """Chain placements and per-chain targets of a chandelier, every problem reported."""
+    from rodcad import chandelier as C
+
+    pattern = c["pattern"]
+    required, optional = PATTERNS[pattern]
+    bad = False
+    for k in required:
+        if k not in c:
+            v.report_at("chandelier", f"a {pattern} chandelier needs {k!r}")
+            bad = True
+    known = set(required) | set(optional) | {"pattern", "target", "frame", "chains"}
+    for k in c:
+        if k not in known:
+            v.report_at(f"chandelier.{k}", f"a {pattern} chandelier takes no {k!r} "
+                        f"(it takes: {', '.join(required + optional)})")
+            bad = True
+    if bad:
+        return None, None
+    try:
+        if pattern == "ring":
+            placements = C.ring(int(c["count"]), c["radius"], c.get("height", 0.0),
+                                start_deg=c.get("start_deg", 0.0), gap=c.get("gap", 20.0))
+        elif pattern == "two-rings":
+            placements = C.two_rings(int(c["count"]), c["r_top"], c["z_top"], c["r_bottom"], c["z_bottom"],
+                                     twist_deg=c.get("twist_deg", 0.0), start_deg=c.get("start_deg", 0.0))
+        elif pattern == "polygon":
+            placements = C.polygon_frame(c["vertices"], gap=c.get("gap", 20.0))
+        else:
+            pairs = []
+            for i, ch in enumerate(c["chains"]):
+                if "anchors" not in ch or len(ch["anchors"]) != 2:
+                    v.report_at(f"chandelier.chains[{i}]", "an explicit chain needs 'anchors': "
+                                "[[x, y, z], [x, y, z]]", fallback="chandelier.chains")
+                    bad = True
+                else:
+                    pairs.append(ch["anchors"])
+            if bad:
+                return None, None
+            placements = C.explicit(pairs)
+    except ValueError as err:
+        v.report_at("chandelier", str(err))
+        return None, None
+    n = len(placements)
+    per = c.get("chains")
+    if per is not None and len(per) != n:
+        v.report_at("chandelier.chains", f"{len(per)} entries for {n} chains (give one per chain)")
+        return None, None
+    targets = []
+    for i, p in enumerate(placements):
+        own = per[i].get("target") if per is not None else None
+        t = own if own is not None else c.get("target")
+        key = f"chandelier.chains[{i}].target" if own is not None else "chandelier.target"
+        if t is None:
+            v.report_at("chandelier", f"chain {p.name} has no target (give 'target' for every chain, or one "
+                        "per chain under 'chains')")
+            return None, None
+        a2, b2 = p.plane_anchors()
+        sub = _Sub(v, key)
+        form, params, curve = _target(t, np.array([a2, b2]), sub)
+        if curve is None:
+            return None, None
+        targets.append({"form": form, **params})
+    return placements, targets
+
+
+class _Sub:
+    """A validator view that reports 'target...' keys under another key path."""
+
+    def __init__(self, v: Any, prefix: str) -> None:
+        self.v, self.prefix = v, prefix
+
+    def report_at(self, key: str, message: str, fallback: str | None = None) -> None:
+        fix = lambda k: None if k is None else self.prefix + k[len("target"):]  # noqa: E731
+        self.v.report_at(fix(key), message, fallback=fix(fallback) or self.prefix)
 
 
 def _target(t: dict[str, Any], anchors: np.ndarray, v: Any) -> tuple[str | None, dict[str, Any], np.ndarray | None]:

@@ -365,3 +365,153 @@ def write_outputs(result: BuildResult, outdir: str | Path, *, progress: Progress
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             (tmp / "report.md").write_text(report.report_markdown(result, data), encoding="utf-8")
     return outdir
+
+
+# --------------------------------------------------------------------------- chandeliers
+
+
+@dataclass
+class ChandelierBuild:
+    """A designed (and optionally fabricated) chandelier.
+
+    Attributes:
+        design: the validated design.
+        result: :class:`rodcad.chandelier.ChandelierDesign` (per-chain designs, bill of materials).
+        frame_plan: the frame's layout (lugs, members).
+        frame: the frame solid and its check (None without CAD).
+        fabrications: per chain, the fabricated rods (None without CAD).
+        as_built: per chain, the as-built re-simulation (None without CAD).
+        notes: things the user should know.
+        time_s: wall time.
+    """
+
+    design: Design
+    result: Any
+    frame_plan: Any
+    frame: tuple[Any, Any] | None = None
+    fabrications: list[Any] | None = None
+    as_built: list[AsBuilt] | None = None
+    notes: list[str] = field(default_factory=list)
+    time_s: float = 0.0
+
+    @property
+    def meets_tolerance(self) -> bool:
+        tol = self.design.tolerance
+        return tol is None or all(c.distance.max_rel_span <= tol for c in self.result.chains)
+
+
+def build_chandelier(design: Design, *, method: str | None = None, seed: int | None = None,
+                     cad: bool | None = None, jobs: int | None = None,
+                     progress: Progress | None = None) -> ChandelierBuild:
+    """Design every chain of a chandelier, lay out its frame and (optionally) build it all."""
+    from rodcad import chandelier as C
+
+    progress = progress or Progress(quiet=True)
+    t0 = time.perf_counter()
+    method = method or design.method
+    seed = design.seed if seed is None else seed
+    cad = design.cad if cad is None else cad
+    c = design.constraints
+    plan_options = {k: v for k, v in (("allowed_types", c.types), ("lengths", c.lengths),
+                                      ("preferred_length", c.preferred_length)) if v is not None}
+    with progress.step("joint limits and mass ranges of the catalog's rods") as st:
+        arrays = catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
+    n = len(design.placements)
+    with progress.step(f"inverse design of {n} chains ({method})"):
+        try:
+            res = C.design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
+                                      seed=seed, jobs=1, arrays=arrays, plan_options=plan_options,
+                                      design_options={"n_starts": N_STARTS})
+        except ValueError as err:
+            raise InputError([design.problem("chandelier", str(err))]) from None
+    frame_cfg = dict(design.chandelier.get("frame") or {})
+    kind = frame_cfg.pop("kind", None) or _frame_kind(design)
+    extra = {}
+    if kind == "bars":
+        # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order
+        extra["vertices"] = design.chandelier.get("vertices") or [
+            list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
+    frame_plan = C.plan_frame(kind, design.placements, design.catalog, res.chains, **frame_cfg, **extra)
+    out = ChandelierBuild(design, res, frame_plan)
+    for ch in res.chains:
+        eq = ch.design.result.equilibrium
+        if not eq.stable:
+            out.notes.append(f"{ch.name}: the designed shape is not a stable equilibrium")
+        if not ch.design.unique:
+            out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
+    if cad:
+        from rodcad.fabricate import fabricate_chain
+
+        with progress.step("frame solid and clearance checks"):
+            out.frame = C.build_frame(frame_plan, design.catalog, res.chains)
+        out.notes += [f"frame: {p}" for p in out.frame[1].problems]
+        types = [design.catalog[name] for ch in res.chains for name in ch.type_names]
+        masses = np.concatenate([ch.masses for ch in res.chains])
+        with progress.step(f"building {len(types)} rods") as st:
+            fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count)
+        out.notes += list(fab.problems)
+        out.fabrications, out.as_built = [], []
+        k = 0
+        with progress.step("as-built check of every chain"):
+            for ch in res.chains:
+                m = len(ch.masses)
+                rods = fab.rods[k:k + m]
+                k += m
+                out.fabrications.append(_chain_fabrication(fab, rods))
+                pr = ch.design.plan.problem
+                a2, b2 = ch.placement.plane_anchors()
+                bm = np.array([r.mass for r in rods], float)
+                bc = np.array([r.com for r in rods], float)
+                eq = solve_equilibrium(pr.lengths, bm, a2, b2, com=bc, limits=pr.limits, g=design.g)
+                out.as_built.append(AsBuilt(bm, bc, eq, shape_distance(eq.points, pr.target)))
+    out.time_s = time.perf_counter() - t0
+    return out
+
+
+def _frame_kind(design: Design) -> str:
+    from rodcad.design import FRAME_OF_PATTERN
+
+    return FRAME_OF_PATTERN[design.chandelier["pattern"]]
+
+
+def _chain_fabrication(fab: Any, rods: list[Any]) -> Any:
+    """The part of a fabrication that belongs to one chain, re-indexed from 0."""
+    import dataclasses
+
+    from rodcad.fabricate import ChainFabrication
+
+    rods = [dataclasses.replace(r, index=i, file_stem=f"{i:02d}_{r.type_name}") for i, r in enumerate(rods)]
+    return ChainFabrication(rods, [], len({id(r.solid) for r in rods}), 0.0)
+
+
+def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
+                             progress: Progress | None = None) -> Path:
+    """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
+    and <chain>/rods/*.step|stl; staged like :func:`write_outputs`."""
+    from rodcad import chandelier as C
+    from rodcad import report
+    from rodcad.outdir import staged_output
+
+    progress = progress or Progress(quiet=True)
+    with staged_output(outdir) as tmp:
+        if b.frame is not None:
+            from rodcad import geometry
+            from rodcad.fabricate import write_rod_files
+
+            with progress.step("writing and checking the rods' STEP/STL files"):
+                for ch, fab in zip(b.result.chains, b.fabrications):
+                    write_rod_files(fab, tmp / ch.name)
+            with progress.step("writing frame.step, frame.stl and assembly.step"):
+                frame = b.frame[0]
+                geometry.export_step(frame, tmp / "frame.step", name="frame")
+                geometry.export_stl(frame, tmp / "frame.stl")
+                nodes = C.chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
+                                           rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
+                geometry.export_assembly(tmp / "assembly.step", nodes, b.design.name)
+        with progress.step("writing design.json, report.md, preview.png"):
+            data = report.chandelier_json(b)
+            report.write_json(tmp / "design.json", data)
+            C.preview_3d(tmp / "preview.png", b.result.chains, C.frame_outline(b.frame_plan),
+                         title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
+            (tmp / "report.md").write_text(report.chandelier_markdown(b, data), encoding="utf-8")
+    return Path(outdir)

@@ -314,3 +314,133 @@ def summary_text(r, outdir: Path | None, data: dict[str, Any]) -> str:
             files += ", assembly.step, rods/*.step|stl"
         L.append(f"  files         {outdir}/ ({files})")
     return "\n".join(L)
+
+
+# --------------------------------------------------------------------------- chandeliers
+
+
+def _pts3(p: np.ndarray) -> list[list[float]]:
+    return [[float(v) for v in row] for row in np.asarray(p, float)]
+
+
+def chandelier_json(b) -> dict[str, Any]:
+    """design.json of a chandelier: per chain what design.json holds for one chain, plus
+    its 3D anchors and points, the frame and the bill of materials over all chains.
+
+    Args:
+        b: a :class:`rodcad.pipeline.ChandelierBuild`.
+    """
+    d = b.design
+    res = b.result
+    chains = []
+    for k, ch in enumerate(res.chains):
+        pr = ch.design.plan.problem
+        eq = ch.design.result.equilibrium
+        lim = pr.limits if pr.limits is not None else np.zeros((0, 2))
+        rods = []
+        for i, name in enumerate(ch.type_names):
+            rods.append({"index": i, "type": name, "length": float(pr.lengths[i]), "mass": float(ch.masses[i]),
+                         "com": [float(v) for v in pr.com[i]],
+                         "limits_deg": _limits_deg(lim[i]) if i < len(ch.type_names) - 1 else None})
+        entry: dict[str, Any] = {
+            "name": ch.name,
+            "anchors_3d": _pts3([ch.placement.a3, ch.placement.b3]),
+            "anchors": _pts(np.array(ch.placement.plane_anchors())),
+            "target": {"points": _pts(pr.target)},
+            "rods": rods,
+            "simulated": {"points": _pts(eq.points), "points_3d": _pts3(ch.points3d),
+                          "angles_deg": [float(math.degrees(v)) for v in eq.angles],
+                          "reaction": [float(v) * 1e-3 for v in eq.reaction],
+                          "kkt_residual": _f(eq.kkt_residual), "stable": bool(eq.stable),
+                          "unique": bool(ch.design.unique)},
+            "error": _error(ch.distance),
+            "shared_with": ch.shared_with,
+        }
+        if b.as_built is not None:
+            ab = b.as_built[k]
+            entry["as_built"] = {"masses": [float(v) for v in ab.masses], "com": _pts(ab.com),
+                                 "points": _pts(ab.equilibrium.points), "error": _error(ab.distance)}
+        chains.append(entry)
+    bom = res.bom.as_dict()
+    if b.fabrications is not None:
+        from collections import Counter as _C
+
+        balls: _C[float] = _C()
+        for fab in b.fabrications:
+            for f in fab.rods:
+                if f.ball_count:
+                    balls[float(f.ball_diameter)] += int(f.ball_count)
+        bom["filament_g"] = float(sum(f.filament_mass for fab in b.fabrications for f in fab.rods))
+        bom["metal_balls"] = [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]
+    out: dict[str, Any] = {
+        "name": d.name,
+        "units": {"length": "mm", "mass": "g", "angle": "deg", "force": "N"},
+        "rodcad": __version__,
+        "design_file": str(d.path),
+        "catalog": d.catalog.name,
+        "method": res.method,
+        "seed": int(res.seed),
+        "time_s": float(b.time_s),
+        "chandelier": {k: v for k, v in d.chandelier.items() if k not in ("chains",)},
+        "chains": chains,
+        "error": {"max_mm": _f(res.max_error),
+                  "max_rel_span": _f(max(c.distance.max_rel_span for c in res.chains))},
+        "bill_of_materials": bom,
+        "notes": list(b.notes),
+        "meets_tolerance": b.meets_tolerance,
+    }
+    if b.frame is not None:
+        chk = b.frame[1]
+        out["frame"] = {"kind": b.frame_plan.kind if hasattr(b.frame_plan, "kind") else None,
+                        "valid": bool(chk.valid), "size_mm": [float(v) for v in chk.size],
+                        "fits_printer": chk.fits_printer, "problems": list(chk.problems),
+                        "closest_rod_mm": _f(min((c[-1] for c in chk.clearances), default=float("nan")))}
+    return out
+
+
+def chandelier_markdown(b, data: dict[str, Any]) -> str:
+    """report.md of a chandelier: inputs, per-chain errors, frame, bill of materials, assembly."""
+    d = b.design
+    L = [f"# {d.name}: chandelier report", ""]
+    if d.description:
+        L += [d.description.strip(), ""]
+    c = d.chandelier
+    L += [f"Made by rodcad {__version__} from `{d.path}` in {b.time_s:.1f} s.", "", "## Inputs", "",
+          f"- Catalog: `{d.catalog.name}`",
+          f"- Pattern: {c['pattern']} with {len(data['chains'])} chains "
+          + ", ".join(f"{k} = {v}" for k, v in c.items() if k not in ("pattern", "chains", "target", "frame")),
+          f"- Method: {data['method']}, seed {data['seed']}", "", "## Chains", "",
+          "| chain | rods | mass g | max error mm | % of span | as built % | stable | unique |",
+          "|---|---|---|---|---|---|---|---|"]
+    for ch in data["chains"]:
+        ab = f"{100 * ch['as_built']['error']['max_rel_span']:.3g}" if "as_built" in ch else "-"
+        mass = sum(r["mass"] for r in ch["rods"])
+        L.append(f"| {ch['name']} | {len(ch['rods'])} | {mass:.1f} | {ch['error']['max_mm']:.3g} "
+                 f"| {100 * ch['error']['max_rel_span']:.3g} | {ab} | {'yes' if ch['simulated']['stable'] else 'NO'} "
+                 f"| {'yes' if ch['simulated']['unique'] else 'no'} |")
+    L += ["", "![preview](preview.png)", ""]
+    for note in b.notes:
+        L.append(f"- Note: {note}")
+    if "frame" in data:
+        f = data["frame"]
+        L += ["", "## Frame", "",
+              f"- `frame.step` / `frame.stl`: {f['size_mm'][0]:.0f} x {f['size_mm'][1]:.0f} x "
+              f"{f['size_mm'][2]:.1f} mm, valid {f['valid']}, fits the printer: {f['fits_printer']}",
+              f"- Closest rod at rest: {f['closest_rod_mm']:.2f} mm from the frame"]
+    bom = data["bill_of_materials"]
+    L += ["", "## Bill of materials", ""]
+    for name, count in bom["rods_by_type"].items():
+        L.append(f"- {count} x rod `{name}`")
+    L.append(f"- {bom['pins']} pins between rods and {bom['anchor_pins']} pins through the frame's lugs")
+    if "filament_g" in bom:
+        L.append(f"- Filament for the rods: {bom['filament_g']:.1f} g")
+        for ball in bom["metal_balls"]:
+            L.append(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
+    L.append(f"- Total rod mass: {bom['total_mass_g']:.1f} g")
+    L += ["", "## Assembly", "",
+          "1. Print the frame and every chain's rods (`<chain>/rods/`, already in print orientation); "
+          "pause rods with balls at the Z height their chain's design lists.",
+          "2. Assemble each chain in index order (rod k's second joint takes rod k+1's first, one pin each).",
+          "3. Pin each chain's first rod to its A lug and its last rod to its B lug, chain by chain in the "
+          "order of `assembly.step`.", ""]
+    return "\n".join(L)

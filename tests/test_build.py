@@ -15,7 +15,7 @@ from rodcad.cli import main
 from rodcad.design import load_design
 
 ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem != "chain")
+EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier"))
 
 
 def check_contract(data: dict, n_rods: int | None = None) -> None:
@@ -161,3 +161,50 @@ def test_simulate_table_and_build_needs_a_target(tmp_path, capsys):
     assert "straight-30" in capsys.readouterr().out
     assert main(["build", str(ex), "-o", str(tmp_path / "o")]) == 2
     assert "no 'target'" in capsys.readouterr().err
+
+
+def test_chandelier_example_builds_without_cad(tmp_path, capsys):
+    out = tmp_path / "ch"
+    assert main(["build", str(ROOT / "examples" / "chandelier.yaml"), "-o", str(out), "--no-cad", "-q"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    assert len(data["chains"]) >= 6 and all(len(c["rods"]) >= 12 for c in data["chains"])
+    for ch in data["chains"]:
+        pts3 = np.array(ch["simulated"]["points_3d"])
+        a3, b3 = np.array(ch["anchors_3d"])
+        np.testing.assert_allclose(pts3[[0, -1]], [a3, b3], atol=1e-6)
+        # every joint lies in the vertical plane through the anchors
+        n = np.cross(b3 - a3, [0, 0, 1.0])
+        assert np.max(np.abs((pts3 - a3) @ (n / np.linalg.norm(n)))) < 1e-9
+        assert ch["error"]["max_rel_span"] < 1e-3
+    assert data["bill_of_materials"]["n_rods"] == sum(len(c["rods"]) for c in data["chains"])
+    assert (out / "preview.png").exists() and "chain_06" in capsys.readouterr().out
+
+
+def test_chandelier_with_a_target_per_chain_and_its_validation(tmp_path):
+    text = """\
+design: 1
+name: two
+catalog: pla-pinned
+chandelier:
+  pattern: explicit
+  chains:
+    - anchors: [[0, 0, 0], [150, 0, 0]]
+      target: {form: arc, sag: 50}
+    - anchors: [[0, 50, 0], [0, 200, 20]]
+      target: {form: catenary, length: 220}
+"""
+    d = load_design(tmp_path / "d.yaml", text=text)
+    b = pipeline.build_chandelier(d, cad=False)
+    assert [c.name for c in b.result.chains] == ["chain_01", "chain_02"]
+    assert b.result.chains[1].distance.max_rel_span < 1e-6  # a catenary is reachable
+    from rodcad.errors import InputError
+
+    bad = text.replace("{form: arc, sag: 50}", "{form: arc, sags: 50}").replace("[0, 200, 20]", "[0, 50, 90]")
+    with pytest.raises(InputError) as err:
+        load_design(tmp_path / "d.yaml", text=bad)
+    got = "\n".join(map(str, err.value.problems))
+    assert "d.yaml:8:27: chandelier.chains[0].target.sags: unknown key 'sags' (did you mean 'sag'?)" in got
+    with pytest.raises(InputError) as err:  # anchors straight above each other: no vertical plane
+        load_design(tmp_path / "d.yaml", text=text.replace("[0, 200, 20]", "[0, 50, 90]"))
+    (p,) = err.value.problems
+    assert p.key == "chandelier" and p.line == 5 and "above" in p.message

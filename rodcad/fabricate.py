@@ -2,10 +2,15 @@
 
 The data flow for one rod (type + target mass), one step per function:
 
+    type     -> achievable_intervals(): once per type (disk-cached), every
+                               symmetric ball subset of the type's socket layout
+                               and the cavity volumes its layouts can remove:
+                               the reachable masses, narrow bands above the solid
     target   -> _plan():       clip to the type's mass range [m_min, m_max]
-                               (:mod:`rodcad.massrange`); pick the ball sockets
-                               (a symmetric subset of the type's socket layout)
-                               and the cavity volume left to remove
+                               (:mod:`rodcad.massrange`); look up the ball
+                               sockets and the cavity volume left to remove in
+                               that table (a target in a gap: the nearest
+                               reachable mass, reported)
              -> _cavities():   cavity centres by Poisson-disk (blue-noise) dart
                                throwing on a seeded candidate pool, every dart
                                thrown with all its mirror images about the
@@ -18,7 +23,8 @@ The data flow for one rod (type + target mass), one step per function:
                                on the B-rep (BRepExtrema), mass and centre of mass
                                from the B-rep plus the balls
     chain    -> fabricate_chain(): identical (type, mass) built once, distinct
-                               rods in parallel worker processes, disk-cached
+                               rods in worker processes (one task per type),
+                               disk-cached
              -> write_rod_files(), write_assembly(): STEP/STL, checked on re-read
 
 Void shapes (all printable without support in the print orientation, see
@@ -59,7 +65,6 @@ from rodcad.massrange import (
     MIN_CAVITY_RADIUS,
     UP,
     _images,
-    layouts,
     sphere_layout,
     void_volume,
 )
@@ -71,6 +76,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "FABRICATE_VERSION",
     "MASS_TOL",
+    "achievable_intervals",
+    "chain_intervals",
     "ChainFabrication",
     "FabricatedRod",
     "FabricationError",
@@ -82,7 +89,10 @@ __all__ = [
 ]
 
 #: Bump when results change (invalidates cached fabrication plans).
-FABRICATE_VERSION = "1"
+FABRICATE_VERSION = "3"
+
+#: Bump when the tables of reachable masses change (:func:`achievable_intervals`).
+INTERVALS_VERSION = "1"
 
 #: Relative mass error the issue allows (0.1 %); the root solve aims 100x tighter.
 MASS_TOL = 1e-3
@@ -99,6 +109,13 @@ POOL_SIZE = 160
 
 #: Design radii tried for cavity layouts shrink by this factor.
 RADIUS_FACTOR = 0.87
+
+#: Gaps between reachable masses narrower than this (relative) are bridged:
+#: a target there is built at the nearest reachable mass (within half of it).
+GAP_MERGE = 5e-4
+
+#: Relative slack on the edges of the reachable intervals (round-off).
+EDGE_TOL = 1e-7
 
 _CAPPED_K = void_volume("capped", 1.0)
 
@@ -379,8 +396,18 @@ def _cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: float,
 
 @lru_cache(maxsize=64)
 def _socket_layout(rod: RodType) -> Any:
-    """The type's largest symmetric socket layout (the one behind m_max)."""
-    return layouts(rod)[1]
+    """The type's largest symmetric socket layout (the one behind m_max; the
+    ball half of :func:`rodcad.massrange.layouts`)."""
+    from rodcad.geometry import Clearance, mass_properties
+    from rodcad.massrange import SphereLayout, ball_offset, max_ball_layout
+
+    if rod.balls is None:
+        return SphereLayout.empty()
+    solid = rod.solid()
+    clearance = Clearance(solid)
+    lift = ball_offset(rod.balls.socket_diameter / 2, rod.balls.mass, rod.material.density)
+    return max_ball_layout(clearance, clearance.bounds, mass_properties(solid).center, rod.balls.socket_diameter,
+                           rod.material.min_wall, void="silo", raise_by=lift)
 
 
 def _orbits(points: np.ndarray, center: Sequence[float], symmetry: str) -> list[np.ndarray]:
@@ -400,11 +427,199 @@ def _fmt(x: float) -> str:
     return f"{x:.3f}"
 
 
-def _plan(rod: RodType, target: float, seed: int) -> dict[str, Any]:
-    """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans)."""
+def _merge(pieces: Sequence[tuple[float, float]], gap: float = 0.0) -> list[tuple[float, float]]:
+    """Sorted union of closed intervals; gaps narrower than ``gap`` x the mass are bridged."""
+    out: list[list[float]] = []
+    for a, b in sorted(pieces):
+        if out and a <= out[-1][1] * (1 + gap):
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return [(float(a), float(b)) for a, b in out]
+
+
+def _ball_options(rod: RodType) -> list[tuple[float, np.ndarray, float]]:
+    """(mass without cavities, socket centres, socket radius) per symmetric ball
+    subset, the plain solid first, sorted by mass then ball count."""
     info = rod.mass_info()
     rho = rod.material.density / 1000.0
     ms = info.volume * rho
+    options: list[tuple[float, np.ndarray, float]] = [(ms, np.zeros((0, 3)), 0.0)]
+    if rod.balls is None:
+        return options
+    balls = _socket_layout(rod)
+    if not balls.count:
+        return options
+    rs = balls.radius
+    net = rod.balls.mass - void_volume("silo", rs) * rho
+    sites = balls.centers - UP * (balls.centers[0] @ UP - info.com[1])
+    orbs = _orbits(sites, (info.com[0], info.com[1], 0.0), balls.symmetry)
+    for mask in range(1, 2 ** len(orbs)):
+        idx = np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1])
+        options.append((ms + len(idx) * net, balls.centers[np.sort(idx)], rs))
+    options.sort(key=lambda o: (o[0], len(o[1])))
+    return options
+
+
+def _removable(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int,
+               lattice_counts: dict[float, int] | None = None) -> list[tuple[float, float]]:
+    """The cavity volumes (mm^3) :func:`_cavities` can remove beside these
+    sockets, as sorted disjoint intervals (exactly its acceptance rule: a
+    prefix of j orbits with n_j sites is used for volumes in
+    (n_{j-1} k r_d^3, n_j k r_d^3] and needs a radius >= MIN_CAVITY_RADIUS).
+
+    The symmetric-lattice fallback is included too (it reaches the catalog's
+    m_min), except for radii where even the lattice without sockets
+    (``lattice_counts``: radius -> cavities, filled in when given empty) could
+    not remove more than the Poisson layouts: leaving reachable masses out only
+    makes the table conservative, never wrong.
+    """
+    wall = rod.material.min_wall
+    k_min = _CAPPED_K * MIN_CAVITY_RADIUS**3
+    pieces: list[tuple[float, float]] = []
+    for symmetry in ("mirror-xyz", "point-xy"):
+        pool = _pool(rod, symmetry, seed)
+        for rd in _radii(rod):
+            n_prev = 0
+            for orb in _dart_throw(pool, rd, wall, sockets, socket_r):
+                n = n_prev + len(orb)
+                lo, hi = max(n * k_min, n_prev * _CAPPED_K * rd**3), n * _CAPPED_K * rd**3
+                if lo < hi:
+                    pieces.append((lo, hi))
+                n_prev = n
+    top = max((b for _, b in pieces), default=0.0)
+    if True:
+        from rodcad.geometry import Clearance, mass_properties
+
+        solid = rod.solid()
+        com = mass_properties(solid).center
+        clr = Clearance(solid)
+
+        def clearance(p: np.ndarray) -> np.ndarray:
+            return np.minimum(clr(p), _silo_distance(p, sockets, socket_r))
+
+        info = rod.mass_info()
+        radii = sorted(set(_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()),
+                       reverse=True)
+        for rd in radii:
+            if lattice_counts is not None and len(sockets) and rd in lattice_counts \
+                    and lattice_counts[rd] * _CAPPED_K * rd**3 <= top:
+                continue
+            lay = sphere_layout(clearance, clr.bounds, com, rd, wall, void="capped")
+            if lattice_counts is not None and not len(sockets):
+                lattice_counts[rd] = lay.count
+            if lay.count:
+                pieces.append((lay.count * k_min, lay.count * _CAPPED_K * rd**3))
+    # a hair inside every edge, so that the edges themselves solve
+    return [(a * (1 + 1e-9), b * (1 - 1e-9)) for a, b in _merge(pieces) if b * (1 - 1e-9) > a * (1 + 1e-9)]
+
+
+def _intervals_key(rod: RodType, seed: int) -> str:
+    from rodcad.catalog import GEOMETRY_VERSION
+
+    return make_key("fabint", INTERVALS_VERSION, FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION,
+                    POOL_SIZE, RADIUS_FACTOR, MIN_CAVITY_RADIUS, SOLID_TOL, GAP_MERGE,
+                    asdict(rod.geometry), asdict(rod.material),
+                    asdict(rod.balls) if rod.balls is not None else None, int(seed))
+
+
+def _compute_table(rod: RodType, seed: int) -> dict[str, Any]:
+    """Every ball option with the masses its cavities reach, and the merged
+    achievable intervals (numbers only; JSON-serialisable)."""
+    info = rod.mass_info()
+    rho = rod.material.density / 1000.0
+    options = []
+    pieces: list[tuple[float, float]] = []
+    counts: dict[float, int] = {}
+    for mass_k, socks, rs in _ball_options(rod):  # the ball-free rod first
+        reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in _removable(rod, socks, rs, seed, counts)]
+        options.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs,
+                         "pieces": [list(p) for p in sorted(reach)]})
+        pieces += reach + [(mass_k * (1 - SOLID_TOL), mass_k * (1 + SOLID_TOL))]
+    intervals = []
+    for a, b in _merge(pieces, GAP_MERGE):
+        # the catalog's extremes are built (within round-off) when reached
+        a = info.m_min if abs(a - info.m_min) <= EDGE_TOL * info.m_min else max(a, info.m_min)
+        b = info.m_max if abs(b - info.m_max) <= EDGE_TOL * info.m_max else min(b, info.m_max)
+        if a <= b:
+            intervals.append([a, b])
+    return {"options": options, "intervals": intervals, "m_min": info.m_min, "m_max": info.m_max}
+
+
+def _table(rod: RodType, seed: int, cache: DiskCache | None = None) -> dict[str, Any]:
+    """:func:`_compute_table`, from the disk cache when possible."""
+    cache = cache if cache is not None else DiskCache()
+    key = _intervals_key(rod, seed)
+    hit = cache.get("fabint", key)
+    if isinstance(hit, dict) and "options" in hit and "intervals" in hit:
+        return hit
+    table = _compute_table(rod, seed)
+    cache.put("fabint", key, table)
+    return table
+
+
+def achievable_intervals(rod: RodType, *, seed: int = 0, cache: DiskCache | None = None) -> list[tuple[float, float]]:
+    """The masses (g) this rod type can really be built at, as sorted disjoint intervals.
+
+    Without balls the rod reaches [m_min, solid mass] (cavities); with k balls,
+    from k balls and the most cavities that fit beside them up to k balls and
+    no cavities. Above the solid mass these are narrow bands (a ball adds far
+    more than the cavities beside the sockets can remove), so the catalog's
+    [m_min, m_max] is not continuous. Gaps narrower than :data:`GAP_MERGE` x the
+    mass (where the smallest printable cavity is still too big) are bridged:
+    such targets are built at the nearest reachable mass, within that
+    tolerance, and are not reported as problems.
+
+    :func:`fabricate_rod` and :func:`fabricate_chain` plan with the same table,
+    so a target inside an interval builds within :data:`MASS_TOL` and one in a
+    gap is built at the nearest interval edge and reported (``in_range=False``).
+    Computed once per type (and seed) and cached on disk.
+
+    Args:
+        rod: the rod type.
+        seed: seed of the Poisson-disk layouts (as for :func:`fabricate_chain`).
+        cache: disk cache (default :class:`DiskCache`).
+
+    Returns:
+        [(lo, hi), ...] in g, ascending, within the type's [m_min, m_max];
+        e.g. ``achievable_intervals(cat['free-20'])[0] == (m_min, ~solid mass)``.
+    """
+    return [(float(a), float(b)) for a, b in _table(rod, seed, cache)["intervals"]]
+
+
+def chain_intervals(types: Sequence[RodType], *, seed: int = 0, jobs: int | None = None,
+                    cache: DiskCache | None = None) -> dict[str, list[tuple[float, float]]]:
+    """:func:`achievable_intervals` of several rod types (name -> intervals),
+    the uncached ones computed in ``jobs`` worker processes (default: the CPUs)."""
+    cache = cache if cache is not None else DiskCache()
+    uniq = list({rod.name: rod for rod in types}.values())
+    todo = [rod for rod in uniq if not isinstance(cache.get("fabint", _intervals_key(rod, seed)), dict)]
+    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
+    if jobs > 1:
+        pool = worker_pool(jobs)
+        try:
+            for rod, table in zip(todo, pool.map(_table_star, [(rod, seed) for rod in todo], chunksize=1)):
+                cache.put("fabint", _intervals_key(rod, seed), table)
+        finally:
+            pool.shutdown()
+    return {rod.name: achievable_intervals(rod, seed=seed, cache=cache) for rod in uniq}
+
+
+def _table_star(args: tuple[RodType, int]) -> dict[str, Any]:
+    rod, seed = args
+    return _compute_table(rod, seed)
+
+
+def _plan(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
+
+    The ball subset and the cavity volume come from the type's table of
+    reachable masses (:func:`achievable_intervals`); one cavity layout search
+    follows for the chosen subset.
+    """
+    info = rod.mass_info()
+    rho = rod.material.density / 1000.0
+    table = table if table is not None else _compute_table(rod, seed)
     m_lo, m_hi = info.m_min, info.m_max
     message = ""
     m = float(target)
@@ -426,50 +641,49 @@ def _plan(rod: RodType, target: float, seed: int) -> dict[str, Any]:
         message = (f"target {_fmt(target)} g is {_fmt(extra)} g ({extra / m_hi:.1%}) above the heaviest printable "
                    f"{rod.name} ({_fmt(m_hi)} g); it would need {need}, denser balls or a larger section")
         m = m_hi
-    sockets = np.zeros((0, 3))
-    rs = 0.0
-    options: list[tuple[float, np.ndarray]] = [(ms, np.zeros((0, 3)))]
-    if m > ms * (1 + SOLID_TOL) and rod.balls is not None:
-        balls = _socket_layout(rod)
-        rs = balls.radius
-        net = rod.balls.mass - void_volume("silo", rs) * rho
-        sites = balls.centers - UP * (balls.centers[0] @ UP - info.com[1]) if balls.count else balls.centers
-        orbs = _orbits(sites, (info.com[0], info.com[1], 0.0), balls.symmetry) if balls.count else []
-        for mask in range(1, 2 ** len(orbs)):
-            idx = np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1])
-            options.append((ms + len(idx) * net, balls.centers[np.sort(idx)]))
-        options.sort(key=lambda o: (o[0], len(o[1])))
-    chosen = None
-    for mass_k, socks in options:
-        if mass_k < m * (1 - SOLID_TOL):
-            continue
-        remove = (mass_k - m) / rho
-        if remove <= SOLID_TOL * m / rho:
-            chosen = (socks, None)
-            break
-        cav = _cavities(rod, remove, socks, rs, seed)
-        if cav is not None:
-            chosen = (socks, cav)
-            break
-    if chosen is None:  # between two ball counts: build the nearest reachable mass
-        best_gap, best_opt = math.inf, (ms, np.zeros((0, 3)), ms)
-        for mass_k, socks in options:
-            lo_k = mass_k - _cavities_capacity(rod, socks, rs, seed) * rho
-            near = min(max(m, lo_k + 1e-9 * mass_k), mass_k)
-            if abs(near - m) < best_gap:
-                best_gap, best_opt = abs(near - m), (mass_k, socks, near)
-        mass_k, socks, near = best_opt
-        remove = (mass_k - near) / rho
-        cav = _cavities(rod, remove, socks, rs, seed) if remove > SOLID_TOL * near / rho else None
-        message = (message + "; " if message else "") + (
-            f"{_fmt(m)} g lies in a gap between the ball counts of {rod.name} (balls come in symmetric groups "
-            f"and the cavities beside them cannot bridge it); built at {_fmt(near)} g with {len(socks)} balls")
-        m = near
-        chosen = (socks, cav)
-    socks, cav = chosen
+    options = table["options"]
+
+    def exact(mass: float) -> tuple[int, float] | None:
+        """(option, cavity volume) building ``mass`` as the original search would: the
+        lightest ball subset that is solid at it or whose cavities reach it."""
+        for i, opt in enumerate(options):
+            mass_k = opt["mass"]
+            if mass_k < mass * (1 - SOLID_TOL):
+                continue
+            if mass_k - mass <= SOLID_TOL * mass:
+                return i, 0.0
+            if any(a <= mass <= b for a, b in opt["pieces"]):
+                return i, (mass_k - mass) / rho
+        return None
+
+    build = m
+    found = exact(m)
+    if found is None:  # the nearest reachable mass: a piece edge or a ball count's solid mass
+        cands = [(abs(o["mass"] - m), o["mass"]) for o in options]
+        cands += [(abs(min(max(m, a), b) - m), min(max(m, a), b)) for o in options for a, b in o["pieces"]]
+        build = min(cands)[1]
+        found = exact(build)
+        assert found is not None
+        inside = (any(a * (1 - EDGE_TOL) <= m <= b * (1 + EDGE_TOL) for a, b in table["intervals"])
+                  or abs(build - m) <= 1e-6 * m)  # an interval edge met to round-off
+        if not inside:
+            message = (message + "; " if message else "") + (
+                f"{_fmt(m)} g lies in a gap between the ball counts of {rod.name} (balls come in symmetric "
+                f"groups and the cavities beside them cannot bridge it); built at {_fmt(build)} g with "
+                f"{len(options[found[0]]['sockets'])} balls")
+            m = build
+    i, remove = found
+    opt = options[i]
+    socks = np.array(opt["sockets"], dtype=float).reshape(-1, 3)
+    rs = float(opt["socket_radius"])
+    cav = _cavities(rod, remove, socks, rs, seed) if remove > 0 else None
+    if remove > 0 and cav is None:  # pragma: no cover - the table says it fits
+        raise FabricationError(f"{rod.name}: no cavity layout removes {remove:.3f} mm^3 beside "
+                               f"{len(socks)} balls, although the table of reachable masses says one does")
     return {
         "mass": m,
-        "sockets": np.asarray(socks, dtype=float).tolist(),
+        "build_mass": build,
+        "sockets": socks.tolist(),
         "socket_radius": rs if len(socks) else 0.0,
         "cavities": [] if cav is None else cav.centers.tolist(),
         "cavity_radius": 0.0 if cav is None else cav.radius,
@@ -477,18 +691,6 @@ def _plan(rod: RodType, target: float, seed: int) -> dict[str, Any]:
         "layout": "" if cav is None else cav.layout,
         "message": message,
     }
-
-
-def _cavities_capacity(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int) -> float:
-    """Most cavity volume (mm^3) that fits beside the sockets."""
-    wall = rod.material.min_wall
-    best = 0.0
-    for symmetry in ("mirror-xyz", "point-xy"):
-        pool = _pool(rod, symmetry, seed)
-        for rd in _radii(rod):
-            n = sum(len(o) for o in _dart_throw(pool, rd, wall, sockets, socket_r))
-            best = max(best, n * _CAPPED_K * rd**3)
-    return best
 
 
 # --------------------------------------------------------------------------- building
@@ -509,7 +711,7 @@ def _build(rod: RodType, plan: dict[str, Any]) -> tuple[Any, float, dict[str, An
     rs = float(plan["socket_radius"])
     n_balls = len(socks)
     metal = n_balls * rod.balls.mass if n_balls and rod.balls is not None else 0.0
-    target = float(plan["mass"])
+    target = float(plan.get("build_mass", plan["mass"]))
 
     def make(r: float) -> Any:
         groups = [("silo", socks, rs)] if n_balls else []
@@ -556,14 +758,22 @@ def _key(rod: RodType, target: float, seed: int) -> str:
                     asdict(rod.balls) if rod.balls is not None else None, round(float(target), 9), int(seed))
 
 
-def _fabricate_star(args: tuple[RodType, float, int]) -> dict[str, Any]:
+def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None]) -> dict[str, Any]:
     """Worker: plan, build, root-solve and measure one rod; returns numbers only."""
-    rod, target, seed = args
-    plan = _plan(rod, target, seed)
+    rod, target, seed, table = args
+    plan = _plan(rod, target, seed, table)
     _, r, meas = _build(rod, plan)
     plan["cavity_radius"] = r
     plan["measured"] = meas
     return plan
+
+
+def _type_star(args: tuple[RodType, list[float], int, dict[str, Any] | None]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """Worker: the type's table of reachable masses (unless given), then every
+    rod of that type (the type's candidate pools are built once per worker)."""
+    rod, targets, seed, table = args
+    table = table if table is not None else _compute_table(rod, seed)
+    return table, [_fabricate_star((rod, m, seed, table)) for m in targets]
 
 
 def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
@@ -577,7 +787,7 @@ def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
         key = _key(rod, target, seed)
         plan = cache.get("fab", key)
         if plan is None:
-            plan = _fabricate_star((rod, target, seed))
+            plan = _fabricate_star((rod, target, seed, _table(rod, seed, cache)))
             cache.put("fab", key, plan)
     return _assemble_result(rod, target, index, plan, geometry)
 
@@ -678,17 +888,40 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     done = len(distinct) - len(todo)
     if progress:
         progress(done, len(distinct))
+    # One task per rod type (its table of reachable masses, then its rods), so
+    # each worker builds a type's candidate pools once; a type with more than
+    # its share of the rods is split so every worker has work.
+    by_type: dict[str, list[int]] = {}
+    for i in todo:
+        by_type.setdefault(distinct[i][0].name, []).append(i)
     jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
-    pool = worker_pool(jobs) if jobs > 1 and len(todo) > 1 else None
+    share = max(1, math.ceil(len(todo) / jobs)) if len(by_type) < jobs else len(todo)
+    tasks: list[list[int]] = []
+    for idx in by_type.values():
+        tasks += [idx[k:k + share] for k in range(0, len(idx), share)]
+    tasks.sort(key=len, reverse=True)
+    tables: dict[str, dict[str, Any] | None] = {}
+    for idx in tasks:
+        rod = distinct[idx[0]][0]
+        if rod.name not in tables:
+            hit = cache.get("fabint", _intervals_key(rod, seed))
+            tables[rod.name] = hit if isinstance(hit, dict) and "options" in hit else None
+    pool = worker_pool(jobs) if jobs > 1 and len(tasks) > 1 else None
     try:
-        args = [(distinct[i][0], distinct[i][1], seed) for i in todo]
-        results = pool.map(_fabricate_star, args, chunksize=1) if pool is not None else map(_fabricate_star, args)
-        for i, res in zip(todo, results):
-            plans[i] = res
-            cache.put("fab", _key(distinct[i][0], distinct[i][1], seed), res)
-            done += 1
-            if progress:
-                progress(done, len(distinct))
+        args = [(distinct[idx[0]][0], [distinct[i][1] for i in idx], seed, tables[distinct[idx[0]][0].name])
+                for idx in tasks]
+        results = pool.map(_type_star, args, chunksize=1) if pool is not None else map(_type_star, args)
+        for idx, (table, res) in zip(tasks, results):
+            rod = distinct[idx[0]][0]
+            if tables[rod.name] is None:
+                tables[rod.name] = table
+                cache.put("fabint", _intervals_key(rod, seed), table)
+            for i, plan in zip(idx, res):
+                plans[i] = plan
+                cache.put("fab", _key(distinct[i][0], distinct[i][1], seed), plan)
+                done += 1
+                if progress:
+                    progress(done, len(distinct))
     finally:
         if pool is not None:
             pool.shutdown()

@@ -223,8 +223,19 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         arrays = catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
     with progress.step("laying rods on the target"):
         p = plan(design, arrays)
-    with progress.step(f"inverse design ({method}, {len(p.type_names)} rods)"):
-        cd = design_chain(p, method, seed=seed, n_starts=N_STARTS)
+    if cad:
+        # masses only where fabrication can really make them (ball counts leave gaps)
+        from rodcad.chain_design import design_buildable
+        from rodcad.fabricate import chain_intervals
+
+        with progress.step("masses each rod type can really be built at"):
+            intervals = chain_intervals([design.catalog[n] for n in p.type_names],
+                                        seed=design.fabrication_seed, jobs=jobs)
+        with progress.step(f"inverse design ({method}, {len(p.type_names)} rods, buildable masses)"):
+            cd = design_buildable(p, method, intervals=intervals, seed=seed, n_starts=N_STARTS)
+    else:
+        with progress.step(f"inverse design ({method}, {len(p.type_names)} rods)"):
+            cd = design_chain(p, method, seed=seed, n_starts=N_STARTS)
     pr = cd.plan.problem
     a, b = design.anchors
     with progress.step("equilibrium check from scratch"):
@@ -239,6 +250,12 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         plan=p, chain_design=cd, notes=list(p.notes),
     )
     result.notes += _design_notes(result)
+    snap = cd.result.info.get("buildable") if isinstance(cd.result.info, dict) else None
+    if snap and snap.get("snapped"):
+        result.notes.append(
+            f"{snap['snapped']} rod mass(es) moved onto masses the rods can really be built at (metal balls "
+            f"come in whole numbers): max error {100 * snap['error_before']:.3g} % -> "
+            f"{100 * snap['error_after']:.3g} % of the span")
     if cad:
         fabricate(result, jobs=jobs, progress=progress)
     result.time_s = time.perf_counter() - t0
@@ -424,6 +441,8 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
                                       design_options={"n_starts": N_STARTS})
         except ValueError as err:
             raise InputError([design.problem("chandelier", str(err))]) from None
+    if cad:
+        _buildable_chains(design, res, method, seed, jobs, progress)
     frame_cfg = dict(design.chandelier.get("frame") or {})
     kind = frame_cfg.pop("kind", None) or _frame_kind(design)
     extra = {}
@@ -466,6 +485,25 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
                 out.as_built.append(AsBuilt(bm, bc, eq, shape_distance(eq.points, pr.target)))
     out.time_s = time.perf_counter() - t0
     return out
+
+
+def _buildable_chains(design: Design, res: Any, method: str, seed: int, jobs: int | None,
+                      progress: Progress) -> None:
+    """Re-design every chain with masses the rods can really be built at (shared chains once)."""
+    from rodcad.chain_design import design_buildable
+    from rodcad.fabricate import chain_intervals
+
+    names = sorted({n for ch in res.chains for n in ch.type_names})
+    with progress.step("masses each rod type can really be built at"):
+        intervals = chain_intervals([design.catalog[n] for n in names], seed=design.fabrication_seed, jobs=jobs)
+    done: dict[int, Any] = {}
+    with progress.step("inverse design with buildable masses"):
+        for ch in res.chains:
+            key = id(ch.design)
+            if key not in done:
+                done[key] = design_buildable(ch.design.plan, method, intervals=intervals, seed=seed,
+                                             n_starts=N_STARTS)
+            ch.design = done[key]
 
 
 def _frame_kind(design: Design) -> str:

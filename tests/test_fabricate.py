@@ -16,7 +16,7 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from rodcad import geometry
 from rodcad.cache import DiskCache
 from rodcad.catalog import load_catalog
-from rodcad.fabricate import fabricate_chain, fabricate_rod, write_assembly, write_rod_files
+from rodcad.fabricate import achievable_intervals, fabricate_chain, fabricate_rod, write_assembly, write_rod_files
 from rodcad.massrange import void_volume
 
 
@@ -116,6 +116,29 @@ def test_identical_rods_are_built_once(chain) -> None:
     assert fab.rods[1].solid is fab.rods[4].solid
     assert fab.distinct == 5
     assert [r.file_stem for r in fab.rods][:2] == ["00_free-20", "01_free-20"]
+
+
+def test_achievable_intervals_agree_with_what_is_built(catalog) -> None:
+    """Inside every interval (edges and middle) the rod builds within 0.1 % and in range;
+    in every gap it is flagged and built at the nearest interval edge."""
+    rod = catalog["free-20"]
+    cache = DiskCache()
+    ivs = achievable_intervals(rod, cache=cache)
+    lo, hi = rod.mass_range
+    assert ivs[0][0] == pytest.approx(lo, rel=1e-9) and ivs[-1][1] == pytest.approx(hi, rel=1e-9)
+    assert ivs[0][1] == pytest.approx(rod.solid_mass, rel=1e-3)
+    assert len(ivs) >= 2 and all(a <= b < c for (a, b), (c, _) in zip(ivs, ivs[1:]))
+    assert achievable_intervals(rod, cache=cache) == ivs  # cached, same
+    edges = [x for a, b in ivs for x in (a, b)]
+    for a, b in ivs:
+        for m in (a, (a + b) / 2, b):
+            f = fabricate_rod(rod, m, cache=cache)
+            assert f.in_range and abs(f.mass - m) <= 1e-3 * m, (m, f.mass, f.message)
+    for (_, b), (c, _) in zip(ivs, ivs[1:]):
+        m = (b + c) / 2
+        f = fabricate_rod(rod, m, cache=cache)
+        assert not f.in_range and "gap between the ball counts" in f.message
+        assert min(abs(f.mass - e) for e in edges) <= 1e-3 * f.mass
 
 
 def test_same_input_same_layout(catalog) -> None:

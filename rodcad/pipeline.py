@@ -437,7 +437,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
     with progress.step(f"inverse design of {n} chains ({method})"):
         try:
             res = C.design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
-                                      seed=seed, jobs=1, arrays=arrays, plan_options=plan_options,
+                                      seed=seed, jobs=jobs or 1, arrays=arrays, plan_options=plan_options,
                                       design_options={"n_starts": N_STARTS})
         except ValueError as err:
             raise InputError([design.problem("chandelier", str(err))]) from None

@@ -44,7 +44,6 @@ import numpy as np
 from rodcad.catalog import Catalog, load_catalog
 from rodcad.errors import InputError, Problem
 from rodcad.yamlio import (
-    Any_,
     Bool,
     Checked,
     Field,
@@ -608,27 +607,23 @@ def _chandelier(c: dict[str, Any], v: Any) -> tuple[list[Any] | None, list[dict[
                         "per chain under 'chains')")
             return None, None
         a2, b2 = p.plane_anchors()
-        sub = _Sub(v, key)
-        form, params, curve = _target(t, np.array([a2, b2]), sub)
+        form, params, curve = _target(t, np.array([a2, b2]), v, key=key)
         if curve is None:
             return None, None
         targets.append({"form": form, **params})
     return placements, targets
 
 
-class _Sub:
-    """A validator view that reports 'target...' keys under another key path."""
+def _target(t: dict[str, Any], anchors: np.ndarray, v: Any, *,
+            key: str = "target") -> tuple[str | None, dict[str, Any], np.ndarray | None]:
+    """Check the target's parameters against its form and build the curve.
 
-    def __init__(self, v: Any, prefix: str) -> None:
-        self.v, self.prefix = v, prefix
-
-    def report_at(self, key: str, message: str, fallback: str | None = None) -> None:
-        fix = lambda k: None if k is None else self.prefix + k[len("target"):]  # noqa: E731
-        self.v.report_at(fix(key), message, fallback=fix(fallback) or self.prefix)
-
-
-def _target(t: dict[str, Any], anchors: np.ndarray, v: Any) -> tuple[str | None, dict[str, Any], np.ndarray | None]:
-    """Check the target's parameters against its form and build the curve."""
+    Args:
+        t: the checked target mapping.
+        anchors: (2, 2) anchors A and B in the target's plane.
+        v: the validator collecting problems.
+        key: key path of the target mapping (e.g. ``chandelier.chains[2].target``).
+    """
     from rodcad.targets import TARGET_FORMS, make_target
 
     form = t["form"]
@@ -638,11 +633,11 @@ def _target(t: dict[str, Any], anchors: np.ndarray, v: Any) -> tuple[str | None,
     for k in params:
         if k not in required + optional:
             takes = ", ".join(required + optional) or "no parameters"
-            v.report_at(f"target.{k}", f"a {form} target takes no {k!r} (it takes: {takes})")
+            v.report_at(f"{key}.{k}", f"a {form} target takes no {k!r} (it takes: {takes})")
             bad = True
     for k in required:
         if k not in params:
-            v.report_at("target", f"a {form} target needs {k!r}", fallback="target")
+            v.report_at(key, f"a {form} target needs {k!r}", fallback=key)
             bad = True
     if bad:
         return None, {}, None
@@ -653,18 +648,13 @@ def _target(t: dict[str, Any], anchors: np.ndarray, v: Any) -> tuple[str | None,
     try:
         curve = make_target(form, anchors[0], anchors[1], **params)
     except (ValueError, ArithmeticError, SyntaxError, TypeError) as err:
-        key = f"target.{required[0]}" if required else "target"
-        v.report_at(key, f"cannot make the {form} target: {err}", fallback="target")
+        at = f"{key}.{required[0]}" if required else key
+        v.report_at(at, f"cannot make the {form} target: {err}", fallback=key)
         return None, {}, None
     if not np.all(np.isfinite(curve)):
-        v.report_at("target", f"the {form} target has points that are not finite numbers")
+        v.report_at(key, f"the {form} target has points that are not finite numbers")
         return None, {}, None
     return form, params, curve
 
 
-def resolve_method(name: str | None, design: Design) -> str:
-    """The method to use: the command line's, else the design's."""
-    return name or design.method
-
-
-__all__ += ["METHOD_NAMES", "resolve_method", "target_spec"]
+__all__ += ["METHOD_NAMES", "target_spec"]

@@ -17,7 +17,6 @@ Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -355,11 +354,15 @@ def fabricate(result: BuildResult, *, jobs: int | None = None, progress: Progres
     result.as_built = AsBuilt(masses, com, eq, shape_distance(eq.points, target))
 
 
-def write_outputs(result: BuildResult, outdir: str | Path, *, progress: Progress | None = None) -> Path:
+def write_outputs(result: BuildResult, outdir: str | Path, *,
+                  progress: Progress | None = None) -> dict[str, Any]:
     """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files.
 
     Everything goes to a temporary folder first, renamed to ``outdir`` at the
     end: a failed or interrupted run leaves ``outdir`` as it was.
+
+    Returns:
+        The data written to design.json (for the terminal summary).
     """
     from rodcad import report
     from rodcad.outdir import staged_output
@@ -381,7 +384,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *, progress: Progress
             report.write_json(tmp / "design.json", data)
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             (tmp / "report.md").write_text(report.report_markdown(result, data), encoding="utf-8")
-    return outdir
+    return data
 
 
 # --------------------------------------------------------------------------- chandeliers
@@ -523,9 +526,9 @@ def _chain_fabrication(fab: Any, rods: list[Any]) -> Any:
 
 
 def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
-                             progress: Progress | None = None) -> Path:
+                             progress: Progress | None = None) -> dict[str, Any]:
     """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
-    and <chain>/rods/*.step|stl; staged like :func:`write_outputs`."""
+    and <chain>/rods/*.step|stl; staged like :func:`write_outputs`, whose return it shares."""
     from rodcad import chandelier as C
     from rodcad import report
     from rodcad.outdir import staged_output
@@ -552,4 +555,4 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
             C.preview_3d(tmp / "preview.png", b.result.chains, C.frame_outline(b.frame_plan),
                          title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
             (tmp / "report.md").write_text(report.chandelier_markdown(b, data), encoding="utf-8")
-    return Path(outdir)
+    return data

@@ -24,13 +24,44 @@ def _pts(p: np.ndarray) -> list[list[float]]:
     return [[float(x), float(y)] for x, y in np.asarray(p, float)]
 
 
-def _error(d) -> dict[str, Any]:
-    return {"max_mm": _f(d.max), "mean_mm": _f(d.mean), "sum_mm": _f(d.sum),
-            "max_rel_span": _f(d.max_rel_span), "deviation_mm": [float(v) for v in d.deviation]}
-
-
 def _limits_deg(lim: np.ndarray) -> list[float | None]:
     return [_f(math.degrees(v)) for v in lim]
+
+
+def _rod_json(i: int, name: str, length: float, mass: float, com, limits, n: int) -> dict[str, Any]:
+    """One rod of design.json's ``rods`` (limits: the joint after it, None for the last rod)."""
+    return {"index": i, "type": name, "length": float(length), "mass": float(mass),
+            "com": [float(v) for v in com], "limits_deg": _limits_deg(limits[i]) if i < n - 1 else None}
+
+
+def _simulated_json(eq, unique: bool) -> dict[str, Any]:
+    """design.json's ``simulated``: points, angles, reactions (g * m/s^2 = mN -> N), KKT, stability."""
+    return {"points": _pts(eq.points), "angles_deg": [float(math.degrees(v)) for v in eq.angles],
+            "reaction": [float(v) * 1e-3 for v in eq.reaction],
+            "reaction_a": [float(v) * 1e-3 for v in eq.reaction_a],
+            "kkt_residual": _f(eq.kkt_residual), "stable": bool(eq.stable), "success": bool(eq.success),
+            "unique": bool(unique)}
+
+
+def _as_built_json(ab) -> dict[str, Any]:
+    return {"masses": [float(v) for v in ab.masses], "com": _pts(ab.com), "points": _pts(ab.equilibrium.points),
+            "error": ab.distance.as_dict(), "stable": bool(ab.equilibrium.stable)}
+
+
+def _filament_and_balls(rods) -> dict[str, Any]:
+    """Filament (g) and metal balls by diameter over fabricated rods."""
+    balls: Counter[float] = Counter()
+    for f in rods:
+        if f.ball_count:
+            balls[float(f.ball_diameter)] += int(f.ball_count)
+    return {"filament_g": float(sum(f.filament_mass for f in rods)),
+            "metal_balls": [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]}
+
+
+def _header(d, method: str | None, seed: int, time_s: float) -> dict[str, Any]:
+    return {"name": d.name, "units": {"length": "mm", "mass": "g", "angle": "deg", "force": "N"},
+            "rodcad": __version__, "design_file": str(d.path), "catalog": d.catalog.name,
+            "method": method, "seed": int(seed), "time_s": float(time_s)}
 
 
 def design_json(r) -> dict[str, Any]:
@@ -43,15 +74,8 @@ def design_json(r) -> dict[str, Any]:
     eq = r.equilibrium
     rods = []
     for i, name in enumerate(r.type_names):
-        rod = {
-            "index": i,
-            "type": name,
-            "length": float(r.lengths[i]),
-            "mass": float(r.masses[i]),
-            "com": [float(v) for v in r.com[i]],
-            "limits_deg": _limits_deg(r.limits[i]) if i < r.n - 1 else None,
-            "mass_range": [float(v) for v in d.catalog[name].mass_range],
-        }
+        rod = _rod_json(i, name, r.lengths[i], r.masses[i], r.com[i], r.limits, r.n)
+        rod["mass_range"] = [float(v) for v in d.catalog[name].mass_range]
         if r.fabrication is not None:
             f = r.fabrication.rods[i]
             rod["fabrication"] = {
@@ -64,31 +88,13 @@ def design_json(r) -> dict[str, Any]:
             }
         rods.append(rod)
     out: dict[str, Any] = {
-        "name": d.name,
-        "units": {"length": "mm", "mass": "g", "angle": "deg", "force": "N"},
-        "rodcad": __version__,
-        "design_file": str(d.path),
-        "catalog": d.catalog.name,
-        "method": r.method or None,
-        "seed": int(r.seed),
-        "time_s": float(r.time_s),
+        **_header(d, r.method or None, r.seed, r.time_s),
         "anchors": _pts(d.anchors),
         "target": {"form": d.target_form, "params": d.target_params,
                    "points": _pts(r.target_points) if r.target_points is not None else None},
         "rods": rods,
-        "simulated": {
-            "points": _pts(eq.points),
-            "angles_deg": [float(math.degrees(v)) for v in eq.angles],
-            # g * m/s^2 = mN -> N
-            "reaction": [float(v) * 1e-3 for v in eq.reaction],
-            "reaction_a": [float(v) * 1e-3 for v in eq.reaction_a],
-            "kkt_residual": _f(eq.kkt_residual),
-            "stable": bool(eq.stable),
-            "success": bool(eq.success),
-            "stable_equilibria_found": int(r.n_stable),
-            "unique": bool(r.unique),
-        },
-        "error": _error(r.distance) if r.distance is not None else None,
+        "simulated": {**_simulated_json(eq, r.unique), "stable_equilibria_found": int(r.n_stable)},
+        "error": r.distance.as_dict() if r.distance is not None else None,
         "tolerance": d.tolerance,
         "meets_tolerance": r.meets_tolerance,
         "notes": list(r.notes),
@@ -103,10 +109,7 @@ def design_json(r) -> dict[str, Any]:
                           "at_bounds": [int(v) for v in res.at_bounds], "nfev": int(res.nfev),
                           "time_s": float(res.time_s), "message": res.message}
     if r.as_built is not None:
-        ab = r.as_built
-        out["as_built"] = {"masses": [float(v) for v in ab.masses], "com": _pts(ab.com),
-                           "points": _pts(ab.equilibrium.points), "error": _error(ab.distance),
-                           "stable": bool(ab.equilibrium.stable)}
+        out["as_built"] = _as_built_json(r.as_built)
     out["bill_of_materials"] = bill_of_materials(r)
     return out
 
@@ -123,14 +126,8 @@ def bill_of_materials(r) -> dict[str, Any]:
                  "note": "one per joint plus one at each anchor"},
     }
     if r.fabrication is not None:
-        rods = r.fabrication.rods
-        balls: Counter[float] = Counter()
-        for f in rods:
-            if f.ball_count:
-                balls[float(f.ball_diameter)] += int(f.ball_count)
-        bom["filament_g"] = float(sum(f.filament_mass for f in rods))
-        bom["metal_balls"] = [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]
-        bom["total_mass_g"] = float(sum(f.mass for f in rods))
+        bom.update(_filament_and_balls(r.fabrication.rods))
+        bom["total_mass_g"] = float(sum(f.mass for f in r.fabrication.rods))
     else:
         bom["total_mass_g"] = float(np.sum(r.masses))
     return bom
@@ -337,50 +334,27 @@ def chandelier_json(b) -> dict[str, Any]:
         pr = ch.design.plan.problem
         eq = ch.design.result.equilibrium
         lim = pr.limits if pr.limits is not None else np.zeros((0, 2))
-        rods = []
-        for i, name in enumerate(ch.type_names):
-            rods.append({"index": i, "type": name, "length": float(pr.lengths[i]), "mass": float(ch.masses[i]),
-                         "com": [float(v) for v in pr.com[i]],
-                         "limits_deg": _limits_deg(lim[i]) if i < len(ch.type_names) - 1 else None})
+        n = len(ch.type_names)
+        rods = [_rod_json(i, name, pr.lengths[i], ch.masses[i], pr.com[i], lim, n)
+                for i, name in enumerate(ch.type_names)]
         entry: dict[str, Any] = {
             "name": ch.name,
             "anchors_3d": _pts3([ch.placement.a3, ch.placement.b3]),
             "anchors": _pts(np.array(ch.placement.plane_anchors())),
             "target": {"points": _pts(pr.target)},
             "rods": rods,
-            "simulated": {"points": _pts(eq.points), "points_3d": _pts3(ch.points3d),
-                          "angles_deg": [float(math.degrees(v)) for v in eq.angles],
-                          "reaction": [float(v) * 1e-3 for v in eq.reaction],
-                          "kkt_residual": _f(eq.kkt_residual), "stable": bool(eq.stable),
-                          "unique": bool(ch.design.unique)},
-            "error": _error(ch.distance),
+            "simulated": {**_simulated_json(eq, ch.design.unique), "points_3d": _pts3(ch.points3d)},
+            "error": ch.distance.as_dict(),
             "shared_with": ch.shared_with,
         }
         if b.as_built is not None:
-            ab = b.as_built[k]
-            entry["as_built"] = {"masses": [float(v) for v in ab.masses], "com": _pts(ab.com),
-                                 "points": _pts(ab.equilibrium.points), "error": _error(ab.distance)}
+            entry["as_built"] = _as_built_json(b.as_built[k])
         chains.append(entry)
     bom = res.bom.as_dict()
     if b.fabrications is not None:
-        from collections import Counter as _C
-
-        balls: _C[float] = _C()
-        for fab in b.fabrications:
-            for f in fab.rods:
-                if f.ball_count:
-                    balls[float(f.ball_diameter)] += int(f.ball_count)
-        bom["filament_g"] = float(sum(f.filament_mass for fab in b.fabrications for f in fab.rods))
-        bom["metal_balls"] = [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]
+        bom.update(_filament_and_balls([f for fab in b.fabrications for f in fab.rods]))
     out: dict[str, Any] = {
-        "name": d.name,
-        "units": {"length": "mm", "mass": "g", "angle": "deg", "force": "N"},
-        "rodcad": __version__,
-        "design_file": str(d.path),
-        "catalog": d.catalog.name,
-        "method": res.method,
-        "seed": int(res.seed),
-        "time_s": float(b.time_s),
+        **_header(d, res.method, res.seed, b.time_s),
         "chandelier": {k: v for k, v in d.chandelier.items() if k not in ("chains",)},
         "chains": chains,
         "error": {"max_mm": _f(res.max_error),

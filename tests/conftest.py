@@ -7,18 +7,12 @@ catalog once per session. Modules that need a cold cache set their own.
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 
 @pytest.fixture(scope="session", autouse=True)
 def session_cache(tmp_path_factory):
-    old = os.environ.get("RODCAD_CACHE_DIR")
     folder = tmp_path_factory.mktemp("rodcad-cache")
-    os.environ["RODCAD_CACHE_DIR"] = str(folder)
-    yield folder
-    if old is None:
-        os.environ.pop("RODCAD_CACHE_DIR", None)
-    else:
-        os.environ["RODCAD_CACHE_DIR"] = old
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("RODCAD_CACHE_DIR", str(folder))
+        yield folder

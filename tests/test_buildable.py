@@ -11,17 +11,10 @@ from rodcad.chain_design import catalog_arrays, design_buildable, design_chain, 
 
 
 @pytest.fixture(scope="module")
-def catalog_and_arrays(tmp_path_factory):
-    import os
-
-    old = os.environ.get("RODCAD_CACHE_DIR")
-    os.environ["RODCAD_CACHE_DIR"] = str(tmp_path_factory.mktemp("cache"))
+def catalog_and_arrays():
+    # the session's disk cache (conftest.py): the catalog's limits are computed once per run
     cat = load_catalog("pla-pinned")
-    yield cat, catalog_arrays(cat, jobs=2)
-    if old is None:
-        os.environ.pop("RODCAD_CACHE_DIR", None)
-    else:
-        os.environ["RODCAD_CACHE_DIR"] = old
+    return cat, catalog_arrays(cat, jobs=2)
 
 
 def _inside(masses, intervals) -> bool:

@@ -6,7 +6,6 @@ Everything is measured on the solids and files written, not taken from the plan.
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -22,14 +21,10 @@ from rodcad.massrange import void_volume
 
 @pytest.fixture(scope="module")
 def cache_dir(tmp_path_factory: pytest.TempPathFactory):
-    old = os.environ.get("RODCAD_CACHE_DIR")
     path = tmp_path_factory.mktemp("cache")
-    os.environ["RODCAD_CACHE_DIR"] = str(path)
-    yield path
-    if old is None:
-        os.environ.pop("RODCAD_CACHE_DIR", None)
-    else:
-        os.environ["RODCAD_CACHE_DIR"] = old
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("RODCAD_CACHE_DIR", str(path))
+        yield path
 
 
 @pytest.fixture(scope="module")

@@ -57,8 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if not result.meets_tolerance:
         target = outdir.with_name(outdir.name + ".best-fit")
         code = 1
-    pipeline.write_outputs(result, target, progress=progress)
-    data = report.design_json(result)
+    data = pipeline.write_outputs(result, target, progress=progress)
     print(report.summary_text(result, target, data))
     if code:
         err = result.distance.max_rel_span
@@ -68,13 +67,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
-    from rodcad import pipeline, report
+    from rodcad import pipeline
 
     b = pipeline.build_chandelier(design, method=args.method, seed=args.seed,
                                   cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
     target = outdir if b.meets_tolerance else outdir.with_name(outdir.name + ".best-fit")
-    pipeline.write_chandelier_outputs(b, target, progress=progress)
-    data = report.chandelier_json(b)
+    data = pipeline.write_chandelier_outputs(b, target, progress=progress)
     res = b.result
     print(f"rodcad: {design.name}: chandelier of {len(res.chains)} chains, {res.bom.n_rods} rods, "
           f"method {res.method}, {b.time_s:.1f} s")

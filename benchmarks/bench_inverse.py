@@ -6,7 +6,11 @@ shipped catalog pla-weighted (straight stops that meet free corners, wider mass
 ranges), plus a convex target reachable within the catalog's mass bounds (a
 catenary). The triangle comes twice: with sides of 150 mm (five 30 mm rods fit
 each side, so its apex is a joint) and 120 mm deep (sides of 156.2 mm, which no
-combination of 30 and 40 mm rods tiles). Every method works on the
+combination of 30 and 40 mm rods tiles). The semicircle also comes twice: as
+planned (joints put on the catalog's 20 degree curve stops where the masses cannot
+hold the sag, see ``plan_chain(add_stops=...)``) and with masses only
+(``add_stops=False``), a bounded best fit whose masses all sit on their bounds.
+Every method works on the
 same InverseProblem; the particle swarms get the same wall-time budget as each
 other (--pso-time), refine runs until it converges. Prints a table and writes
 benchmarks/inverse_convergence.png.
@@ -31,6 +35,7 @@ A, B = (0.0, 0.0), (200.0, 0.0)
 TARGETS = {
     "catenary (reachable)": ("catenary", {"length": 300}),
     "semicircle": ("semicircle", {}),
+    "semicircle, no stops": ("semicircle", {}),
     "triangle (sides 150)": ("triangle", {"depth": float(np.sqrt(150**2 - 100**2))}),
     "triangle (depth 120)": ("triangle", {"depth": 120}),
     "polygon (3 sides)": ("polygon", {"sides": 3}),
@@ -53,7 +58,8 @@ def main() -> None:
     print(f"{'target':<22} {'N':>3} {'method':<11} {'max err/span':>13} {'time s':>8} "
           f"{'sim calls':>9}  note")
     for label, (form, params) in TARGETS.items():
-        plan = plan_chain(cat, T.make_target(form, A, B, **params), arrays=arrays)
+        plan = plan_chain(cat, T.make_target(form, A, B, **params), arrays=arrays,
+                          add_stops="no stops" not in label)
         prob = plan.problem
         curves[label] = {}
         for method in ("exact", "refine", "guided-pso", "pso"):
@@ -80,6 +86,9 @@ def main() -> None:
         print(f"{'':<22} discretisation error {plan.discretization.curve_error:.2f} mm; "
               f"stop mismatch {np.degrees(plan.assign_cost):.1f} deg{unmet}")
         print(f"{'':<22} types: {_types_summary(plan.type_names)}")
+        if plan.added_stops:
+            print(f"{'':<22} stops added at joints {plan.added_stops} "
+                  f"({', '.join(f'{np.degrees(plan.problem.limits[j, 1]) + 0.0:.0f}' for j in plan.added_stops)} deg)")
 
     print("\nrefine vs guided PSO at the same wall time (guided PSO's best error when it had used "
           "as much time as refine took, and at its full budget):")

@@ -24,6 +24,7 @@ def assign_types(
     stop_below: float = np.radians(0.5),
     margin: float = np.radians(3.0),
     type_cost=None,
+    need_stop=None,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Rod types for a target with the given bends.
 
@@ -35,6 +36,11 @@ def assign_types(
         stop_below: a joint bending less than this needs a stop (straight or concave).
         margin: a free joint should stay this far inside its limits.
         type_cost: optional (T,) small preference cost per type (default: catalog order).
+        need_stop: optional (N-1,) boolean: these joints must rest on a stop on their
+            sagging side even though they bend convexly (the masses alone cannot hold the
+            bend, see :func:`optimize.stops.needed_stops`). Their cost is the distance
+            |hi - bend| from the nearest stop; the caller then moves the joints so they
+            bend exactly at the chosen stops (:func:`optimize.discretize.refit`).
 
     Returns:
         (types (N,), limits (N-1, 2) of the chosen pairs, cost). The cost is 0 when every
@@ -60,8 +66,14 @@ def assign_types(
     node = np.where(allowed, pref[None, :], np.inf)
     cost = node[0].copy()
     back = np.zeros((n, t), dtype=int)
+    need = np.zeros(n - 1, dtype=bool) if need_stop is None else np.asarray(need_stop, dtype=bool)
+    if need.shape != (n - 1,):
+        raise ValueError(f"need_stop must have shape ({n - 1},), got {need.shape}")
     for j in range(n - 1):
-        edge = _edge_cost(phi[j], lo, hi, stop_below, margin)
+        if need[j]:
+            edge = np.where(np.isfinite(hi) & (lo <= hi) & (phi[j] >= lo), np.abs(hi - phi[j]), _BIG)
+        else:
+            edge = _edge_cost(phi[j], lo, hi, stop_below, margin)
         total = cost[:, None] + edge  # (left type, right type)
         back[j + 1] = np.argmin(total, axis=0)
         cost = total[back[j + 1], np.arange(t)] + node[j + 1]

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
-__all__ = ["Discretization", "discretize", "resample", "find_corners"]
+__all__ = ["Discretization", "discretize", "refit", "resample", "find_corners"]
 
 
 @dataclass
@@ -257,6 +257,74 @@ def _close(joints, lengths, a, b, dense) -> np.ndarray:
         )
     out[-1] = b
     return out
+
+
+def refit(curve, points, lengths, fixed_bends) -> Discretization | None:
+    """Move the joints so that some joints bend by given angles exactly, staying close to the curve.
+
+    Rods joined at a fixed bend move as one rigid group (a run resting on stops), so the
+    unknowns are one angle per group: least squares on the joints' distances to the
+    curve, then exact closure on B by minimum-norm Newton steps.
+
+    Args:
+        curve: (M, 2) target polyline from A to B.
+        points: (N+1, 2) current joints (the start), points[0] = A, points[-1] = B.
+        lengths: (N,) rod lengths.
+        fixed_bends: {joint j: bend phi_j in radians} for interior joints j = 0..N-2.
+
+    Returns:
+        The new Discretization (corners: none recorded), or None when the groups cannot
+        close on B (fewer than two groups, or Newton fails).
+    """
+    curve = np.asarray(curve, dtype=float)
+    points = np.asarray(points, dtype=float)
+    lengths = np.asarray(lengths, dtype=float)
+    n = lengths.size
+    d = np.diff(points, axis=0)
+    theta = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+    group = np.zeros(n, dtype=int)
+    offset = np.zeros(n)
+    for k in range(1, n):
+        j = k - 1
+        if j in fixed_bends:
+            group[k], offset[k] = group[k - 1], offset[k - 1] + float(fixed_bends[j])
+        else:
+            group[k], offset[k] = group[k - 1] + 1, 0.0
+    n_groups = int(group[-1]) + 1
+    if n_groups < 2:
+        return None
+    psi0 = np.array([np.mean(theta[group == g] - offset[group == g]) for g in range(n_groups)])
+    a, b = points[0], points[-1]
+    dense = resample(curve, max(4000, 20 * len(curve)))
+    tree = cKDTree(dense)
+    scale = float(lengths.sum())
+
+    def pts(psi):
+        th = psi[group] + offset
+        steps = lengths[:, None] * np.column_stack([np.cos(th), np.sin(th)])
+        return a + np.vstack([np.zeros(2), np.cumsum(steps, axis=0)])
+
+    def resid(psi):
+        p = pts(psi)
+        return np.concatenate([tree.query(p[1:-1])[0], 1e3 * (p[-1] - b)]) / scale
+
+    psi = least_squares(resid, psi0, method="trf", xtol=1e-14, ftol=1e-14, gtol=1e-14,
+                        max_nfev=200 * n_groups).x
+    G = np.zeros((n, n_groups))
+    G[np.arange(n), group] = 1.0
+    for _ in range(50):
+        th = psi[group] + offset
+        r = a + np.array([lengths @ np.cos(th), lengths @ np.sin(th)]) - b
+        if np.hypot(*r) <= 1e-13 * scale:
+            break
+        J = np.vstack([-lengths * np.sin(th), lengths * np.cos(th)]) @ G
+        psi = psi - np.linalg.lstsq(J, r, rcond=None)[0]
+    out = pts(psi)
+    if float(np.hypot(*(out[-1] - b))) > 1e-9 * scale:
+        return None
+    out[-1] = b
+    return Discretization(out, lengths.copy(), float(_point_polyline_distance(out, curve).max()),
+                          _polyline_distance(dense, out), [])
 
 
 def _point_polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarray:

@@ -47,6 +47,9 @@ class ChainPlan:
             the target bend at all.
         unmet_joints: joints whose target bend no allowed pair of types can hold (a straight
             or concave bend with no stop there, or a bend beyond every limit).
+        added_stops: joints put on a stop (at a sagging or straight bend) because the masses
+            alone could not hold the target within their ranges; the joints were moved onto
+            the stop angles (see ``plan_chain(add_stops=...)``).
     """
 
     curve: np.ndarray
@@ -57,6 +60,7 @@ class ChainPlan:
     notes: list[str] = field(default_factory=list)
     joint_mismatch: np.ndarray = field(default_factory=lambda: np.zeros(0))
     unmet_joints: list[int] = field(default_factory=list)
+    added_stops: list[int] = field(default_factory=list)
 
 
 @dataclass
@@ -100,6 +104,7 @@ def plan_chain(
     preferred_length: float | None = None,
     arrays=None,
     snap_stops: float = np.radians(0.01),
+    add_stops: bool = True,
 ) -> ChainPlan:
     """Lay a chain of the catalog's rods on the target curve.
 
@@ -115,6 +120,12 @@ def plan_chain(
             come from a search on the B-rep to 0.005 deg (:data:`rodcad.limits.TOLERANCE_DEG`),
             so a flush stop designed for 0 deg reads -0.0006 deg; without snapping, the
             straight run would be 0.0006 deg from its stop and the exact statics would fail.
+        add_stops: when the masses cannot hold the target within the types' mass ranges
+            (a semicircle's near-vertical ends need end rods many times heavier than the
+            middle), let joints rest on stops where the catalog has types that stop near the
+            target bend (pla-weighted's curve10 / curve20 at +5 to +20 deg, straight stops
+            at 0), moving the joints onto the stop angles; kept only when the chain then
+            hangs closer to the curve. ``ChainPlan.added_stops`` lists those joints.
 
     Raises:
         ValueError: the rods cannot be laid on the curve (explained).
@@ -139,11 +150,30 @@ def plan_chain(
     joinable[np.isnan(t_lim[..., 0])] = [np.inf, -np.inf]
     bends = np.diff(theta)
     chosen, limits, _ = assign_types(bends, allowed, joinable)
+    plan = _make_plan(curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops)
+    if add_stops and n > 1:
+        plan = _with_added_stops(plan, allowed, joinable, names, t_com, t_bounds, snap_stops)
+    return plan
+
+
+#: A stop is tried at a joint only when some allowed pair of types stops within
+#: this many radians of the target bend; the joints are then moved onto the stops.
+STOP_REACH = np.radians(5.0)
+
+
+def _make_plan(curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
+               fixed=()) -> ChainPlan:
+    """The plan for chosen types: limits snapped onto the bends they hold, notes, problem."""
+    n = disc.lengths.size
+    d = np.diff(disc.points, axis=0)
+    bends = np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0])))
     limits = np.array(limits, dtype=float)
     if limits.size:
         stop = (bends < np.radians(0.5)) & (np.abs(limits[:, 1] - bends) <= snap_stops)
+        stop[list(fixed)] = True
         limits[stop, 1] = bends[stop]
     mismatch = joint_mismatch(bends, limits)
+    mismatch[list(fixed)] = 0.0
     unmet = [int(j) for j in np.flatnonzero(~np.isfinite(mismatch))]
     cost = float(np.sum(mismatch[np.isfinite(mismatch)]))
     notes = []
@@ -174,7 +204,106 @@ def plan_chain(
         limits=limits if n > 1 else np.zeros((0, 2)),
     )
     return ChainPlan(np.asarray(curve, float), disc, [names[i] for i in chosen], problem, cost, notes,
-                     mismatch, unmet)
+                     mismatch, unmet, sorted(int(j) for j in fixed))
+
+
+def _fit_error(plan: ChainPlan) -> tuple[float, object]:
+    """Hausdorff distance (mm) between the target curve and the chain hanging with the
+    masses ``refine`` chooses for the plan, and that result."""
+    from optimize.discretize import _polyline_distance, resample
+
+    r = design(plan.problem, "refine")
+    dense = resample(plan.curve, max(4000, 20 * len(plan.curve)))
+    return _polyline_distance(dense, r.equilibrium.points), r
+
+
+def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds, snap_stops,
+                       rounds: int = 2) -> ChainPlan:
+    """Where fabrication bounds keep the masses from holding a sagging target, rest joints
+    on stops at their (positive) bends and move the joints onto the stop angles
+    (:func:`optimize.discretize.refit`); keep the result when the chain then hangs
+    closer to the curve than the plan without them.
+
+    A joint is a candidate when some allowed pair of types stops within
+    :data:`STOP_REACH` of its bend. Each round tries three sets of stops: the
+    fewest that let the masses hold the target (:func:`optimize.stops.needed_stops`),
+    every candidate, and the candidates whose nearest stop is straight (near-straight
+    sides held straight); the best is scored by the Hausdorff distance between the curve
+    and the chain hanging with the masses ``refine`` gives it.
+    """
+    from optimize.discretize import refit
+    from optimize.inverse import _exact_masses
+    from optimize.stops import needed_stops
+
+    if _exact_masses(plan.problem)[2]:
+        return plan  # the masses alone hold the target
+    free_err, _ = _fit_error(plan)
+    best, best_err = plan, free_err
+    lo_all, hi_all = joinable[..., 0], joinable[..., 1]
+    seen: set[tuple[int, ...]] = set()
+    current = plan
+    for _ in range(rounds):
+        p = current.problem
+        bends = np.diff(p.angles)
+        on_limit = set(int(j) for j in np.flatnonzero(np.abs(p.limits[:, 1] - bends) <= 1e-6))
+        nearest = {}
+        for j in range(bends.size):
+            if j in on_limit or bends[j] <= 0:
+                continue
+            hi = hi_all[np.ix_(np.flatnonzero(allowed[j]), np.flatnonzero(allowed[j + 1]))]
+            lo = lo_all[np.ix_(np.flatnonzero(allowed[j]), np.flatnonzero(allowed[j + 1]))]
+            gap = np.where(np.isfinite(hi) & (lo <= hi), np.abs(hi - bends[j]), np.inf)
+            if gap.min() <= STOP_REACH:
+                nearest[j] = float(hi.flat[int(np.argmin(gap))])
+        if not nearest:
+            break
+        need = needed_stops(p, list(nearest))
+        straight = {j for j in nearest if bends[j] <= STOP_REACH
+                    and np.any(np.abs(hi_all[np.ix_(np.flatnonzero(allowed[j]),
+                                                    np.flatnonzero(allowed[j + 1]))]) < 1e-3)}
+        options = [(set(nearest), set()), (straight, straight)]
+        if need is not None and need.size:
+            options.insert(0, (set(need.tolist()), set()))
+        improved = False
+        for opt, flat in options:
+            keep = {j for j in on_limit if bends[j] > 0}  # earlier convex stops stay
+            key = tuple(sorted(opt | keep))
+            if not opt or (key, tuple(sorted(flat))) in seen:
+                continue
+            seen.add((key, tuple(sorted(flat))))
+            mask = np.zeros(bends.size, dtype=bool)
+            mask[list(key)] = True
+            wanted = bends.copy()
+            wanted[list(flat)] = 0.0  # near-straight: held straight
+            chosen, limits, _ = assign_types(wanted, allowed, joinable, need_stop=mask)
+            fixed = {int(j): float(limits[j, 1]) for j in key}
+            for j in on_limit:  # straight runs and concave stops stay on their stops
+                fixed.setdefault(j, float(limits[j, 1]))
+            # a flush stop designed straight reads within the search tolerance of 0: straight
+            fixed = {j: 0.0 if abs(v) <= snap_stops else v for j, v in fixed.items()}
+            if any(not np.isfinite(v) for v in fixed.values()):
+                continue
+            disc = refit(current.curve, p.target, p.lengths, fixed)
+            if disc is None:
+                continue
+            disc.corners = list(plan.discretization.corners)
+            cand = _make_plan(current.curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
+                              fixed=[j for j in fixed if j not in on_limit])
+            err, _ = _fit_error(cand)
+            if err < best_err - 1e-6:
+                best, best_err, improved = cand, err, True
+        if not improved or _exact_masses(best.problem)[2]:
+            break
+        current = best
+    if best is not plan:
+        stops = ", ".join(f"{j} ({round(np.degrees(best.problem.limits[j, 1]), 1) + 0.0:.1f} deg)"
+                          for j in best.added_stops)
+        best.notes.insert(0, (
+            f"the masses alone cannot hold this shape within the rods' mass ranges, so joints {stops} "
+            f"rest on stops (the adjacent rods' ends meet there) and were moved onto the stop "
+            f"angles; the chain hangs within {best_err:.3g} mm of the curve (without these stops "
+            f"{free_err:.3g} mm)"))
+    return best
 
 
 def design_chain(

@@ -25,13 +25,16 @@ from rodcad.limits import all_pair_limits
 CHECK = Path(__file__).with_name("data") / "pla-weighted.check.json"
 A, B = (0.0, 0.0), (200.0, 0.0)
 
-#: End shape at (first, second) joint per family: F free, S straight stop, C concave stop.
+#: End shape at (first, second) joint per family: F free, S straight stop, C concave stop,
+#: V5 / V10 convex stop (flush, top chamfer +5 / +10 deg).
 ENDS = {
     "free": ("F", "F"),
     "straight": ("S", "S"),
     "straight-free": ("S", "F"),
     "free-straight": ("F", "S"),
     "concave20": ("C", "S"),
+    "curve10": ("V5", "V5"),
+    "curve20": ("V10", "V10"),
 }
 
 
@@ -81,15 +84,20 @@ def test_catalog_loads_with_mixed_end_families(cat, check):
 
 def test_limits_follow_the_end_shapes(check):
     """Per (left rod's second end, right rod's first end): S-S stops at exactly 0, S-C at
-    -20, F-F bends past 100 degrees both ways; everything bends past -100 the other way."""
+    -20, F-F bends past 100 degrees both ways; convex stops add their chamfers (V5-V10 stops
+    at +15, V10-C at -10, F-V10 at about 65.8); everything bends past -100 the other way."""
     expected_hi = {("S", "S"): 0.0, ("S", "C"): -20.0, ("F", "F"): 110.9, ("F", "S"): 55.8,
-                   ("S", "F"): 55.8, ("F", "C"): 35.8}
+                   ("S", "F"): 55.8, ("F", "C"): 35.8,
+                   ("S", "V5"): 5.0, ("S", "V10"): 10.0, ("V5", "S"): 5.0, ("V10", "S"): 10.0,
+                   ("V5", "V5"): 10.0, ("V5", "V10"): 15.0, ("V10", "V5"): 15.0, ("V10", "V10"): 20.0,
+                   ("V5", "C"): -15.0, ("V10", "C"): -10.0,
+                   ("F", "V5"): 60.8, ("F", "V10"): 65.8, ("V5", "F"): 60.8, ("V10", "F"): 65.8}
     for p in check["pairs"]:
         key = (ENDS[_family(check, p["left"])][1], ENDS[_family(check, p["right"])][0])
         lo, hi = p["limits_deg"]
         assert hi == pytest.approx(expected_hi[key], abs=0.1), (p, key)
         assert lo < -100
-        if key in (("S", "S"), ("S", "C")):  # flush faces: exact to the search tolerance
+        if "F" not in key:  # flush faces: exact to the search tolerance
             assert hi == pytest.approx(expected_hi[key], abs=0.005)
 
 
@@ -107,7 +115,7 @@ def test_mass_ranges_are_wider_than_pla_pinned(check):
 def test_check_table_matches_the_solids(cat, check):
     """A sample of the stored limits, recomputed from the B-rep."""
     sample = [("straight-30", "straight-free-30"), ("straight-free-30", "free-straight-30"),
-              ("free-straight-30", "concave20-30")]
+              ("free-straight-30", "concave20-30"), ("curve10-30", "curve20-30")]
     fresh = all_pair_limits(cat, pairs=[(cat[a], cat[b]) for a, b in sample], jobs=2)
     stored = {(p["left"], p["right"]): p["limits_deg"] for p in check["pairs"]}
     for key, r in fresh.items():
@@ -192,3 +200,46 @@ def test_heart_tip_bends_freely_and_is_a_bounded_best_fit(cat, arrays):
     assert any(name.startswith("straight") for name in plan.type_names)  # the straight sides
     d = design_chain(plan, "refine", n_starts=4)
     assert d.result.success and d.result.distance.max_rel_span < 0.1
+
+
+def _hang_error(plan, result) -> float:
+    """Hausdorff distance (mm) between the target curve and the hanging chain."""
+    from optimize.discretize import _polyline_distance, resample
+
+    return _polyline_distance(resample(plan.curve), result.equilibrium.points)
+
+
+def test_semicircle_rests_on_curve_stops_where_the_masses_cannot_hold_it(cat, arrays):
+    """The semicircle's near-vertical ends need end rods many times heavier than the
+    middle ones; no type's mass range allows that, so the planner rests the middle joints
+    on curve20 stops (20 degrees) and the design becomes exact, and hangs closer to the
+    curve than the masses-only best fit."""
+    target = T.make_target("semicircle", A, B)
+    free = plan_chain(cat, target, arrays=arrays, add_stops=False)
+    plan = plan_chain(cat, target, arrays=arrays)
+    assert not free.added_stops and plan.added_stops
+    bends = np.diff(plan.problem.angles)
+    for j in plan.added_stops:
+        assert plan.problem.limits[j, 1] == bends[j]  # the joint sits exactly on its stop
+        assert np.degrees(bends[j]) == pytest.approx(20.0, abs=1e-9)
+        assert plan.type_names[j].startswith("curve20") and plan.type_names[j + 1].startswith("curve20")
+    assert "rest on stops" in plan.notes[0]
+    d_free = design_chain(free, "refine", n_starts=4)
+    d = design_chain(plan, "refine", n_starts=4)
+    assert not d_free.result.exact and d_free.result.distance.max_rel_span > 0.02
+    assert d.result.exact and d.result.distance.max_rel_span < 1e-9, d.result.message
+    eq = d.result.equilibrium
+    assert np.all(eq.active[plan.added_stops] == 1) and np.all(eq.moments[plan.added_stops] <= 0)
+    assert _hang_error(plan, d.result) < 0.8 * _hang_error(free, d_free.result)
+
+
+def test_heart_sides_are_held_straight_by_added_stops(cat, arrays):
+    target = T.heart(A, B)
+    free = plan_chain(cat, target, arrays=arrays, add_stops=False)
+    plan = plan_chain(cat, target, arrays=arrays)
+    bends = np.diff(plan.problem.angles)
+    assert plan.added_stops and np.all(np.abs(bends[plan.added_stops]) < 1e-9)  # straight
+    d_free = design_chain(free, "refine", n_starts=4)
+    d = design_chain(plan, "refine", n_starts=4)
+    assert d.result.distance.max_rel_span < 0.2 * d_free.result.distance.max_rel_span
+    assert _hang_error(plan, d.result) < 0.5 * _hang_error(free, d_free.result)

@@ -73,6 +73,24 @@ def test_masses_and_centres_of_mass(chain) -> None:
     assert fab.rods[0].cavity_count > 0 and fab.rods[3].ball_count > 0
 
 
+def test_convex_stop_rod_of_pla_weighted(cache_dir: Path) -> None:
+    """A curve20 rod (flush ends, +10 deg top chamfers) builds to its mass and centre of mass."""
+    rod = load_catalog("pla-weighted")["curve20-30"]
+    lo, hi = rod.mass_range
+    m = (lo + rod.solid_mass) / 2
+    assert lo < m < hi
+    f = fabricate_rod(rod, m, seed=3)
+    mass, com = _measured(rod, f)
+    assert f.in_range and f.cavity_count > 0, f.message
+    assert mass == pytest.approx(f.mass, rel=1e-9)
+    assert abs(mass - m) <= 1e-3 * m
+    assert np.allclose(com, rod.com, atol=1e-6), (com, rod.com)
+    assert np.allclose(f.com, rod.com, atol=1e-6)
+    assert geometry.is_valid_solid(f.solid)
+    assert len(f.solid.shells()) == 1 + f.cavity_count + f.ball_count
+    assert f.min_wall >= rod.material.min_wall - 1e-6
+
+
 def test_walls_measured_on_the_final_solid(chain) -> None:
     types, _, fab = chain
     checked = 0

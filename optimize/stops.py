@@ -1,0 +1,76 @@
+"""Where the masses cannot hold a sagging target, stops can.
+
+At the target, statics is linear in the masses, the reaction at B and the moments at
+joints resting on stops (:func:`optimize.inverse.statics_matrix`). A sagging (convex)
+joint needs no moment when the masses are free, but fabrication bounds the masses: a
+semicircle's near-vertical ends need end rods many times heavier than any rod type can
+be. A stop on the joint's sagging side, placed exactly at the target bend, supplies a
+moment of one sign (it only pushes back against more sag). :func:`needed_stops` finds
+the fewest such stops, as the L1-smallest moments that balance the target with every
+mass inside its bounds (a linear program; L1 favours few non-zero moments).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.optimize import linprog
+
+from optimize.inverse import InverseProblem, _scaled, statics_matrix
+
+__all__ = ["needed_stops"]
+
+
+def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1e-7) -> np.ndarray | None:
+    """Joints that must rest on a stop at their target bend for the target to be an
+    equilibrium with every mass inside its bounds.
+
+    Args:
+        problem: the target, rods and mass bounds; joints already resting on a limit keep
+            their stops (their moments are free and cost nothing).
+        candidates: joints that may get a stop on their sagging side (default: every
+            interior joint not already on a limit whose target bend is convex, phi > 0).
+        rel_tol: a candidate's moment counts as needed above this fraction of the largest.
+
+    Returns:
+        Sorted joint indices (empty when the masses alone can hold the target), or None
+        when even stops at every candidate cannot balance it (a moment of the wrong sign
+        would be needed: the target bends less than the chain wants to somewhere a stop
+        on the sagging side cannot help).
+    """
+    phi = np.diff(problem.angles)
+    lim = problem.limits.copy()
+    _, on_limit, _ = statics_matrix(problem)
+    if candidates is None:
+        candidates = [j for j in range(phi.size) if phi[j] > 0 and j not in set(on_limit.tolist())]
+    cand = np.array(sorted(set(int(j) for j in candidates) - set(on_limit.tolist())), dtype=int)
+    if cand.size:
+        lim[cand, 1] = phi[cand]
+        lim[cand, 0] = np.minimum(lim[cand, 0], phi[cand])
+    trial = replace(problem, limits=lim)
+    A, stops, signs = statics_matrix(trial)
+    n = problem.n
+    row, col = _scaled(trial, A)
+    As = (A * row[:, None]) * col[None, :]
+    nvar = A.shape[1]
+    lb = np.full(nvar, -np.inf)
+    ub = np.full(nvar, np.inf)
+    lb[:n], ub[:n] = problem.mass_bounds[:, 0] / col[:n], problem.mass_bounds[:, 1] / col[:n]
+    new = np.isin(stops, cand)
+    # a new stop sits on the sagging side (hi): its moment is <= 0; existing stops keep their signs
+    for k, (j, sgn) in enumerate(zip(stops, signs)):
+        if sgn > 0:
+            lb[n + 2 + k] = 0.0
+        elif sgn < 0:
+            ub[n + 2 + k] = 0.0
+    c = np.zeros(nvar)
+    c[n + 2:][new] = -1.0  # minimise sum |mu| over the new stops (all <= 0)
+    bounds = list(zip(np.where(np.isfinite(lb), lb, None), np.where(np.isfinite(ub), ub, None)))
+    lp = linprog(c, A_eq=As, b_eq=np.zeros(n), bounds=bounds, method="highs")
+    if lp.status != 0:
+        return None
+    mu = np.abs(lp.x[n + 2:][new])
+    if mu.size == 0 or mu.max() <= 0:
+        return np.zeros(0, dtype=int)
+    return np.sort(stops[new][mu > rel_tol * max(mu.max(), 1e-300)]).astype(int)

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
-__all__ = ["Discretization", "discretize", "refit", "resample", "find_corners"]
+__all__ = ["Discretization", "curve_distance", "discretize", "refit", "resample", "find_corners"]
 
 
 @dataclass
@@ -337,6 +337,13 @@ def _point_polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarra
         t = np.clip(np.einsum("ij,ij->i", p - a, ab) / denom, 0.0, 1.0)
         out[i] = np.min(np.hypot(*(a + t[:, None] * ab - p).T))
     return out
+
+
+def curve_distance(curve, chain) -> float:
+    """Hausdorff distance between a target curve (any polyline) and a chain polyline (mm):
+    how far the hanging chain is from the curve, everywhere along both."""
+    curve = np.asarray(curve, dtype=float)
+    return _polyline_distance(resample(curve, max(4000, 20 * len(curve))), np.asarray(chain, dtype=float))
 
 
 def _polyline_distance(curve: np.ndarray, chain: np.ndarray) -> float:

@@ -210,11 +210,10 @@ def _make_plan(curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
 def _fit_error(plan: ChainPlan) -> tuple[float, object]:
     """Hausdorff distance (mm) between the target curve and the chain hanging with the
     masses ``refine`` chooses for the plan, and that result."""
-    from optimize.discretize import _polyline_distance, resample
+    from optimize.discretize import curve_distance
 
     r = design(plan.problem, "refine")
-    dense = resample(plan.curve, max(4000, 20 * len(plan.curve)))
-    return _polyline_distance(dense, r.equilibrium.points), r
+    return curve_distance(plan.curve, r.equilibrium.points), r
 
 
 def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds, snap_stops,

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from optimize.discretize import curve_distance
 from rodcad import __version__
 
 __all__ = ["design_json", "report_markdown", "summary_text", "write_json"]
@@ -101,6 +102,7 @@ def design_json(r) -> dict[str, Any]:
     }
     if r.plan is not None:
         out["discretisation"] = {"curve_error_mm": _f(r.plan.discretization.curve_error),
+                                 "hanging_curve_error_mm": _f(curve_distance(r.plan.curve, eq.points)),
                                  "joint_error_mm": _f(r.plan.discretization.joint_error),
                                  "stop_mismatch_deg": _f(math.degrees(r.plan.assign_cost))}
     if r.chain_design is not None:
@@ -191,6 +193,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         disc = data["discretisation"]
         add(f"- Discretisation (rods laid on the curve): curve error {disc['curve_error_mm']:.3g} mm, "
             f"stop mismatch {disc['stop_mismatch_deg']:.3g} deg (reported apart from the physics error)")
+        add(f"- The simulated chain hangs within {disc['hanging_curve_error_mm']:.3g} mm of the target curve "
+            "(both errors together, everywhere along the rods)")
     if "as_built" in data:
         add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
     if "inverse" in data:
@@ -290,6 +294,10 @@ def summary_text(r, outdir: Path | None, data: dict[str, Any]) -> str:
          f"method {r.method or 'simulate'}, {r.time_s:.1f} s"]
     if data.get("error"):
         L.append(f"  shape error   {_fmt_err(data['error'])}")
+    if "discretisation" in data:
+        disc = data["discretisation"]
+        L.append(f"  vs the curve  hangs within {disc['hanging_curve_error_mm']:.3g} mm of the target curve "
+                 f"(rods laid on it within {disc['curve_error_mm']:.3g} mm)")
     if "as_built" in data:
         L.append(f"  as built      {_fmt_err(data['as_built']['error'])}")
     sim = data["simulated"]

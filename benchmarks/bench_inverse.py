@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize import design
+from optimize.discretize import curve_distance
 from rodcad import targets as T
 from rodcad.catalog import load_catalog
 from rodcad.chain_design import catalog_arrays, plan_chain
@@ -49,6 +50,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=3, help="PSO seeds per target")
     ap.add_argument("--catalog", default="pla-weighted", help="catalog name or file")
     ap.add_argument("--png", default=str(Path(__file__).with_name("inverse_convergence.png")))
+    ap.add_argument("--spans", type=float, nargs="*", default=[200, 400, 600],
+                    help="anchor distances (mm) for the bounded-target size sweep (none: skip it)")
     args = ap.parse_args()
 
     cat = load_catalog(args.catalog)
@@ -88,7 +91,7 @@ def main() -> None:
         print(f"{'':<22} types: {_types_summary(plan.type_names)}")
         if plan.added_stops:
             print(f"{'':<22} stops added at joints {plan.added_stops} "
-                  f"({', '.join(f'{np.degrees(plan.problem.limits[j, 1]) + 0.0:.0f}' for j in plan.added_stops)} deg)")
+                  f"({', '.join(f'{round(np.degrees(plan.problem.limits[j, 1]), 1) + 0.0:g}' for j in plan.added_stops)} deg)")
 
     print("\nrefine vs guided PSO at the same wall time (guided PSO's best error when it had used "
           "as much time as refine took, and at its full budget):")
@@ -117,8 +120,36 @@ def main() -> None:
         p = next(r for r in rows if r[0] == label and r[1] == "pso")[2]
         print(f"  {label:<22} guided {g:.3e}  plain {p:.3e}  -> "
               f"{'guided better' if g < p else 'plain better or equal'}")
+    if args.spans:
+        _size_sweep(cat, arrays, args.spans, args.pso_time)
     _plot(curves, args.png)
     print(f"\nwrote {args.png}")
+
+
+def _size_sweep(cat, arrays, spans, pso_time) -> None:
+    """Bounded targets at several sizes (more rods): refine against guided PSO at the same
+    wall time, masses only and with the planner's stops."""
+    print("\nbounded targets at other sizes (more rods): max joint error / span of refine and of "
+          "guided PSO (seed 0) at refine's wall time and at the end of its budget; 'hang mm': how far "
+          "refine's chain hangs from the target curve")
+    print(f"{'target':<12} {'span':>5} {'N':>3} {'stops':<6} {'refine':>9} {'ms':>5} {'gPSO same t':>11} "
+          f"{'ratio':>8} {'gPSO end':>9} {'hang mm':>8}")
+    for form in ("semicircle", "heart"):
+        for span in spans:
+            for stops in (False, True):
+                plan = plan_chain(cat, T.make_target(form, A, (float(span), 0.0)), arrays=arrays,
+                                  add_stops=stops)
+                prob = plan.problem
+                r = design(prob, "refine", max_nfev=400)
+                g = design(prob, "guided-pso", seed=0, max_nfev=10**9, max_time=pso_time)
+                early = [e for _, t, e in g.history if t <= r.time_s]
+                same = min(early) if early else g.history[0][2]
+                ref = r.distance.max_rel_span
+                ratio = same / ref if ref > 0 else float("inf")
+                hang = curve_distance(plan.curve, r.equilibrium.points)
+                print(f"{form:<12} {span:>5.0f} {prob.n:>3} {'yes' if plan.added_stops else 'no':<6} "
+                      f"{ref:>9.2e} {1e3 * r.time_s:>5.0f} {same:>11.2e} {ratio:>8.3g} "
+                      f"{g.distance.max_rel_span:>9.2e} {hang:>8.2f}")
 
 
 def _types_summary(names) -> str:

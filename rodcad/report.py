@@ -104,7 +104,10 @@ def design_json(r) -> dict[str, Any]:
         out["discretisation"] = {"curve_error_mm": _f(r.plan.discretization.curve_error),
                                  "hanging_curve_error_mm": _f(curve_distance(r.plan.curve, eq.points)),
                                  "joint_error_mm": _f(r.plan.discretization.joint_error),
-                                 "stop_mismatch_deg": _f(math.degrees(r.plan.assign_cost))}
+                                 "stop_mismatch_deg": _f(math.degrees(r.plan.assign_cost)),
+                                 "added_stops": [{"joint": int(j),
+                                                  "deg": _f(math.degrees(r.plan.problem.limits[j, 1]) + 0.0)}
+                                                 for j in r.plan.added_stops]}
     if r.chain_design is not None:
         res = r.chain_design.result
         out["inverse"] = {"exact": bool(res.exact), "statics_residual": _f(res.statics_residual),

@@ -210,3 +210,16 @@ chandelier:
         load_design(tmp_path / "d.yaml", text=text.replace("[0, 200, 20]", "[0, 50, 90]"))
     (p,) = err.value.problems
     assert p.key == "chandelier" and p.line == 5 and "above" in p.message
+
+
+def test_semicircle_example_rests_on_curve_stops_and_says_so(tmp_path):
+    out = tmp_path / "semi"
+    assert main(["build", str(ROOT / "examples" / "semicircle.yaml"), "-o", str(out), "--no-cad", "-q"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    disc = data["discretisation"]
+    assert disc["added_stops"] and all(15.0 <= s["deg"] <= 25.0 for s in disc["added_stops"])
+    assert data["error"]["max_rel_span"] < 1e-9  # exact on its (refitted) joints
+    assert disc["hanging_curve_error_mm"] == pytest.approx(disc["curve_error_mm"], abs=1e-6)
+    assert disc["hanging_curve_error_mm"] < 5.0
+    report = (out / "report.md").read_text()
+    assert "rest on stops" in report and "hangs within" in report

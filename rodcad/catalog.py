@@ -47,6 +47,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rodcad.cache import register_seed
 from rodcad.errors import InputError, Problem
 from rodcad.yamlio import (
     MISSING,
@@ -721,11 +722,18 @@ def load_catalog(name_or_path: str | Path, base_dir: str | Path | None = None) -
 
     Raises:
         InputError: every problem as ``FILE:LINE:COL: key.path: message``.
+
+    A ``<stem>.cache.json`` next to the file (precomputed limits and masses,
+    ``rodcad catalog precompute``) is registered as a seed of the disk cache.
     """
     path = resolve_catalog(name_or_path, base_dir)
     display = str(name_or_path) if Path(name_or_path) == path else str(path)
     doc = check_document(load_yaml(path, display), catalog_spec(), filename=display, defer=True)
-    return _build(doc, path)
+    catalog = _build(doc, path)
+    seed = path.with_name(f"{path.stem}.cache.json")
+    if seed.is_file():
+        register_seed(seed)
+    return catalog
 
 
 def catalog_from_text(text: str, filename: str = "<catalog>") -> Catalog:

@@ -6,6 +6,10 @@
 * ``rodcad catalog export CATALOG -o DIR`` writes ``DIR/<type>.step`` per type.
 * ``rodcad catalog schema [-o FILE]`` prints (or writes) the JSON Schema of
   catalog files.
+* ``rodcad catalog precompute CATALOG [-o FILE] [--jobs N]`` computes the
+  joint limits, mass ranges and achievable mass intervals (fabrication seed 0)
+  of every type into a seed file of the disk cache (default
+  ``<catalog>.cache.json`` next to the catalog), read by every later run.
 
 CATALOG is a path or the name of a shipped catalog (e.g. ``pla-pinned``).
 """
@@ -26,7 +30,7 @@ from rodcad.cache import DiskCache
 from rodcad.catalog import Catalog, catalog_schema, load_catalog
 from rodcad.errors import InputError, Problem
 
-__all__ = ["check_report", "register", "schema_text"]
+__all__ = ["check_report", "precompute", "register", "schema_text"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -66,6 +70,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     export.add_argument("catalog", metavar="CATALOG", help="catalog file, or name of a shipped catalog")
     export.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
     export.set_defaults(handler=_export)
+
+    pre = sub.add_parser(
+        "precompute",
+        help="precompute limits and mass tables into a seed file shipped with the catalog",
+        description="Compute, from the solids and ignoring every cache, the joint limits of every ordered "
+        "pair of types, each type's mass range and its achievable mass intervals (fabrication seed 0), "
+        "and write them as a seed file of the disk cache: later runs read them instead of computing.",
+    )
+    pre.add_argument("catalog", metavar="CATALOG", help="catalog file, or name of a shipped catalog")
+    pre.add_argument("-o", "--output", metavar="FILE",
+                     help="seed file to write (default: <catalog stem>.cache.json next to the catalog)")
+    pre.add_argument("--jobs", type=int, default=None, metavar="N",
+                     help="worker processes (default: number of CPUs)")
+    pre.set_defaults(handler=_precompute)
 
     schema = sub.add_parser(
         "schema",
@@ -245,6 +263,84 @@ def _format_report(report: dict[str, Any]) -> str:
     lines.append(f"({stats['pairs_computed']} pairs computed, {stats['pairs_cached']} from cache, "
                  f"{stats['seconds']:.1f} s)")
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- precompute
+
+#: The cache kinds a seed file holds.
+SEED_KINDS = ("limits", "mass", "fabint")
+
+
+def precompute(catalog: Catalog, *, jobs: int | None = None, progress: bool = False) -> dict[str, Any]:
+    """Compute a catalog's seed data from the solids, in a fresh cache with
+    the seed layer off.
+
+    Returns:
+        ``{"rodcad_seed_cache": 1, "catalog": NAME, "entries": {kind: {key:
+        value}}}`` for the kinds of :data:`SEED_KINDS`.
+    """
+    from rodcad.fabricate import chain_intervals
+
+    saved = {k: os.environ.get(k) for k in ("RODCAD_CACHE_DIR", "RODCAD_SEED_CACHE")}
+    with tempfile.TemporaryDirectory(prefix="rodcad-precompute-") as tmp:
+        # worker processes inherit the environment: they too compute afresh
+        os.environ["RODCAD_CACHE_DIR"] = tmp
+        os.environ["RODCAD_SEED_CACHE"] = "0"
+        try:
+            cache = DiskCache(tmp)
+            check_report(catalog, jobs=jobs, cache=cache, progress=progress)
+            if progress:
+                print(f"rodcad: computing achievable mass intervals of {len(catalog)} types ...",
+                      file=sys.stderr, flush=True)
+            chain_intervals(list(catalog), seed=0, jobs=jobs, cache=cache)
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
+        entries: dict[str, dict[str, Any]] = {}
+        for kind in SEED_KINDS:
+            table = entries[kind] = {}
+            for f in sorted((Path(tmp) / kind).glob("*/*.json")):
+                with open(f, encoding="utf-8") as fh:
+                    value = json.load(fh)
+                if kind == "limits" and isinstance(value, dict) and "seconds" in value:
+                    value["seconds"] = 0.0  # timing: unused from the cache, kept out for reproducible files
+                table[f.stem] = value
+    return {"rodcad_seed_cache": 1, "catalog": catalog.name, "entries": entries}
+
+
+def _precompute(args: argparse.Namespace) -> int:
+    catalog = load_catalog(args.catalog)
+    if args.output:
+        out = Path(args.output)
+    elif catalog.path is not None:
+        out = catalog.path.with_name(f"{catalog.path.stem}.cache.json")
+    else:  # pragma: no cover - load_catalog always sets the path
+        out = Path(f"{catalog.name}.cache.json")
+    t0 = time.perf_counter()
+    data = precompute(catalog, jobs=args.jobs, progress=sys.stderr.isatty())
+    text = json.dumps(data, sort_keys=True, separators=(",", ":")) + "\n"
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.chmod(tmp, 0o644)  # mkstemp makes it private; this is a file to ship
+        os.replace(tmp, out)
+    except OSError as err:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        print(f"rodcad: cannot write {out}: {err.strerror or err}", file=sys.stderr)
+        return 1
+    counts = ", ".join(f"{len(data['entries'][k])} {k}" for k in SEED_KINDS)
+    print(f"catalog {catalog.name}: {counts} entries in {time.perf_counter() - t0:.1f} s -> {out} "
+          f"({len(text) / 1024:.0f} KiB)")
+    return 0
 
 
 # --------------------------------------------------------------------------- export

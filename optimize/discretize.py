@@ -223,40 +223,52 @@ def discretize(
 
 def _close(joints, lengths, a, b, dense) -> np.ndarray:
     """Least-squares move of the joints toward the curve with exact closure on B."""
-    tree = cKDTree(dense)
     d = np.diff(joints, axis=0)
     theta0 = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
-    span_scale = float(lengths.sum())
-
-    def pts(theta):
-        steps = lengths[:, None] * np.column_stack([np.cos(theta), np.sin(theta)])
-        return a + np.vstack([np.zeros(2), np.cumsum(steps, axis=0)])
-
-    def resid(theta):
-        p = pts(theta)
-        off = tree.query(p[1:-1])[0]
-        return np.concatenate([off, 1e3 * (p[-1] - b)]) / span_scale
-
-    sol = least_squares(resid, theta0, method="trf", xtol=1e-14, ftol=1e-14, gtol=1e-14,
-                        max_nfev=200 * len(lengths))
-    theta = sol.x
-    # exact closure: minimum-norm Newton steps on the two closure equations
-    for _ in range(50):
-        p_end = a + np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)])
-        r = p_end - b
-        if np.hypot(*r) <= 1e-13 * span_scale:
-            break
-        J = np.vstack([-lengths * np.sin(theta), lengths * np.cos(theta)])
-        theta = theta - np.linalg.lstsq(J, r, rcond=None)[0]
-    out = pts(theta)
+    n = len(lengths)
+    out = _fit_groups(a, b, lengths, np.arange(n), np.zeros(n), theta0, cKDTree(dense))
     miss = float(np.hypot(*(out[-1] - b)))
-    if miss > 1e-9 * span_scale:
+    if miss > 1e-9 * float(lengths.sum()):
         raise ValueError(
             f"the rods ({len(lengths)} of lengths {sorted(set(lengths.tolist()))}) cannot close "
             f"on anchor B along this curve (they miss it by {miss:.4g}); allow other lengths"
         )
     out[-1] = b
     return out
+
+
+def _fit_groups(a, b, lengths, group, offset, psi0, tree) -> np.ndarray:
+    """Joints of a chain from A whose rods turn in rigid groups, moved toward the curve.
+
+    Rod k points at angle ``psi[group[k]] + offset[k]``: least squares on the joints'
+    distances to the curve (``tree``, a KD-tree of its dense points) with a heavy
+    closure term, then minimum-norm Newton steps on the two closure equations. Returns
+    the (N+1, 2) joints; the caller checks how far the last one is from B.
+    """
+    n_groups = int(group.max()) + 1
+    scale = float(lengths.sum())
+
+    def pts(psi):
+        th = psi[group] + offset
+        steps = lengths[:, None] * np.column_stack([np.cos(th), np.sin(th)])
+        return a + np.vstack([np.zeros(2), np.cumsum(steps, axis=0)])
+
+    def resid(psi):
+        p = pts(psi)
+        return np.concatenate([tree.query(p[1:-1])[0], 1e3 * (p[-1] - b)]) / scale
+
+    psi = least_squares(resid, psi0, method="trf", xtol=1e-14, ftol=1e-14, gtol=1e-14,
+                        max_nfev=200 * n_groups).x
+    G = np.zeros((len(lengths), n_groups))
+    G[np.arange(len(lengths)), group] = 1.0
+    for _ in range(50):
+        th = psi[group] + offset
+        r = a + np.array([lengths @ np.cos(th), lengths @ np.sin(th)]) - b
+        if np.hypot(*r) <= 1e-13 * scale:
+            break
+        J = np.vstack([-lengths * np.sin(th), lengths * np.cos(th)]) @ G
+        psi = psi - np.linalg.lstsq(J, r, rcond=None)[0]
+    return pts(psi)
 
 
 def refit(curve, points, lengths, fixed_bends) -> Discretization | None:
@@ -296,31 +308,8 @@ def refit(curve, points, lengths, fixed_bends) -> Discretization | None:
     psi0 = np.array([np.mean(theta[group == g] - offset[group == g]) for g in range(n_groups)])
     a, b = points[0], points[-1]
     dense = resample(curve, max(4000, 20 * len(curve)))
-    tree = cKDTree(dense)
-    scale = float(lengths.sum())
-
-    def pts(psi):
-        th = psi[group] + offset
-        steps = lengths[:, None] * np.column_stack([np.cos(th), np.sin(th)])
-        return a + np.vstack([np.zeros(2), np.cumsum(steps, axis=0)])
-
-    def resid(psi):
-        p = pts(psi)
-        return np.concatenate([tree.query(p[1:-1])[0], 1e3 * (p[-1] - b)]) / scale
-
-    psi = least_squares(resid, psi0, method="trf", xtol=1e-14, ftol=1e-14, gtol=1e-14,
-                        max_nfev=200 * n_groups).x
-    G = np.zeros((n, n_groups))
-    G[np.arange(n), group] = 1.0
-    for _ in range(50):
-        th = psi[group] + offset
-        r = a + np.array([lengths @ np.cos(th), lengths @ np.sin(th)]) - b
-        if np.hypot(*r) <= 1e-13 * scale:
-            break
-        J = np.vstack([-lengths * np.sin(th), lengths * np.cos(th)]) @ G
-        psi = psi - np.linalg.lstsq(J, r, rcond=None)[0]
-    out = pts(psi)
-    if float(np.hypot(*(out[-1] - b))) > 1e-9 * scale:
+    out = _fit_groups(a, b, lengths, group, offset, psi0, cKDTree(dense))
+    if float(np.hypot(*(out[-1] - b))) > 1e-9 * float(lengths.sum()):
         return None
     out[-1] = b
     return Discretization(out, lengths.copy(), float(_point_polyline_distance(out, curve).max()),

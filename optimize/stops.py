@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import linprog
 
-from optimize.inverse import InverseProblem, _scaled, statics_matrix
+from optimize.inverse import InverseProblem, _moment_signs, _scaled, statics_matrix
 
 __all__ = ["needed_stops"]
 
@@ -41,10 +41,10 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
     """
     phi = np.diff(problem.angles)
     lim = problem.limits.copy()
-    _, on_limit, _ = statics_matrix(problem)
+    on_limit = set(statics_matrix(problem)[1].tolist())
     if candidates is None:
-        candidates = [j for j in range(phi.size) if phi[j] > 0 and j not in set(on_limit.tolist())]
-    cand = np.array(sorted(set(int(j) for j in candidates) - set(on_limit.tolist())), dtype=int)
+        candidates = [j for j in range(phi.size) if phi[j] > 0]
+    cand = np.array(sorted(set(int(j) for j in candidates) - on_limit), dtype=int)
     if cand.size:
         lim[cand, 1] = phi[cand]
         lim[cand, 0] = np.minimum(lim[cand, 0], phi[cand])
@@ -59,11 +59,7 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
     lb[:n], ub[:n] = problem.mass_bounds[:, 0] / col[:n], problem.mass_bounds[:, 1] / col[:n]
     new = np.isin(stops, cand)
     # a new stop sits on the sagging side (hi): its moment is <= 0; existing stops keep their signs
-    for k, (j, sgn) in enumerate(zip(stops, signs)):
-        if sgn > 0:
-            lb[n + 2 + k] = 0.0
-        elif sgn < 0:
-            ub[n + 2 + k] = 0.0
+    _moment_signs(signs, lb[n + 2:], ub[n + 2:])
     c = np.zeros(nvar)
     c[n + 2:][new] = -1.0  # minimise sum |mu| over the new stops (all <= 0)
     bounds = list(zip(np.where(np.isfinite(lb), lb, None), np.where(np.isfinite(ub), ub, None)))

@@ -226,9 +226,9 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
     A joint is a candidate when some allowed pair of types stops within
     :data:`STOP_REACH` of its bend. Each round tries three sets of stops: the
     fewest that let the masses hold the target (:func:`optimize.stops.needed_stops`),
-    every candidate, and the candidates whose nearest stop is straight (near-straight
-    sides held straight); the best is scored by the Hausdorff distance between the curve
-    and the chain hanging with the masses ``refine`` gives it.
+    every candidate, and the near-straight candidates (bending less than the reach) that
+    a pair can hold straight, held straight; the best is scored by the Hausdorff distance
+    between the curve and the chain hanging with the masses ``refine`` gives it.
     """
     from optimize.discretize import refit
     from optimize.inverse import _exact_masses
@@ -245,22 +245,21 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
         p = current.problem
         bends = np.diff(p.angles)
         on_limit = set(int(j) for j in np.flatnonzero(np.abs(p.limits[:, 1] - bends) <= 1e-6))
-        nearest = {}
+        near, straight = set(), set()  # joints with a stop within reach; of those, near-straight
         for j in range(bends.size):
             if j in on_limit or bends[j] <= 0:
                 continue
-            hi = hi_all[np.ix_(np.flatnonzero(allowed[j]), np.flatnonzero(allowed[j + 1]))]
-            lo = lo_all[np.ix_(np.flatnonzero(allowed[j]), np.flatnonzero(allowed[j + 1]))]
+            pair = np.ix_(np.flatnonzero(allowed[j]), np.flatnonzero(allowed[j + 1]))
+            hi, lo = hi_all[pair], lo_all[pair]
             gap = np.where(np.isfinite(hi) & (lo <= hi), np.abs(hi - bends[j]), np.inf)
             if gap.min() <= STOP_REACH:
-                nearest[j] = float(hi.flat[int(np.argmin(gap))])
-        if not nearest:
+                near.add(j)
+                if bends[j] <= STOP_REACH and np.any(np.abs(hi) < 1e-3):
+                    straight.add(j)
+        if not near:
             break
-        need = needed_stops(p, list(nearest))
-        straight = {j for j in nearest if bends[j] <= STOP_REACH
-                    and np.any(np.abs(hi_all[np.ix_(np.flatnonzero(allowed[j]),
-                                                    np.flatnonzero(allowed[j + 1]))]) < 1e-3)}
-        options = [(set(nearest), set()), (straight, straight)]
+        need = needed_stops(p, sorted(near))
+        options = [(near, set()), (straight, straight)]
         if need is not None and need.size:
             options.insert(0, (set(need.tolist()), set()))
         improved = False

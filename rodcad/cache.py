@@ -22,9 +22,10 @@ import copy
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from rodcad.outdir import write_atomic
 
 __all__ = ["DiskCache", "default_cache_dir", "make_key", "register_seed", "seeds_enabled"]
 
@@ -130,14 +131,9 @@ class DiskCache:
         if not self.enabled:
             return
         path = self._path(kind, key)
+        text = json.dumps(value)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                json.dump(value, fh)
-            os.replace(tmp, path)
+            write_atomic(path, text)
         except OSError:
-            try:
-                os.unlink(tmp)  # type: ignore[possibly-undefined]
-            except (OSError, NameError):
-                pass
+            pass

@@ -1,8 +1,9 @@
-"""Output folders that change all at once or not at all.
+"""Output folders and files that change all at once or not at all.
 
 Everything a command writes goes to a temporary folder next to the destination;
 only when every file is written (and checked) is the folder renamed into place.
 A run that fails, raises or is interrupted leaves the destination as it was.
+Single files go the same way (:func:`write_atomic`).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["staged_output"]
+__all__ = ["staged_output", "write_atomic"]
 
 
 @contextmanager
@@ -44,3 +45,27 @@ def staged_output(outdir: str | os.PathLike[str]) -> Iterator[Path]:
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_atomic(path: str | os.PathLike[str], text: str, *, mode: int | None = None) -> None:
+    """Write ``text`` to ``path`` all at once: into a hidden temporary sibling, renamed
+    into place, so readers never see a half-written file. ``mode`` sets the file's
+    permissions (temporary files are private). The folder must exist.
+
+    Raises:
+        OSError: the file cannot be written (the temporary file is removed).
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        if mode is not None:
+            os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

@@ -29,6 +29,7 @@ from typing import Any
 from rodcad.cache import DiskCache
 from rodcad.catalog import Catalog, catalog_schema, load_catalog
 from rodcad.errors import InputError, Problem
+from rodcad.outdir import write_atomic
 
 __all__ = ["check_report", "precompute", "register", "schema_text"]
 
@@ -322,19 +323,9 @@ def _precompute(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     data = precompute(catalog, jobs=args.jobs, progress=sys.stderr.isatty())
     text = json.dumps(data, sort_keys=True, separators=(",", ":")) + "\n"
-    tmp = None
     try:
-        fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o644)  # mkstemp makes it private; this is a file to ship
-        os.replace(tmp, out)
+        write_atomic(out, text, mode=0o644)  # a file to ship: readable by all
     except OSError as err:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
         print(f"rodcad: cannot write {out}: {err.strerror or err}", file=sys.stderr)
         return 1
     counts = ", ".join(f"{len(data['entries'][k])} {k}" for k in SEED_KINDS)

@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from optimize import find_equilibria, solve_equilibrium
+from rodcad.outdir import staged_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,8 +47,7 @@ def run(args: argparse.Namespace) -> int:
           f"stable {res.stable}, distinct stable equilibria found from 8 starts: {multi.n_distinct}")
 
     out = Path(args.outdir)
-    tmp = Path(tempfile.mkdtemp(prefix=".rodcad-", dir=out.parent if out.parent.exists() else None))
-    try:
+    with staged_output(out) as tmp:
         _plot(tmp / "demo.png", free, res, masses)
         (tmp / "equilibrium.json").write_text(json.dumps({
             "units": {"length": "mm", "mass": "g"},
@@ -59,13 +56,6 @@ def run(args: argparse.Namespace) -> int:
             "kkt_residual": res.kkt_residual,
             "stable": res.stable,
         }, indent=2))
-        out.parent.mkdir(parents=True, exist_ok=True)
-        if out.exists():
-            shutil.rmtree(out)
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
     print(f"wrote {out / 'demo.png'} and {out / 'equilibrium.json'}")
     return 0 if res.success else 1
 

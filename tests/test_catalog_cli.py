@@ -89,6 +89,18 @@ def test_bad_catalog_exits_2_with_every_problem(tmp_path: Path, capsys: pytest.C
     assert "Traceback" not in captured.err
 
 
+def test_precompute_of_a_bad_catalog_exits_2_and_writes_nothing(tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, BASE.replace("length: 30", "length: thirty"))
+    assert main(["catalog", "precompute", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.splitlines() == [
+        f"{path}:9:13: families[0].length: expected a number, got a string ('thirty')"]
+    assert "Traceback" not in captured.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]  # no seed file, no temporary
+
+
 def test_unknown_catalog_name(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["catalog", "check", "pla-pinne"]) == 2
     assert capsys.readouterr().err == (

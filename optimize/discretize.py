@@ -58,6 +58,11 @@ def find_corners(curve: np.ndarray, angle_deg: float = 25.0) -> list[int]:
     return [int(i) + 1 for i in np.flatnonzero(turn > np.radians(angle_deg))]
 
 
+#: Relative tolerance (of the rod length) within which a chord of the walk ends on a
+#: polyline vertex: the joint is put on the vertex exactly.
+VERTEX_TOL = 1e-9
+
+
 def _walk(curve: np.ndarray, s: np.ndarray, start_s: float, lengths) -> tuple[np.ndarray, float]:
     """Chord walk along the polyline from arc length start_s; returns joints and end arc length."""
     pts = [np.interp(start_s, s, curve[:, 0]), np.interp(start_s, s, curve[:, 1])]
@@ -66,9 +71,19 @@ def _walk(curve: np.ndarray, s: np.ndarray, start_s: float, lengths) -> tuple[np
     out = [p]
     cur_s = start_s
     for l in lengths:
-        # first polyline point beyond cur_s at distance >= l from p
+        # first polyline point beyond cur_s at distance >= l from p; a vertex at distance l
+        # up to round-off is the joint itself (a polyline whose segments are multiples of the
+        # rod length keeps its vertices as joints on every CPU, whatever the last digits)
+        tol = VERTEX_TOL * l
         dist = np.hypot(*(curve[i + 1:] - p).T)
-        j = np.flatnonzero(dist >= l)
+        j = np.flatnonzero(dist >= l - tol)
+        if j.size and abs(dist[j[0]] - l) <= tol:
+            j = int(j[0]) + i + 1
+            p = curve[j].copy()
+            cur_s = s[j]
+            i = min(j, len(curve) - 2)
+            out.append(p)
+            continue
         if j.size == 0:  # past the end of the curve: carry on straight toward its end
             direction = curve[-1] - p
             norm = np.hypot(*direction)

@@ -34,170 +34,23 @@ limits as hard inequalities, and joint moments of the right sign.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
-from optimize import _validate as val
+from optimize.chain import (
+    ANGLE_TOL,
+    MESSAGES,
+    MOMENT_TOL,
+    Chain,
+    EquilibriumResult,
+    Groups,
+    is_stable,
+    kkt_residual,
+    multipliers,
+    sag_guess,
+)
+from optimize.penalty import solve_penalty
 
-__all__ = ["EquilibriumResult", "solve_equilibrium", "kkt_residual", "MESSAGES"]
-
-#: Status codes and their messages (one table, as in scipy.optimize).
-MESSAGES = {
-    0: "Equilibrium found: closure exact, limits respected, KKT conditions satisfied.",
-    1: "Active-set iteration limit reached before the KKT conditions held.",
-    2: "Dual Newton solve did not converge (degenerate chain: a rod with no net load).",
-    3: "No configuration satisfies the joint limits and reaches anchor B.",
-    4: "Chain exactly taut: the equilibrium is the straight line (tension unbounded).",
-    5: "Chain exactly taut, but the joint limits exclude the straight line.",
-    6: "Penalty model (paper Eq. 1-3): a minimum of the penalised energy; the far end "
-    "misses its anchor by closure_error.",
-    7: "Penalty model: the minimiser stopped before convergence.",
-}
-
-# Relative tolerances of the active-set test (angles in rad, moments relative to
-# total weight x total length). They are far below the reported KKT target 1e-9.
-_ANGLE_TOL = 1e-11
-_MOMENT_TOL = 1e-11
-
-
-@dataclass
-class EquilibriumResult:
-    """The equilibrium of a hanging chain.
-
-    Attributes:
-        points: (N+1, 2) joint positions, ``points[0] = A``, ``points[-1]`` on B to round-off.
-        angles: (N,) chord angles theta_i in radians.
-        reaction: (2,) support reaction (H, V) that anchor B exerts on the chain,
-            in mass x length / time^2 of the caller's units times ``g``.
-        reaction_a: (2,) the reaction at anchor A.
-        moments: (N-1,) moment carried by each joint's limit stop (0 where the joint
-            is free). Positive pushes phi up (a stop at lo), negative pushes it down.
-        active: (N-1,) -1 where the joint rests on lo, +1 on hi, 0 where it is free.
-        kkt_residual: relative KKT residual (closure, stationarity, feasibility, sign).
-        closure_error: distance from the chain's far end to B (caller's length unit).
-        energy: potential energy g * sum m_i y(com_i).
-        stable: second-order check: the Hessian of the Lagrangian is positive
-            definite on the tangent space of the active constraints.
-        success, status, message: outcome, with ``message = MESSAGES[status]`` plus detail.
-        nit: active-set iterations; nnewton: dual Newton iterations in total.
-        model: "exact" or "penalty".
-    """
-
-    points: np.ndarray
-    angles: np.ndarray
-    reaction: np.ndarray
-    reaction_a: np.ndarray
-    moments: np.ndarray
-    active: np.ndarray
-    kkt_residual: float
-    closure_error: float
-    energy: float
-    stable: bool
-    success: bool
-    status: int
-    message: str
-    nit: int = 0
-    nnewton: int = 0
-    model: str = "exact"
-    info: dict = field(default_factory=dict)
-
-    @property
-    def bends(self) -> np.ndarray:
-        """(N-1,) bend angles phi_j in radians."""
-        return np.diff(self.angles)
-
-    def __repr__(self) -> str:  # pragma: no cover - convenience
-        return (
-            f"EquilibriumResult(success={self.success}, stable={self.stable}, "
-            f"kkt_residual={self.kkt_residual:.2e}, nit={self.nit}, "
-            f"active={int(np.count_nonzero(self.active))}, message={self.message!r})"
-        )
-
-
-@dataclass
-class Chain:
-    """A validated chain problem (arrays in, arrays out; no units attached)."""
-
-    lengths: np.ndarray
-    masses: np.ndarray
-    com: np.ndarray
-    limits: np.ndarray
-    anchor_a: np.ndarray
-    anchor_b: np.ndarray
-    g: float
-
-    def __post_init__(self) -> None:
-        l, m = self.lengths, self.masses
-        self.n = l.size
-        self.total_length = float(l.sum())
-        self.total_mass = float(m.sum())
-        dvec = self.anchor_b - self.anchor_a
-        self.d = complex(dvec[0], dvec[1])
-        self.span = abs(self.d)
-        after = np.cumsum(m[::-1])[::-1] - m  # S_k: mass of the rods after k
-        along, perp = self.com[:, 0], self.com[:, 1]
-        self.sigma = self.g * (m * perp / l + 1j * (after + m * along / l))
-        self.fixed = self.limits[:, 0] == self.limits[:, 1]
-        self.moment_scale = self.g * self.total_mass * self.total_length
-        # U(theta) = sum(c_sin sin theta + c_cos cos theta) + const
-        self.c_sin = self.g * (after * l + m * along)
-        self.c_cos = self.g * m * perp
-
-    @classmethod
-    def from_args(cls, lengths, masses, anchor_a, anchor_b, com=None, limits=None, g=9.81):
-        lengths = val.as_positive_vector("lengths", lengths)
-        masses = val.as_positive_vector("masses", masses, lengths.size)
-        return cls(
-            lengths=lengths,
-            masses=masses,
-            com=val.as_com(com, lengths),
-            limits=val.as_limits(limits, lengths.size),
-            anchor_a=val.as_point("anchor_a", anchor_a),
-            anchor_b=val.as_point("anchor_b", anchor_b),
-            g=val.as_gravity(g),
-        )
-
-    def energy(self, theta: np.ndarray) -> float:
-        l, m = self.lengths, self.masses
-        y_joint = self.anchor_a[1] + np.concatenate([[0.0], np.cumsum(l * np.sin(theta))[:-1]])
-        y_com = y_joint + self.com[:, 0] * np.sin(theta) + self.com[:, 1] * np.cos(theta)
-        return float(self.g * np.dot(m, y_com))
-
-    def points(self, theta: np.ndarray) -> np.ndarray:
-        steps = self.lengths[:, None] * np.column_stack([np.cos(theta), np.sin(theta)])
-        return self.anchor_a + np.vstack([np.zeros(2), np.cumsum(steps, axis=0)])
-
-
-class _Groups:
-    """Rigid groups of rods for one active set (joints held at a limit)."""
-
-    def __init__(self, chain: Chain, side: np.ndarray):
-        lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-        locked = side != 0
-        phi_fix = np.where(side < 0, lo, np.where(side > 0, hi, 0.0))
-        self.starts = np.flatnonzero(np.concatenate([[True], ~locked]))
-        self.gid = np.concatenate([[0], np.cumsum(~locked)])
-        cum = np.concatenate([[0.0], np.cumsum(phi_fix)])
-        self.offsets = cum - cum[self.starts][self.gid]
-        w = chain.lengths * np.exp(-1j * self.offsets)
-        self.P = np.add.reduceat(w, self.starts)
-        self.Q = np.add.reduceat(w * chain.sigma, self.starts)
-        self.chords = np.abs(self.P)
-
-    def reachable(self, span: float) -> bool:
-        total = self.chords.sum()
-        longest = self.chords.max()
-        margin = 1e-12 * total
-        return bool(span < total - margin and span > 2.0 * longest - total + margin)
-
-    def angles(self, W: np.ndarray, signs=None) -> np.ndarray:
-        """Rod angles with every group turned along (or, sign -1, against) its load W.
-
-        Bends at free joints are taken in (-pi, pi]: a chain cannot fold through itself.
-        """
-        psi = np.angle(W if signs is None else signs * W)
-        return np.unwrap(psi[self.gid] + self.offsets)
+__all__ = ["Chain", "EquilibriumResult", "solve_equilibrium", "kkt_residual", "MESSAGES"]
 
 
 def _initial_reaction(chain: Chain) -> complex:
@@ -278,7 +131,7 @@ def _dual_newton(P, Q, d, lam, length_scale, max_iter=200):
     return lam, W, max_iter, abs(grad) <= 1e-9 * length_scale
 
 
-def _close_at_kink(chain: Chain, groups: _Groups, W: np.ndarray, theta: np.ndarray) -> np.ndarray:
+def _close_at_kink(chain: Chain, groups: Groups, W: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Exact closure when the dual optimum sits next to a kink.
 
     When one group carries almost no load (|W_G| -> 0, e.g. a bottom rod that spans a
@@ -301,93 +154,17 @@ def _close_at_kink(chain: Chain, groups: _Groups, W: np.ndarray, theta: np.ndarr
     return np.unwrap(out)
 
 
-def _multipliers(chain: Chain, theta: np.ndarray, lam: complex):
-    """Per-rod generalised force f_k, joint moments mu_j and the end moment mu_{N-1}."""
-    z = lam - chain.sigma
-    e = np.exp(1j * theta)
-    f = chain.lengths * (np.conj(z) * e).imag
-    cum = -np.cumsum(f)
-    curvature = chain.lengths * (np.conj(z) * e).real
-    return cum[:-1], float(cum[-1]), curvature
-
-
-def kkt_residual(
-    chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray, mult=None
-) -> float:
-    """Relative KKT residual of a configuration for a given active set.
-
-    The largest of: closure error / total length; moments at free joints and the
-    end moment / (g * total mass * total length); limit violation (rad); wrong-sign
-    moments at active limits (same scale).
-    """
-    closure = abs(np.sum(chain.lengths * np.exp(1j * theta)) - chain.d) / chain.total_length
-    mu, mu_end, _ = mult if mult is not None else _multipliers(chain, theta, lam)
-    scale = chain.moment_scale
-    free = side == 0
-    stat = max(np.max(np.abs(mu[free]), initial=0.0), abs(mu_end)) / scale
-    phi = np.diff(theta)
-    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    feas = np.max(np.maximum(lo - phi, phi - hi), initial=0.0)
-    feas = max(feas, 0.0)
-    movable = ~chain.fixed
-    sign = np.max(
-        np.concatenate([-mu[(side < 0) & movable], mu[(side > 0) & movable], [0.0]])
-    ) / scale
-    return float(max(closure, stat, feas, max(sign, 0.0)))
-
-
-def _is_stable(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray, mult=None) -> bool:
-    """Second-order check on the tangent space of closure and the binding limits.
-
-    Joints at a limit with a vanishing moment are treated as free (a conservative
-    check). For group angles psi the Lagrangian Hessian is diagonal, D_G; with the
-    closure Jacobian C (2 x n) the inertia identity
-    In(Z'DZ) = In(D) + In(-C D^-1 C') - (m, m, 0) decides it in O(n).
-    """
-    mu, _, curv = mult if mult is not None else _multipliers(chain, theta, lam)
-    binding = (side != 0) & (chain.fixed | (np.abs(mu) > 1e3 * _MOMENT_TOL * chain.moment_scale))
-    starts = np.flatnonzero(np.concatenate([[True], ~binding]))
-    D = np.add.reduceat(curv, starts)
-    chords = np.add.reduceat(chain.lengths * np.exp(1j * theta), starts)
-    cols = 1j * chords  # d(closure)/d(psi_G)
-    C = np.vstack([cols.real, cols.imag])
-    scale = np.max(np.abs(D)) if D.size else 1.0
-    rank = np.linalg.matrix_rank(C, tol=1e-12 * chain.total_length)
-    if np.any(np.abs(D) <= 1e-9 * scale):
-        # an unloaded group: the inertia identity needs D invertible, so project
-        # explicitly (dense, affordable for the few hundred groups where this occurs)
-        if D.size > 500:
-            return False
-        from scipy.linalg import null_space
-
-        Z = null_space(C, rcond=1e-12)
-        if Z.shape[1] == 0:
-            return True
-        eig = np.linalg.eigvalsh(Z.T @ (D[:, None] * Z))
-        return bool(eig.min() > 1e-9 * scale)
-    if D.size <= rank:
-        return True  # the closure leaves no freedom: an isolated configuration
-    n_neg_d = int(np.count_nonzero(D < 0))
-    if n_neg_d == 0:
-        return True
-    S = -(C / D) @ C.T
-    eig = np.linalg.eigvalsh(S)
-    if np.any(np.abs(eig) <= 1e-12 * np.max(np.abs(eig))):
-        return False
-    return n_neg_d + int(np.count_nonzero(eig < 0)) - rank == 0
-
-
 def _violations(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray):
     """Primal (free joints outside limits) and dual (wrong-sign moments) violations."""
     phi = np.diff(theta)
     lo, hi = chain.limits[:, 0], chain.limits[:, 1]
     free = side == 0
-    over = free & (phi > hi + _ANGLE_TOL)
-    under = free & (phi < lo - _ANGLE_TOL)
+    over = free & (phi > hi + ANGLE_TOL)
+    under = free & (phi < lo - ANGLE_TOL)
     primal = np.where(over, phi - hi, np.where(under, lo - phi, 0.0))
-    mu, _, _ = _multipliers(chain, theta, lam)
+    mu, _, _ = multipliers(chain, theta, lam)
     movable = ~chain.fixed
-    tol = _MOMENT_TOL * chain.moment_scale
+    tol = MOMENT_TOL * chain.moment_scale
     wrong = np.where((side < 0) & movable & (mu < -tol), -mu, 0.0)
     wrong = np.where((side > 0) & movable & (mu > tol), mu, wrong)
     return primal, np.where(over, 1, np.where(under, -1, 0)), wrong / chain.moment_scale
@@ -510,13 +287,6 @@ def _branch_newton(P, Q, d, signs, lam, length_scale, max_iter=100):
     return lam, W, max_iter, abs(F) <= 1e-9 * length_scale
 
 
-def _sag_guess(chain: Chain) -> np.ndarray:
-    """A symmetric two-slope sag between the anchors (knows nothing of the answer)."""
-    drop = np.arccos(min(1.0, chain.span / chain.total_length))
-    half = np.arange(chain.n) < chain.n / 2
-    return np.angle(chain.d) + np.where(half, -drop, drop)
-
-
 def _fallback_starts(chain: Chain, theta: np.ndarray, count: int = 6):
     """Starting angles for the SLSQP fallback: the last iterate, its bends clipped to the
     limits (and mirrored), then seeded random bends within the limits."""
@@ -562,7 +332,7 @@ def _polish_point(chain: Chain, x: np.ndarray):
     phi = np.diff(x)
     side = np.where(phi <= lo + 1e-7, -1, np.where(phi >= hi - 1e-7, 1, 0))
     side = np.where(chain.fixed, -1, side)
-    groups = _Groups(chain, side)
+    groups = Groups(chain, side)
     if not groups.reachable(chain.span):
         return None
     # group angles, then the reaction by least squares on the group stationarity,
@@ -594,9 +364,9 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
             raise ValueError(f"active0 must have shape ({n - 1},) with entries -1, 0 or 1")
         side = np.where((a0 < 0) & np.isfinite(lo), -1, np.where((a0 > 0) & np.isfinite(hi), 1, 0))
     side = np.where(chain.fixed, -1, side)
-    if not _Groups(chain, side).reachable(chain.span):
+    if not Groups(chain, side).reachable(chain.span):
         side = np.where(chain.fixed, -1, 0)
-        if not _Groups(chain, side).reachable(chain.span):
+        if not Groups(chain, side).reachable(chain.span):
             raise ValueError(
                 "the rigid joints (lo == hi) leave no configuration that reaches anchor B"
             )
@@ -611,7 +381,7 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
     last = None
     it = 0
     for it in range(1, max_iter + 1):
-        groups = _Groups(chain, side)
+        groups = Groups(chain, side)
         lam_try, W, k, converged = _dual_newton(
             groups.P, groups.Q, chain.d, lam, chain.total_length
         )
@@ -658,7 +428,7 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
 
     if status != 0:
         if theta is None:  # not even the first dual solve converged
-            theta = _sag_guess(chain)
+            theta = sag_guess(chain)
         polished = _polish_nlp(chain, theta)
         used_nlp = True
         if polished is not None:
@@ -676,7 +446,7 @@ def _next_active_set(chain, side, primal, pside, dual, mode):
         new = side.copy()
         new[dual > 0] = 0
         new[primal > 0] = pside[primal > 0]
-        if _Groups(chain, new).reachable(chain.span):
+        if Groups(chain, new).reachable(chain.span):
             return new
     # one change at a time: add the worst reachable primal violator, else drop the worst dual
     for j in np.argsort(-primal):
@@ -684,7 +454,7 @@ def _next_active_set(chain, side, primal, pside, dual, mode):
             break
         new = side.copy()
         new[j] = pside[j]
-        if _Groups(chain, new).reachable(chain.span):
+        if Groups(chain, new).reachable(chain.span):
             return new
     if dual.any():
         new = side.copy()
@@ -712,7 +482,7 @@ def _reach_hint(chain: Chain) -> str:
 
 
 def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp) -> EquilibriumResult:
-    mult = _multipliers(chain, theta, lam)
+    mult = multipliers(chain, theta, lam)
     moments = np.where(side != 0, mult[0], 0.0)
     pts = chain.points(theta)
     closure = float(np.hypot(*(pts[-1] - chain.anchor_b)))
@@ -720,7 +490,7 @@ def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp) -> Equili
     success = status == 0 and kkt < 1e-9
     if status == 0 and not success:
         status = 1
-    stable = _is_stable(chain, theta, lam, side, mult) if status in (0, 1) else False
+    stable = is_stable(chain, theta, lam, side, mult) if status in (0, 1) else False
     message = MESSAGES[status]
     if status == 3:
         message += _reach_hint(chain)
@@ -800,8 +570,6 @@ def solve_equilibrium(
     if chain.span >= chain.total_length * (1 - 1e-12):
         return _taut(chain)
     if model == "penalty":
-        from optimize.penalty import solve_penalty
-
         return solve_penalty(chain, penalty_weight, collision_weight)
     if max_iter is None:
         max_iter = 10 + 4 * chain.n

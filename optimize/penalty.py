@@ -15,14 +15,14 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
-from optimize.equilibrium import (
+from optimize.chain import (
     MESSAGES,
     Chain,
     EquilibriumResult,
-    _is_stable,
-    _multipliers,
-    _sag_guess,
+    is_stable,
     kkt_residual,
+    multipliers,
+    sag_guess,
 )
 
 
@@ -63,7 +63,7 @@ def solve_penalty(chain: Chain, penalty_weight: float, collision_weight: float) 
         return float(value), grad
 
     n = chain.n
-    theta0 = _sag_guess(chain)
+    theta0 = sag_guess(chain)
     res = minimize(smooth, theta0, jac=True, method="BFGS", options={"gtol": 1e-12, "maxiter": 20000})
     theta = res.x
     converged = bool(res.success) or res.status == 2  # 2: precision loss at the minimum
@@ -89,7 +89,7 @@ def solve_penalty(chain: Chain, penalty_weight: float, collision_weight: float) 
         f"({closure / chain.total_length:.2e} of the chain length); "
         f"{violated} joint(s) outside their limits."
     )
-    mult = _multipliers(chain, theta, lam)
+    mult = multipliers(chain, theta, lam)
     return EquilibriumResult(
         points=pts,
         angles=theta,
@@ -100,7 +100,7 @@ def solve_penalty(chain: Chain, penalty_weight: float, collision_weight: float) 
         kkt_residual=kkt_residual(chain, theta, lam, side, mult),
         closure_error=closure,
         energy=chain.energy(theta),
-        stable=_is_stable(chain, theta, lam, side, mult),
+        stable=is_stable(chain, theta, lam, side, mult),
         success=converged,
         status=status,
         message=message,

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.equilibrium import Chain, EquilibriumResult, _Groups
+from optimize.chain import Chain, EquilibriumResult, Groups
 
 
 def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:
@@ -32,7 +32,7 @@ def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:
     n = chain.n
     if not np.all(np.isfinite(result.reaction)):
         return np.zeros((n + 1, 2, n))  # taut: the straight line does not move
-    groups = _Groups(chain, result.active)
+    groups = Groups(chain, result.active)
     lam = complex(*result.reaction)
     W = groups.P * lam - groups.Q
     theta = result.angles

@@ -1,7 +1,7 @@
 """Where the masses cannot hold a sagging target, stops can.
 
 At the target, statics is linear in the masses, the reaction at B and the moments at
-joints resting on stops (:func:`optimize.inverse.statics_matrix`). A sagging (convex)
+joints resting on stops (:func:`optimize.statics.statics_matrix`). A sagging (convex)
 joint needs no moment when the masses are free, but fabrication bounds the masses: a
 semicircle's near-vertical ends need end rods many times heavier than any rod type can
 be. A stop on the joint's sagging side, placed exactly at the target bend, supplies a
@@ -17,7 +17,8 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import linprog
 
-from optimize.inverse import InverseProblem, _moment_signs, _scaled, statics_matrix
+from optimize.problem import InverseProblem
+from optimize.statics import moment_signs, scaled_statics, statics_matrix
 
 __all__ = ["needed_stops"]
 
@@ -51,7 +52,7 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
     trial = replace(problem, limits=lim)
     A, stops, signs = statics_matrix(trial)
     n = problem.n
-    row, col = _scaled(trial, A)
+    row, col = scaled_statics(trial, A)
     As = (A * row[:, None]) * col[None, :]
     nvar = A.shape[1]
     lb = np.full(nvar, -np.inf)
@@ -59,7 +60,7 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
     lb[:n], ub[:n] = problem.mass_bounds[:, 0] / col[:n], problem.mass_bounds[:, 1] / col[:n]
     new = np.isin(stops, cand)
     # a new stop sits on the sagging side (hi): its moment is <= 0; existing stops keep their signs
-    _moment_signs(signs, lb[n + 2:], ub[n + 2:])
+    moment_signs(signs, lb[n + 2:], ub[n + 2:])
     c = np.zeros(nvar)
     c[n + 2:][new] = -1.0  # minimise sum |mu| over the new stops (all <= 0)
     bounds = list(zip(np.where(np.isfinite(lb), lb, None), np.where(np.isfinite(ub), ub, None)))

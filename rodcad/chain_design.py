@@ -231,10 +231,10 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
     between the curve and the chain hanging with the masses ``refine`` gives it.
     """
     from optimize.discretize import refit
-    from optimize.inverse import _exact_masses
+    from optimize.statics import exact_masses
     from optimize.stops import needed_stops
 
-    if _exact_masses(plan.problem)[2]:
+    if exact_masses(plan.problem)[2]:
         return plan  # the masses alone hold the target
     free_err, _ = _fit_error(plan)
     best, best_err = plan, free_err
@@ -290,7 +290,7 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
             err, _ = _fit_error(cand)
             if err < best_err - 1e-6:
                 best, best_err, improved = cand, err, True
-        if not improved or _exact_masses(best.problem)[2]:
+        if not improved or exact_masses(best.problem)[2]:
             break
         current = best
     if best is not plan:
@@ -428,7 +428,8 @@ def design_buildable(
     """
     import time
 
-    from optimize.inverse import _finish, _statics_residual
+    from optimize.inverse import finish_result
+    from optimize.statics import statics_residual
 
     if strategy not in SNAP_STRATEGIES:
         raise ValueError(f"strategy must be one of {', '.join(SNAP_STRATEGIES)}; got {strategy!r}")
@@ -489,7 +490,7 @@ def design_buildable(
             masses[k] = _nearest(ivs[k], float(masses[k]))[0]
     history = list(first.history)
     info = dict(first.info)
-    final = _finish(p, method, masses, t0, nfev, history, _statics_residual(p, masses),
+    final = finish_result(p, method, masses, t0, nfev, history, statics_residual(p, masses),
                     f"buildable masses ({len(moved)} rod(s) fixed at an achievable mass, "
                     f"{rounds} re-design(s) after the continuous one)", info)
     final.info["buildable"] = {

@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from optimize import find_equilibria, solve_equilibrium
-from optimize.equilibrium import Chain, _is_stable
+from optimize.chain import Chain, is_stable
 
 G = 9.81
 
@@ -288,7 +288,7 @@ def test_inverted_free_chain_is_unstable():
     chain = Chain.from_args(lengths, masses, (0, 0), (4, 0))
     lam = complex(*r.reaction)
     side = np.zeros(n - 1, int)
-    assert _is_stable(chain, r.angles, lam, side)
+    assert is_stable(chain, r.angles, lam, side)
     # the same shape flipped upward is an equilibrium of the arch with the reaction
     # reversed in H; it satisfies stationarity but is a maximum
     up = -r.angles
@@ -296,7 +296,7 @@ def test_inverted_free_chain_is_unstable():
     from optimize.equilibrium import kkt_residual
 
     assert kkt_residual(chain, up, lam_up, side) < 1e-9
-    assert not _is_stable(chain, up, lam_up, side)
+    assert not is_stable(chain, up, lam_up, side)
 
 
 def test_multistart_counts():

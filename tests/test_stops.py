@@ -14,7 +14,7 @@ import pytest
 from optimize import InverseProblem, design, solve_equilibrium
 from optimize.assign import assign_types
 from optimize.discretize import discretize, refit
-from optimize.inverse import _exact_masses
+from optimize.statics import exact_masses
 from optimize.stops import needed_stops
 
 A, B = np.array([0.0, 0.0]), np.array([200.0, 0.0])
@@ -36,14 +36,14 @@ def _problem(bounds=(8.0, 12.0)) -> tuple[np.ndarray, InverseProblem]:
 
 def test_masses_alone_cannot_hold_a_semicircle_within_narrow_bounds():
     _, p = _problem()
-    assert not _exact_masses(p)[2]
+    assert not exact_masses(p)[2]
     r = design(p, "refine")
     assert not r.exact and r.distance.max_rel_span > 1e-2  # the bounded best fit is far off
 
 
 def test_no_stops_needed_when_the_bounds_are_wide():
     _, p = _problem(bounds=(0.1, 1000.0))
-    assert _exact_masses(p)[2]
+    assert exact_masses(p)[2]
     assert needed_stops(p).size == 0
 
 

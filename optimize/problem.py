@@ -1,0 +1,93 @@
+"""The inverse-design problem: a target shape, the rods that must hang in it, and
+what fabrication allows (:class:`InverseProblem`).
+
+Shared by :mod:`optimize.statics` (the linear statics at the target) and
+:mod:`optimize.inverse` (the design methods). Lengths in the caller's length unit,
+masses in its mass unit, angles in radians, ``g`` in length / time^2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from optimize import validate as val
+from optimize.chain import Chain, EquilibriumResult
+from optimize.equilibrium import solve_equilibrium
+
+__all__ = ["InverseProblem"]
+
+
+@dataclass
+class InverseProblem:
+    """What the chain must do and what fabrication allows.
+
+    Attributes:
+        target: (N+1, 2) target joint positions; target[0] = A and target[-1] = B.
+        lengths: (N,) rod lengths (pin to pin); must match the target's chords.
+        mass_bounds: (N, 2) achievable [m_min, m_max] per rod.
+        com: (N, 2) centres of mass (along, perp) per rod, or None for mid-chord.
+        limits: (N-1, 2) bend limits in radians, or None for free joints.
+        g: gravitational acceleration.
+    """
+
+    target: np.ndarray
+    lengths: np.ndarray
+    mass_bounds: np.ndarray
+    com: np.ndarray | None = None
+    limits: np.ndarray | None = None
+    g: float = 9.81
+
+    def __post_init__(self) -> None:
+        self.lengths = val.as_positive_vector("lengths", self.lengths)
+        n = self.lengths.size
+        self.target = np.asarray(self.target, dtype=float)
+        if self.target.shape != (n + 1, 2) or not np.all(np.isfinite(self.target)):
+            raise ValueError(f"target must be a finite ({n + 1}, 2) array of joint positions")
+        chords = np.hypot(*np.diff(self.target, axis=0).T)
+        bad = np.flatnonzero(np.abs(chords - self.lengths) > 1e-7 * self.lengths)
+        if bad.size:
+            k = bad[0]
+            raise ValueError(
+                f"target joints {k} and {k + 1} are {chords[k]:.6g} apart but rod {k} is "
+                f"{self.lengths[k]:.6g} long: discretise the target with the rod lengths first"
+            )
+        bounds = np.asarray(self.mass_bounds, dtype=float)
+        if bounds.shape != (n, 2):
+            raise ValueError(f"mass_bounds must have shape ({n}, 2), got {bounds.shape}")
+        if np.any(~np.isfinite(bounds)) or np.any(bounds[:, 0] <= 0) or np.any(bounds[:, 0] > bounds[:, 1]):
+            k = int(np.flatnonzero(~np.isfinite(bounds).all(1) | (bounds[:, 0] <= 0)
+                                   | (bounds[:, 0] > bounds[:, 1]))[0])
+            raise ValueError(f"mass_bounds[{k}] must satisfy 0 < m_min <= m_max, got {bounds[k].tolist()}")
+        self.mass_bounds = bounds
+        self.com = val.as_com(self.com, self.lengths)
+        self.limits = val.as_limits(self.limits, n)
+        self.g = val.as_gravity(self.g)
+
+    @property
+    def n(self) -> int:
+        return self.lengths.size
+
+    @property
+    def anchors(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.target[0], self.target[-1]
+
+    @property
+    def span(self) -> float:
+        return float(np.hypot(*(self.target[-1] - self.target[0])))
+
+    @property
+    def angles(self) -> np.ndarray:
+        d = np.diff(self.target, axis=0)
+        return np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+
+    def simulate(self, masses, **kw) -> EquilibriumResult:
+        a, b = self.anchors
+        return solve_equilibrium(
+            self.lengths, masses, a, b, com=self.com, limits=self.limits, g=self.g, **kw
+        )
+
+    def chain(self, masses) -> Chain:
+        a, b = self.anchors
+        return Chain.from_args(self.lengths, masses, a, b, self.com, self.limits, self.g)

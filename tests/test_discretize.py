@@ -1,0 +1,45 @@
+"""The chord walk keeps a polyline's vertices as joints whatever the last digits.
+
+A polyline whose segments are whole multiples of the rod length must come back with
+its vertices as joints exactly; before the walk snapped onto vertices at the rod
+length up to round-off, another CPU's last digits put the joint just short of a
+vertex, the walk cut the corner and the chain missed B by 10 mm.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from optimize.discretize import discretize
+
+
+def _polyline(legs):
+    pts = [np.zeros(2)]
+    for ang, length in legs:
+        a = math.radians(ang)
+        pts.append(pts[-1] + length * np.array([math.cos(a), math.sin(a)]))
+    return np.array(pts)
+
+
+LEGS = [((-40, 90), (-60, 90), (40, 120)),          # a concave bend of -20 deg, then a corner
+        ((-30, 60), (-10, 30), (10, 30), (35, 90))]  # gentle bends a rod length apart
+
+
+@pytest.mark.parametrize("legs", LEGS)
+@pytest.mark.parametrize("seed", range(6))
+def test_vertices_at_rod_multiples_are_joints_under_round_off(legs, seed):
+    curve = _polyline(legs)
+    if seed:  # perturb every coordinate by about 1e-12 (relative)
+        rng = np.random.default_rng(seed)
+        curve = curve * (1 + 1e-12 * rng.standard_normal(curve.shape))
+    d = discretize(curve, [30.0])
+    assert d.lengths.sum() == pytest.approx(sum(l for _, l in legs))
+    for v in curve[1:-1]:  # every vertex is a joint, to round-off
+        assert np.min(np.hypot(*(d.points - v).T)) < 1e-9
+    assert d.joint_error < 1e-9
+    theta = np.degrees(np.arctan2(*np.diff(d.points, axis=0).T[::-1]))
+    wanted = np.repeat([a for a, _ in legs], [int(round(l / 30)) for _, l in legs])
+    np.testing.assert_allclose(theta, wanted, atol=1e-7)

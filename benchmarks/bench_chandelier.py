@@ -20,9 +20,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from rodcad import chandelier as C
-from rodcad.catalog import load_catalog
-from rodcad.chain_design import catalog_arrays
+from rodcad.cad.chandelier import build_frame, chandelier_nodes
+from rodcad.design.chandelier import design_chandelier, ring
+from rodcad.design.frame import frame_outline, plan_frame
+from rodcad.outputs.preview3d import preview_3d
+from rodcad.catalog.loader import load_catalog
+from rodcad.design.plan import catalog_arrays
 from rodcad.parallel import default_jobs
 
 LENGTHS = (250, 260, 270, 280, 290, 300)
@@ -47,33 +50,33 @@ def main(argv: list[str] | None = None) -> int:
     cat = load_catalog("pla-pinned")
     arrays = catalog_arrays(cat, jobs=args.jobs)
     stage("catalog arrays (cached)", t)
-    placements = C.ring(6, 100.0, 0.0)
+    placements = ring(6, 100.0, 0.0)
     targets = [{"form": "catenary", "length": float(L)} for L in LENGTHS]
     for jobs in sorted({1, args.jobs}):
         t = time.perf_counter()
-        design = C.design_chandelier(cat, placements, targets, method="refine", seed=0, jobs=jobs,
+        design = design_chandelier(cat, placements, targets, method="refine", seed=0, jobs=jobs,
                                      arrays=arrays,
                                      plan_options=None if args.any_length else {"lengths": [20.0]})
         stage(f"design 6 chains, jobs={jobs}", t)
     t = time.perf_counter()
-    plan = C.plan_frame("ring", placements, cat, design.chains)
-    frame, check = C.build_frame(plan, cat, design.chains)
+    plan = plan_frame("ring", placements, cat, design.chains)
+    frame, check = build_frame(plan, cat, design.chains)
     stage("frame: solid + checks", t)
     t = time.perf_counter()
-    C.preview_3d(out / "preview.png", design.chains, C.frame_outline(plan), title="bench chandelier")
+    preview_3d(out / "preview.png", design.chains, frame_outline(plan), title="bench chandelier")
     stage("3D preview", t)
     if args.cad:
-        from rodcad import geometry
-        from rodcad.fabricate import fabricate_chain
+        from rodcad.cad.export import export_assembly
+        from rodcad.cad.rods import fabricate_chain
 
         t = time.perf_counter()
         fabs = [fabricate_chain([cat[n] for n in c.type_names], c.masses, seed=0, jobs=args.jobs)
                 for c in design.chains]
         stage("fabricate every rod", t)
         t = time.perf_counter()
-        nodes = C.chandelier_nodes(frame, design.chains, cat, frame_plan=plan,
+        nodes = chandelier_nodes(frame, design.chains, cat, frame_plan=plan,
                                    rod_solid=lambda ci, i: fabs[ci].rods[i].solid)
-        geometry.export_assembly(out / "assembly.step", nodes, "chandelier")
+        export_assembly(out / "assembly.step", nodes, "chandelier")
         stage("assembly.step", t)
 
     print(f"chains: {len(design.chains)}, distinct problems: {design.n_distinct}, rods: {design.bom.n_rods}")

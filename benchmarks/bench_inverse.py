@@ -1,7 +1,7 @@
 """Inverse design methods side by side (issue 4): error vs wall time and vs simulator calls.
 
 Targets: the paper's Fig. 7 shapes (semicircle, triangle, regular polygon) and
-its heart (Fig. 9, the lower outline: see rodcad.targets.heart), laid on the
+its heart (Fig. 9, the lower outline: see rodcad.design.targets.heart), laid on the
 shipped catalog pla-weighted (straight stops that meet free corners, wider mass
 ranges), plus a convex target reachable within the catalog's mass bounds (a
 catenary). The triangle comes twice: with sides of 150 mm (five 30 mm rods fit
@@ -28,9 +28,9 @@ import numpy as np
 
 from optimize import design
 from optimize.discretize import curve_distance
-from rodcad import targets as T
-from rodcad.catalog import load_catalog
-from rodcad.chain_design import catalog_arrays, plan_chain
+from rodcad.design.targets import make_target
+from rodcad.catalog.loader import load_catalog
+from rodcad.design.plan import catalog_arrays, plan_chain
 
 A, B = (0.0, 0.0), (200.0, 0.0)
 TARGETS = {
@@ -61,7 +61,7 @@ def main() -> None:
     print(f"{'target':<22} {'N':>3} {'method':<11} {'max err/span':>13} {'time s':>8} "
           f"{'sim calls':>9}  note")
     for label, (form, params) in TARGETS.items():
-        plan = plan_chain(cat, T.make_target(form, A, B, **params), arrays=arrays,
+        plan = plan_chain(cat, make_target(form, A, B, **params), arrays=arrays,
                           add_stops="no stops" not in label)
         prob = plan.problem
         curves[label] = {}
@@ -137,7 +137,7 @@ def _size_sweep(cat, arrays, spans, pso_time) -> None:
     for form in ("semicircle", "heart"):
         for span in spans:
             for stops in (False, True):
-                plan = plan_chain(cat, T.make_target(form, A, (float(span), 0.0)), arrays=arrays,
+                plan = plan_chain(cat, make_target(form, A, (float(span), 0.0)), arrays=arrays,
                                   add_stops=stops)
                 prob = plan.problem
                 r = design(prob, "refine", max_nfev=400)

@@ -2,7 +2,7 @@
 
 The OCCT kernel is not safe to ``fork`` once it has been used (a lock held by
 one of its threads in the parent stays locked in the child), so workers come
-from a *forkserver* that has imported :mod:`rodcad.geometry` but never built
+from a *forkserver* that has imported the CAD modules (:mod:`rodcad.cad`) but never built
 anything; where forkserver is missing, they are spawned.
 """
 
@@ -27,7 +27,7 @@ def worker_pool(jobs: int) -> ProcessPoolExecutor:
     """A process pool of ``jobs`` workers that may use the CAD kernel."""
     if "forkserver" in multiprocessing.get_all_start_methods():
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["rodcad.geometry"])
+        ctx.set_forkserver_preload(["rodcad.cad.solids", "rodcad.cad.collision", "rodcad.cad.export"])
     else:  # pragma: no cover - Windows / macOS default
         ctx = multiprocessing.get_context("spawn")
     return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)

@@ -9,7 +9,7 @@ One function per step of the data flow (style.md)::
     -> equilibrium check from scratch              check_equilibrium()
     -> cavities, sockets, exact B-rep              fabricate()
     -> as-built re-simulation                      as_built()
-    -> design.json, report.md, previews, STEP/STL  rodcad.report, write_outputs()
+    -> design.json, report.md, previews, STEP/STL  rodcad.outputs.report, write_outputs()
 
 Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 """
@@ -25,8 +25,9 @@ import numpy as np
 
 from optimize import EquilibriumResult, find_equilibria, shape_distance, solve_equilibrium
 from optimize.distance import ShapeDistance
-from rodcad.chain_design import ChainDesign, ChainPlan, catalog_arrays, design_chain, plan_chain
-from rodcad.design import Design
+from rodcad.design.masses import ChainDesign, design_chain
+from rodcad.design.plan import ChainPlan, catalog_arrays, plan_chain
+from rodcad.design.model import Design
 from rodcad.errors import InputError
 from rodcad.progress import Progress
 
@@ -224,8 +225,8 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         p = plan(design, arrays)
     if cad:
         # masses only where fabrication can really make them (ball counts leave gaps)
-        from rodcad.chain_design import design_buildable
-        from rodcad.fabricate import chain_intervals
+        from rodcad.design.masses import design_buildable
+        from rodcad.fabrication.intervals import chain_intervals
 
         with progress.step("masses each rod type can really be built at"):
             intervals = chain_intervals([design.catalog[n] for n in p.type_names],
@@ -335,7 +336,7 @@ def _design_notes(r: BuildResult) -> list[str]:
 
 def fabricate(result: BuildResult, *, jobs: int | None = None, progress: Progress | None = None) -> None:
     """Build every rod's solid with its designed mass, then re-simulate the as-built chain."""
-    from rodcad.fabricate import fabricate_chain
+    from rodcad.cad.rods import fabricate_chain
 
     progress = progress or Progress(quiet=True)
     types = [result.design.catalog[n] for n in result.type_names]
@@ -364,15 +365,16 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     Returns:
         The data written to design.json (for the terminal summary).
     """
-    from rodcad import report
+    from rodcad.outputs.design_json import design_json, write_json
+    from rodcad.outputs.report import report_markdown
     from rodcad.outdir import staged_output
-    from rodcad.preview import plot_chain
+    from rodcad.outputs.preview import plot_chain
 
     progress = progress or Progress(quiet=True)
     outdir = Path(outdir)
     with staged_output(outdir) as tmp:
         if result.fabrication is not None:
-            from rodcad.fabricate import write_assembly, write_rod_files
+            from rodcad.cad.rods import write_assembly, write_rod_files
 
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
                 write_rod_files(result.fabrication, tmp)
@@ -380,10 +382,10 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                 write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
                                name=result.design.name)
         with progress.step("writing design.json, report.md, preview.png/.svg"):
-            data = report.design_json(result)
-            report.write_json(tmp / "design.json", data)
+            data = design_json(result)
+            write_json(tmp / "design.json", data)
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
-            (tmp / "report.md").write_text(report.report_markdown(result, data), encoding="utf-8")
+            (tmp / "report.md").write_text(report_markdown(result, data), encoding="utf-8")
     return data
 
 
@@ -396,7 +398,7 @@ class ChandelierBuild:
 
     Attributes:
         design: the validated design.
-        result: :class:`rodcad.chandelier.ChandelierDesign` (per-chain designs, bill of materials).
+        result: :class:`rodcad.design.chandelier.ChandelierDesign` (per-chain designs, bill of materials).
         frame_plan: the frame's layout (lugs, members).
         frame: the frame solid and its check (None without CAD).
         fabrications: per chain, the fabricated rods (None without CAD).
@@ -424,7 +426,9 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
                      cad: bool | None = None, jobs: int | None = None,
                      progress: Progress | None = None) -> ChandelierBuild:
     """Design every chain of a chandelier, lay out its frame and (optionally) build it all."""
-    from rodcad import chandelier as C
+    from rodcad.cad.chandelier import build_frame
+    from rodcad.design.chandelier import design_chandelier
+    from rodcad.design.frame import plan_frame
 
     progress = progress or Progress(quiet=True)
     t0 = time.perf_counter()
@@ -439,7 +443,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
     n = len(design.placements)
     with progress.step(f"inverse design of {n} chains ({method})"):
         try:
-            res = C.design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
+            res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
                                       seed=seed, jobs=jobs or 1, arrays=arrays, plan_options=plan_options,
                                       design_options={"n_starts": N_STARTS})
         except ValueError as err:
@@ -453,7 +457,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
         # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order
         extra["vertices"] = design.chandelier.get("vertices") or [
             list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
-    frame_plan = C.plan_frame(kind, design.placements, design.catalog, res.chains, **frame_cfg, **extra)
+    frame_plan = plan_frame(kind, design.placements, design.catalog, res.chains, **frame_cfg, **extra)
     out = ChandelierBuild(design, res, frame_plan)
     for ch in res.chains:
         eq = ch.design.result.equilibrium
@@ -462,10 +466,10 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
         if not ch.design.unique:
             out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
     if cad:
-        from rodcad.fabricate import fabricate_chain
+        from rodcad.cad.rods import fabricate_chain
 
         with progress.step("frame solid and clearance checks"):
-            out.frame = C.build_frame(frame_plan, design.catalog, res.chains)
+            out.frame = build_frame(frame_plan, design.catalog, res.chains)
         out.notes += [f"frame: {p}" for p in out.frame[1].problems]
         types = [design.catalog[name] for ch in res.chains for name in ch.type_names]
         masses = np.concatenate([ch.masses for ch in res.chains])
@@ -493,8 +497,8 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
 def _buildable_chains(design: Design, res: Any, method: str, seed: int, jobs: int | None,
                       progress: Progress) -> None:
     """Re-design every chain with masses the rods can really be built at (shared chains once)."""
-    from rodcad.chain_design import design_buildable
-    from rodcad.fabricate import chain_intervals
+    from rodcad.design.masses import design_buildable
+    from rodcad.fabrication.intervals import chain_intervals
 
     names = sorted({n for ch in res.chains for n in ch.type_names})
     with progress.step("masses each rod type can really be built at"):
@@ -510,7 +514,7 @@ def _buildable_chains(design: Design, res: Any, method: str, seed: int, jobs: in
 
 
 def _frame_kind(design: Design) -> str:
-    from rodcad.design import FRAME_OF_PATTERN
+    from rodcad.design.spec import FRAME_OF_PATTERN
 
     return FRAME_OF_PATTERN[design.chandelier["pattern"]]
 
@@ -519,7 +523,7 @@ def _chain_fabrication(fab: Any, rods: list[Any]) -> Any:
     """The part of a fabrication that belongs to one chain, re-indexed from 0."""
     import dataclasses
 
-    from rodcad.fabricate import ChainFabrication
+    from rodcad.cad.rods import ChainFabrication
 
     rods = [dataclasses.replace(r, index=i, file_stem=f"{i:02d}_{r.type_name}") for i, r in enumerate(rods)]
     return ChainFabrication(rods, [], len({id(r.solid) for r in rods}), 0.0)
@@ -529,30 +533,33 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
                              progress: Progress | None = None) -> dict[str, Any]:
     """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
     and <chain>/rods/*.step|stl; staged like :func:`write_outputs`, whose return it shares."""
-    from rodcad import chandelier as C
-    from rodcad import report
+    from rodcad.cad.chandelier import chandelier_nodes
+    from rodcad.design.frame import frame_outline
+    from rodcad.outputs.preview3d import preview_3d
+    from rodcad.outputs.design_json import chandelier_json, write_json
+    from rodcad.outputs.report import chandelier_markdown
     from rodcad.outdir import staged_output
 
     progress = progress or Progress(quiet=True)
     with staged_output(outdir) as tmp:
         if b.frame is not None:
-            from rodcad import geometry
-            from rodcad.fabricate import write_rod_files
+            from rodcad.cad.export import export_assembly, export_step, export_stl
+            from rodcad.cad.rods import write_rod_files
 
             with progress.step("writing and checking the rods' STEP/STL files"):
                 for ch, fab in zip(b.result.chains, b.fabrications):
                     write_rod_files(fab, tmp / ch.name)
             with progress.step("writing frame.step, frame.stl and assembly.step"):
                 frame = b.frame[0]
-                geometry.export_step(frame, tmp / "frame.step", name="frame")
-                geometry.export_stl(frame, tmp / "frame.stl")
-                nodes = C.chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
+                export_step(frame, tmp / "frame.step", name="frame")
+                export_stl(frame, tmp / "frame.stl")
+                nodes = chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
                                            rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
-                geometry.export_assembly(tmp / "assembly.step", nodes, b.design.name)
+                export_assembly(tmp / "assembly.step", nodes, b.design.name)
         with progress.step("writing design.json, report.md, preview.png"):
-            data = report.chandelier_json(b)
-            report.write_json(tmp / "design.json", data)
-            C.preview_3d(tmp / "preview.png", b.result.chains, C.frame_outline(b.frame_plan),
+            data = chandelier_json(b)
+            write_json(tmp / "design.json", data)
+            preview_3d(tmp / "preview.png", b.result.chains, frame_outline(b.frame_plan),
                          title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
-            (tmp / "report.md").write_text(report.chandelier_markdown(b, data), encoding="utf-8")
+            (tmp / "report.md").write_text(chandelier_markdown(b, data), encoding="utf-8")
     return data

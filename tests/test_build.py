@@ -12,7 +12,8 @@ import pytest
 from optimize import solve_equilibrium
 from rodcad import pipeline
 from rodcad.cli import main
-from rodcad.design import load_design
+from rodcad.design.loader import load_design
+from rodcad.catalog.massrange import mass_info
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier"))
@@ -63,7 +64,7 @@ def test_every_example_builds_without_cad(example, tmp_path, capsys):
     np.testing.assert_allclose(eq.points, data["simulated"]["points"], atol=1e-6 * d.span)
     # masses are within what the catalog can make
     for r in rods:
-        lo, hi = d.catalog[r["type"]].mass_range
+        lo, hi = mass_info(d.catalog[r["type"]]).mass_range
         assert lo * (1 - 1e-9) <= r["mass"] <= hi * (1 + 1e-9)
     report = (out / "report.md").read_text()
     for heading in ("## Inputs", "## Result", "## Rods", "## Bill of materials", "## Printing and assembly"):
@@ -104,7 +105,7 @@ def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr("rodcad.preview.plot_chain", boom)
+    monkeypatch.setattr("rodcad.outputs.preview.plot_chain", boom)
     with pytest.raises(RuntimeError):
         main(["build", str(ex), "-o", str(out), "--no-cad", "-q"])
     assert [p.name for p in out.iterdir()] == ["mine.txt"]

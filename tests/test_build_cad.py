@@ -43,7 +43,8 @@ def test_cad_outputs_exist_and_design_json_has_as_built(built):
 def test_rod_files_are_valid_and_watertight(built):
     import trimesh
 
-    from rodcad.geometry import import_step, is_valid_solid, mass_properties
+    from rodcad.cad.export import import_step
+    from rodcad.cad.solids import is_valid_solid, mass_properties
 
     out, data = built
     for step in sorted((out / "rods").glob("*.step")):
@@ -58,7 +59,7 @@ def test_rod_files_are_valid_and_watertight(built):
 
 
 def test_assembly_step_holds_a_named_solid_per_rod(built):
-    from rodcad.geometry import read_assembly
+    from rodcad.cad.export import read_assembly
 
     out, data = built
     parts = read_assembly(out / "assembly.step")

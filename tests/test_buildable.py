@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodcad import targets as T
-from rodcad.catalog import load_catalog
-from rodcad.chain_design import catalog_arrays, design_buildable, design_chain, plan_chain
+from rodcad.design.targets import catenary, semicircle
+from rodcad.catalog.loader import load_catalog
+from rodcad.design.plan import catalog_arrays, plan_chain
+from rodcad.design.masses import design_buildable, design_chain
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +35,7 @@ def _gappy(plan, width: float = 0.25):
 def test_snapped_masses_are_buildable_and_reported(catalog_and_arrays):
     cat, arrays = catalog_and_arrays
     # the exact design of a catenary keeps its masses well inside their bounds
-    plan = plan_chain(cat, T.catenary((0, 0), (240, 30), length=330), arrays=arrays, allowed_types=["free-30"])
+    plan = plan_chain(cat, catenary((0, 0), (240, 30), length=330), arrays=arrays, allowed_types=["free-30"])
     ivs = _gappy(plan, 0.6)
     free = design_chain(plan, "refine", n_starts=4)
     d = design_buildable(plan, "refine", intervals=ivs, n_starts=4, rescale=False)
@@ -59,7 +60,7 @@ def test_snapped_masses_are_buildable_and_reported(catalog_and_arrays):
 def test_common_scale_keeps_an_exact_shape(catalog_and_arrays):
     """A catenary is reachable for a whole family of mass scales: one of them fits the gaps."""
     cat, arrays = catalog_and_arrays
-    plan = plan_chain(cat, T.catenary((0, 0), (240, 30), length=330), arrays=arrays, allowed_types=["free-30"])
+    plan = plan_chain(cat, catenary((0, 0), (240, 30), length=330), arrays=arrays, allowed_types=["free-30"])
     ivs = _gappy(plan, 0.5)
     d = design_buildable(plan, "refine", intervals=ivs, n_starts=4)
     assert _inside(d.result.masses, ivs)
@@ -69,7 +70,7 @@ def test_common_scale_keeps_an_exact_shape(catalog_and_arrays):
 
 def test_max_rounds_zero_snaps_without_redesign(catalog_and_arrays):
     cat, arrays = catalog_and_arrays
-    plan = plan_chain(cat, T.semicircle((0, 0), (200, 0)), arrays=arrays, lengths=[30])
+    plan = plan_chain(cat, semicircle((0, 0), (200, 0)), arrays=arrays, lengths=[30])
     ivs = _gappy(plan, 0.6)
     d = design_buildable(plan, "exact", intervals=ivs, n_starts=2, max_rounds=0, rescale=False)
     assert _inside(d.result.masses, ivs) and d.result.info["buildable"]["rounds"] == 0
@@ -77,10 +78,10 @@ def test_max_rounds_zero_snaps_without_redesign(catalog_and_arrays):
 
 def test_real_intervals_of_the_catalog(catalog_and_arrays):
     """With the intervals fabrication reports (pla-pinned: gaps between the ball counts)."""
-    from rodcad.fabricate import chain_intervals
+    from rodcad.fabrication.intervals import chain_intervals
 
     cat, arrays = catalog_and_arrays
-    plan = plan_chain(cat, T.catenary((0, 0), (240, 30), length=330), arrays=arrays, allowed_types=["free-30"])
+    plan = plan_chain(cat, catenary((0, 0), (240, 30), length=330), arrays=arrays, allowed_types=["free-30"])
     by_type = chain_intervals([cat[n] for n in set(plan.type_names)], jobs=1)
     ivs = [by_type[n] for n in plan.type_names]
     assert len(ivs[0]) >= 2  # not one continuous range

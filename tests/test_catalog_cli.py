@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from catalog_testutil import BASE, write
 
-from rodcad import geometry
-from rodcad.catalog import default_catalog_dir
+from rodcad.cad.export import import_step
+from rodcad.catalog.paths import default_catalog_dir
 from rodcad.cli import main
 
 TWO = BASE.replace("length: 30", "length: [20, 30]") + \
@@ -113,7 +113,7 @@ def test_export_writes_one_step_per_type(tmp_path: Path, capsys: pytest.CaptureF
     assert main(["catalog", "export", str(path), "-o", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["sq-20.step", "sq-30.step"]
     for name in ("sq-20", "sq-30"):
-        solid = geometry.import_step(out / f"{name}.step")
+        solid = import_step(out / f"{name}.step")
         assert solid.is_valid and solid.label == name
         bb = solid.bounding_box()  # rod frame: axes at x = 0 and x = length, along z
         assert bb.min.X == pytest.approx(-3.2, abs=1e-5)

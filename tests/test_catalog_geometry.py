@@ -9,8 +9,12 @@ import numpy as np
 import pytest
 from catalog_testutil import BASE, load
 
-from rodcad import geometry
-from rodcad.catalog import load_catalog
+from rodcad.cad.collision import Clearance
+from rodcad.cad.export import export_step, import_step
+from rodcad.cad.solids import is_valid_solid, mass_properties, with_spherical_voids
+from rodcad.catalog.loader import load_catalog
+from rodcad.cad.solids import type_solid
+from rodcad.catalog.massrange import mass_info
 
 SHIPPED = load_catalog("pla-pinned")
 
@@ -21,15 +25,15 @@ def _tmp_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def inside(solid, points) -> np.ndarray:
-    return geometry.Clearance(solid)(np.asarray(points, dtype=float)) > 0
+    return Clearance(solid)(np.asarray(points, dtype=float)) > 0
 
 
 @pytest.mark.parametrize("name", SHIPPED.names)
 def test_every_shipped_type_builds_a_valid_named_solid(name: str) -> None:
     rod = SHIPPED[name]
     g = rod.geometry
-    solid = rod.solid()
-    assert geometry.is_valid_solid(solid)
+    solid = type_solid(rod)
+    assert is_valid_solid(solid)
     assert solid.label == name
     bb = solid.bounding_box()
     r = g.hinge.knuckle_radius
@@ -71,20 +75,20 @@ def test_volume_and_com_of_a_square_ended_rod_match_a_hand_count(tmp_path: Path)
     cleared = bar_side(Z)
     first = knuckle * tongue - cleared * (t - tongue)          # tongue at the first joint
     second = knuckle * prongs - cleared * (tongue + 2 * gap)   # fork at the second
-    props = geometry.mass_properties(rod.solid())
+    props = mass_properties(type_solid(rod))
     assert props.volume == pytest.approx(bar + first + second, rel=1e-9)
     # Mirror symmetric in y and z: the com lies on the chord.
     assert props.center[1] == pytest.approx(0, abs=1e-9) and props.center[2] == pytest.approx(0, abs=1e-9)
     assert 0 < props.center[0] < L
-    assert rod.solid_mass == pytest.approx(props.volume * 1.24e-3)
+    assert mass_info(rod).solid_mass == pytest.approx(props.volume * 1.24e-3)
 
 
 @pytest.mark.parametrize("curvature, sign", [(0.02, -1), (-0.02, 1)])
 def test_curvature_sign_sets_the_side_of_the_com(tmp_path: Path, curvature: float, sign: int) -> None:
     rod = load(tmp_path, BASE.replace("length: 30", f"length: 30\n    curvature: {curvature}"))["sq-30"]
-    solid = rod.solid()
-    assert geometry.is_valid_solid(solid)
-    com = geometry.mass_properties(solid).center
+    solid = type_solid(rod)
+    assert is_valid_solid(solid)
+    com = mass_properties(solid).center
     assert math.copysign(1, com[1]) == sign and abs(com[1]) > 1.0
     # The body follows the arc: its middle sits one sagitta off the chord.
     rho = 1 / abs(curvature)
@@ -96,8 +100,8 @@ def test_curvature_sign_sets_the_side_of_the_com(tmp_path: Path, curvature: floa
 def test_fork_tongue_layout_swaps_the_knuckles(tmp_path: Path) -> None:
     rod = load(tmp_path, BASE.replace("length: 30", "length: 30\n    joint: {layout: fork-tongue}"))["sq-30"]
     g = rod.geometry
-    solid = rod.solid()
-    assert geometry.is_valid_solid(solid)
+    solid = type_solid(rod)
+    assert is_valid_solid(solid)
     ring = g.hinge.hole_diameter / 2 + 0.3
     assert inside(solid, [(g.length - ring, 0, 0), (-ring, 0, 3.3)]).all()
     assert not inside(solid, [(-ring, 0, 0), (g.length + ring, 0, 3.3)]).any()
@@ -105,12 +109,12 @@ def test_fork_tongue_layout_swaps_the_knuckles(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("name", SHIPPED.names)
 def test_step_round_trip_keeps_validity_volume_and_name(tmp_path: Path, name: str) -> None:
-    solid = SHIPPED[name].solid()
-    path = geometry.export_step(solid, tmp_path / f"{name}.step", name)
+    solid = type_solid(SHIPPED[name])
+    path = export_step(solid, tmp_path / f"{name}.step", name)
     text = path.read_text()
     assert text.startswith("ISO-10303-21;") and f"PRODUCT('{name}'" in text
     assert text.count("MANIFOLD_SOLID_BREP") == 1
-    back = geometry.import_step(path)
+    back = import_step(path)
     assert back.is_valid and back.label == name
     assert back.volume == pytest.approx(solid.volume, rel=1e-6)
     back_bb, bb = back.bounding_box(), solid.bounding_box()
@@ -118,8 +122,8 @@ def test_step_round_trip_keeps_validity_volume_and_name(tmp_path: Path, name: st
 
 
 def test_spherical_voids_keep_the_solid_valid(tmp_path: Path) -> None:
-    solid = load(tmp_path, BASE)["sq-30"].solid()
+    solid = type_solid(load(tmp_path, BASE)["sq-30"])
     centres = np.array([[11.0, 0, 0], [19.0, 0, 0]])
-    holed = geometry.with_spherical_voids(solid, centres, 2.0)
-    assert geometry.is_valid_solid(holed)
+    holed = with_spherical_voids(solid, centres, 2.0)
+    assert is_valid_solid(holed)
     assert holed.volume == pytest.approx(solid.volume - 2 * 4 / 3 * math.pi * 8, rel=1e-9)

@@ -11,18 +11,10 @@ from pathlib import Path
 import pytest
 from catalog_testutil import BASE, load
 
-from rodcad import geometry
-from rodcad.cache import DiskCache
-from rodcad.catalog import load_catalog
-from rodcad.limits import (
-    TOLERANCE_DEG,
-    NoFreeAngle,
-    all_pair_limits,
-    nominal_middle,
-    pair_limits,
-    pair_limits_detail,
-    search_limits,
-)
+from rodcad.cad.collision import PairScene
+from rodcad.catalog.cache import DiskCache
+from rodcad.catalog.loader import load_catalog
+from rodcad.catalog.limits import TOLERANCE_DEG, NoFreeAngle, all_pair_limits, nominal_middle, pair_limits, pair_limits_detail, search_limits
 
 
 @pytest.fixture(autouse=True)
@@ -127,7 +119,7 @@ def test_proxies_interfere_exactly_when_the_full_solids_do(tmp_path: Path) -> No
     cat = load(tmp_path, BASE + "    ends: {setback: 0, top_chamfer: -10, bottom_chamfer: 40}\n")
     g = cat["sq-30"].geometry
     lo, hi = pair_limits(cat, "sq-30", "sq-30")
-    scene = geometry.PairScene(g, g)
+    scene = PairScene(g, g)
     for phi in (lo - 0.05, lo + 0.05, (lo + hi) / 2, hi - 0.05, hi + 0.05, 170.0, -170.0, 0.0):
         assert scene.interferes(phi, full=True) == scene.interferes(phi), phi
 

@@ -12,15 +12,10 @@ import pytest
 import yaml
 from catalog_testutil import BASE, load, problems, write
 
-from rodcad.catalog import (
-    Catalog,
-    catalog_from_text,
-    catalog_schema,
-    default_catalog_dir,
-    load_catalog,
-    resolve_catalog,
-    shipped_catalogs,
-)
+from rodcad.catalog.model import Catalog
+from rodcad.catalog.loader import catalog_from_text, load_catalog, resolve_catalog
+from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
+from rodcad.catalog.spec import catalog_schema
 from rodcad.commands.catalog import schema_text
 from rodcad.errors import InputError
 

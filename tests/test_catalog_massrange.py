@@ -10,18 +10,11 @@ import pytest
 from catalog_testutil import BASE, load
 from scipy.spatial.distance import pdist
 
-from rodcad import geometry
-from rodcad.massrange import (
-    LATTICES,
-    SYMMETRIES,
-    compute_mass_info,
-    lattice_sites,
-    layouts,
-    mass_info,
-    mass_infos,
-    sphere_layout,
-    symmetric_subset,
-)
+from rodcad.cad.collision import Clearance
+from rodcad.cad.solids import is_valid_solid, mass_properties, with_voids
+from rodcad.fabrication.layout import LATTICES, SYMMETRIES, lattice_sites, sphere_layout, symmetric_subset
+from rodcad.catalog.massrange import compute_mass_info, layouts, mass_info, mass_infos
+from rodcad.cad.solids import type_solid
 
 BALLS = BASE + "    balls: {diameter: 5, density: 7.85, clearance: 0.2}\n"
 
@@ -82,11 +75,11 @@ def test_sphere_layout_in_a_box_matches_a_hand_count() -> None:
 
 def test_cavities_and_sockets_fit_the_real_solid_and_keep_the_com(tmp_path: Path) -> None:
     rod = load(tmp_path, BALLS.replace("length: 30", "length: 40"))["sq-40"]
-    solid = rod.solid()
-    props = geometry.mass_properties(solid)
+    solid = type_solid(rod)
+    props = mass_properties(solid)
     cavities, balls = layouts(rod)
     wall = rod.material.min_wall
-    clearance = geometry.Clearance(solid)
+    clearance = Clearance(solid)
     for layout in (cavities, balls):
         assert layout.count > 0
         assert (clearance(layout.centers) >= layout.radius + wall - 1e-9).all()
@@ -94,10 +87,10 @@ def test_cavities_and_sockets_fit_the_real_solid_and_keep_the_com(tmp_path: Path
             assert pdist(layout.centers).min() >= 2 * layout.radius + wall - 1e-9
         # Cut the printable voids from the B-rep: still one valid solid, exact volume, same com
         # (sockets with their balls in).
-        holed = geometry.with_voids(solid, [(layout.void, layout.centers, layout.radius)])
-        assert geometry.is_valid_solid(holed)
+        holed = with_voids(solid, [(layout.void, layout.centers, layout.radius)])
+        assert is_valid_solid(holed)
         assert holed.volume == pytest.approx(props.volume - layout.volume, rel=1e-6)
-        hp = geometry.mass_properties(holed)
+        hp = mass_properties(holed)
         rho = rod.material.density / 1000
         m = hp.volume * rho
         c = np.array(hp.center) * m
@@ -119,8 +112,8 @@ def test_mass_range_numbers(tmp_path: Path) -> None:
     assert info.m_max == pytest.approx((info.volume - balls.volume) * rho + balls.count * ball_mass)
     assert info.m_min < info.solid_mass < info.m_max
     assert info.ball_count == balls.count and info.cavity_count == cavities.count
-    assert info.com == pytest.approx(geometry.mass_properties(rod.solid()).center[:2])
-    assert rod.mass_range == (info.m_min, info.m_max)
+    assert info.com == pytest.approx(mass_properties(type_solid(rod)).center[:2])
+    assert mass_info(rod).mass_range == (info.m_min, info.m_max)
 
 
 def test_without_balls_the_top_of_the_range_is_the_solid(tmp_path: Path) -> None:

@@ -17,10 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodcad import targets as T
-from rodcad.catalog import load_catalog
-from rodcad.chain_design import design_chain, plan_chain
-from rodcad.limits import all_pair_limits
+from rodcad.design.targets import heart, make_target
+from rodcad.catalog.loader import load_catalog
+from rodcad.design.masses import design_chain
+from rodcad.design.plan import plan_chain
+from rodcad.catalog.limits import all_pair_limits
 
 CHECK = Path(__file__).with_name("data") / "pla-weighted.check.json"
 A, B = (0.0, 0.0), (200.0, 0.0)
@@ -51,7 +52,7 @@ def check():
 
 @pytest.fixture(scope="module")
 def arrays(cat, check):
-    """What :func:`rodcad.chain_design.catalog_arrays` returns, from the check table."""
+    """What :func:`rodcad.design.plan.catalog_arrays` returns, from the check table."""
     types = list(cat)
     by_name = {t["name"]: t for t in check["types"]}
     assert [t.name for t in types] == [t["name"] for t in check["types"]]
@@ -140,7 +141,7 @@ def _stops_and_free(plan):
     ("polygon", {"sides": 3}),
 ])
 def test_corners_bend_freely_and_straight_sides_rest_on_stops(cat, arrays, form, params):
-    plan = plan_chain(cat, T.make_target(form, A, B, **params), arrays=arrays)
+    plan = plan_chain(cat, make_target(form, A, B, **params), arrays=arrays)
     bends, lim, stops, corners = _stops_and_free(plan)
     assert plan.assign_cost == 0 and not plan.unmet_joints and not plan.notes
     assert corners.size == (1 if form == "triangle" else 2)
@@ -196,7 +197,7 @@ def test_concave_bend_without_a_stop_type_is_explained_and_best_fit(cat, arrays)
 
 
 def test_heart_tip_bends_freely_and_is_a_bounded_best_fit(cat, arrays):
-    plan = plan_chain(cat, T.heart(A, B), arrays=arrays)
+    plan = plan_chain(cat, heart(A, B), arrays=arrays)
     bends = np.diff(plan.problem.angles)
     tip = int(np.argmax(bends))
     assert np.degrees(bends[tip]) > 60
@@ -219,7 +220,7 @@ def test_semicircle_rests_on_curve_stops_where_the_masses_cannot_hold_it(cat, ar
     middle ones; no type's mass range allows that, so the planner rests the middle joints
     on curve stops (20 to 25 degrees) and the design becomes exact, and hangs closer to
     the curve than the masses-only best fit."""
-    target = T.make_target("semicircle", A, B)
+    target = make_target("semicircle", A, B)
     free = plan_chain(cat, target, arrays=arrays, add_stops=False)
     plan = plan_chain(cat, target, arrays=arrays)
     assert not free.added_stops and plan.added_stops
@@ -239,7 +240,7 @@ def test_semicircle_rests_on_curve_stops_where_the_masses_cannot_hold_it(cat, ar
 
 
 def test_heart_sides_are_held_straight_by_added_stops(cat, arrays):
-    target = T.heart(A, B)
+    target = heart(A, B)
     free = plan_chain(cat, target, arrays=arrays, add_stops=False)
     plan = plan_chain(cat, target, arrays=arrays)
     bends = np.diff(plan.problem.angles)

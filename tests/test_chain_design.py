@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodcad import targets as T
-from rodcad.catalog import load_catalog
-from rodcad.chain_design import catalog_arrays, design_chain, plan_chain
+from rodcad.design.targets import catenary, semicircle
+from rodcad.catalog.loader import load_catalog
+from rodcad.design.plan import catalog_arrays, plan_chain
+from rodcad.design.masses import design_chain
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +20,7 @@ def catalog_and_arrays():
 
 def test_reachable_catenary_is_designed_exactly_and_uniquely(catalog_and_arrays):
     cat, arrays = catalog_and_arrays
-    plan = plan_chain(cat, T.catenary((0, 0), (200, 0), length=300), arrays=arrays)
+    plan = plan_chain(cat, catenary((0, 0), (200, 0), length=300), arrays=arrays)
     d = design_chain(plan, "refine", n_starts=6)
     assert d.result.exact and d.unique
     assert d.result.distance.max_rel_span < 1e-6 and d.result.time_s < 0.1
@@ -49,4 +50,4 @@ def test_straight_run_gets_straight_stop_types(catalog_and_arrays):
 def test_bad_constraints_explained(catalog_and_arrays):
     cat, arrays = catalog_and_arrays
     with pytest.raises(ValueError, match="no rod type of the catalog is allowed"):
-        plan_chain(cat, T.semicircle((0, 0), (200, 0)), arrays=arrays, allowed_types=["nope"])
+        plan_chain(cat, semicircle((0, 0), (200, 0)), arrays=arrays, allowed_types=["nope"])

@@ -7,8 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from rodcad import chandelier as C
-from rodcad.catalog import load_catalog
+from rodcad.cad.chandelier import _rod_matrix, build_frame, chandelier_nodes
+from rodcad.design.chandelier import ChainPlacement, design_chandelier, explicit, polygon_frame, ring, two_rings
+from rodcad.design.frame import FramePlan, frame_outline, plan_frame
+from rodcad.outputs.preview3d import preview_3d
+from rodcad.catalog.loader import load_catalog
+from rodcad.cad.solids import type_solid
 
 
 @pytest.fixture(scope="module")
@@ -18,7 +22,7 @@ def catalog():
 
 @pytest.fixture(scope="module")
 def arrays(catalog):
-    from rodcad.chain_design import catalog_arrays
+    from rodcad.design.plan import catalog_arrays
 
     return catalog_arrays(catalog, jobs=2)
 
@@ -26,17 +30,17 @@ def arrays(catalog):
 @pytest.fixture(scope="module")
 def small(catalog, arrays):
     """Three 7-rod chains around a ring, designed, with their ring frame built."""
-    pl = C.ring(3, 60, 0)
-    design = C.design_chandelier(catalog, pl, {"form": "catenary", "length": 140}, arrays=arrays)
-    plan = C.plan_frame("ring", pl, catalog, design.chains)
-    frame, check = C.build_frame(plan, catalog, design.chains)
+    pl = ring(3, 60, 0)
+    design = design_chandelier(catalog, pl, {"form": "catenary", "length": 140}, arrays=arrays)
+    plan = plan_frame("ring", pl, catalog, design.chains)
+    frame, check = build_frame(plan, catalog, design.chains)
     return pl, design, plan, frame, check
 
 
 # --------------------------------------------------------------------------- placements
 
 
-def _assert_frame_maps(p: C.ChainPlacement) -> None:
+def _assert_frame_maps(p: ChainPlacement) -> None:
     m = p.transform()
     r = m[:3, :3]
     assert np.allclose(r.T @ r, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(r), 1.0)
@@ -58,7 +62,7 @@ def _assert_frame_maps(p: C.ChainPlacement) -> None:
 
 
 def test_ring_places_chords_with_gaps():
-    pl = C.ring(6, 100, 5.0, start_deg=15, gap=20)
+    pl = ring(6, 100, 5.0, start_deg=15, gap=20)
     assert [p.name for p in pl] == [f"chain_0{i}" for i in range(1, 7)]
     for k, p in enumerate(pl):
         _assert_frame_maps(p)
@@ -70,13 +74,13 @@ def test_ring_places_chords_with_gaps():
         assert np.isclose((ang + math.pi) % (2 * math.pi) - math.pi, 20 / 100)
         assert np.isclose(p.horizontal_distance, 2 * 100 * math.sin((math.pi / 3 - 0.2) / 2))
     with pytest.raises(ValueError, match="gap must be > 0"):
-        C.ring(6, 100, gap=0)
+        ring(6, 100, gap=0)
     with pytest.raises(ValueError, match="at least the ring's side arc"):
-        C.ring(6, 10, gap=20)
+        ring(6, 10, gap=20)
 
 
 def test_two_rings_polygon_and_explicit():
-    pl = C.two_rings(5, 20, 0, 90, -150, twist_deg=30)
+    pl = two_rings(5, 20, 0, 90, -150, twist_deg=30)
     assert len(pl) == 5
     for k, p in enumerate(pl):
         _assert_frame_maps(p)
@@ -85,9 +89,9 @@ def test_two_rings_polygon_and_explicit():
         turn = math.atan2(p.b3[1], p.b3[0]) - math.atan2(p.a3[1], p.a3[0])
         assert np.isclose((turn + math.pi) % (2 * math.pi) - math.pi, math.radians(30))
     with pytest.raises(ValueError, match="vertically above each other"):
-        C.two_rings(4, 50, 0, 50, -100)
+        two_rings(4, 50, 0, 50, -100)
     sq = np.array([[0, 0, 0], [100, 0, 0], [100, 100, 20], [0, 100, 20]], float)
-    pl = C.polygon_frame(sq, gap=10)
+    pl = polygon_frame(sq, gap=10)
     assert len(pl) == 4
     for k, p in enumerate(pl):
         _assert_frame_maps(p)
@@ -95,13 +99,13 @@ def test_two_rings_polygon_and_explicit():
         assert np.allclose(p.a3, sq[k] + e / np.linalg.norm(e) * 5)
         assert np.isclose(np.linalg.norm(p.b3 - p.a3), np.linalg.norm(e) - 10)
     with pytest.raises(ValueError, match="vertically above each other"):
-        C.polygon_frame([[0, 0, 0], [0, 0, 100]], gap=10)
-    pl = C.explicit([((0, 0, 0), (50, 0, -10)), ((0, 10, 0), (0, 60, 0))], names=["a", "b"])
+        polygon_frame([[0, 0, 0], [0, 0, 100]], gap=10)
+    pl = explicit([((0, 0, 0), (50, 0, -10)), ((0, 10, 0), (0, 60, 0))], names=["a", "b"])
     assert [p.name for p in pl] == ["a", "b"] and pl[1].plane_anchors().tolist() == [[0, 0], [50, 0]]
     with pytest.raises(ValueError, match="share the anchor"):
-        C.explicit([((0, 0, 0), (50, 0, 0)), ((50, 0, 0), (90, 0, 0))])
+        explicit([((0, 0, 0), (50, 0, 0)), ((50, 0, 0), (90, 0, 0))])
     with pytest.raises(ValueError, match="vertically above each other"):
-        C.ChainPlacement("v", (1, 2, 3), (1, 2, -40))
+        ChainPlacement("v", (1, 2, 3), (1, 2, -40))
 
 
 # --------------------------------------------------------------------------- frame
@@ -123,10 +127,10 @@ def _hole_axes(frame, radius: float) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def test_ring_frame_is_valid_and_its_pin_axes_pass_through_the_anchors(catalog, small):
-    from rodcad import geometry
+    from rodcad.cad.solids import is_valid_solid
 
     pl, design, plan, frame, check = small
-    assert geometry.is_valid_solid(frame) and check.valid
+    assert is_valid_solid(frame) and check.valid
     hinge = catalog[design.chains[0].type_names[0]].geometry.hinge
     axes = _hole_axes(frame, hinge.hole_diameter / 2)
     assert plan.lugs and len(plan.lugs) == 2 * len(pl)
@@ -159,44 +163,47 @@ def test_rods_clear_the_frame_at_rest_and_hanging_free(catalog, small):
 
 
 def test_frame_problems_are_reported(catalog, small):
-    from rodcad import geometry
+    from rodcad.cad.collision import DistanceTo
+    from rodcad.cad.export import placed
+    from rodcad.cad.frame import frame_solid
+    from rodcad.cad.solids import GeometryError
 
     pl, design, plan, frame, check = small
     # a rod turned up into the ring touches it
-    bad = C.FramePlan(plan.kind, plan.params, plan.lugs, [math.pi / 2 if r is not None else None
+    bad = FramePlan(plan.kind, plan.params, plan.lugs, [math.pi / 2 if r is not None else None
                                                           for r in plan.rest])
     lug = bad.lugs[0]
     rod = catalog[design.chains[0].type_names[0]]
-    d = geometry.DistanceTo(frame)(geometry.placed(rod.solid(), lug.location @ C._rod_matrix((0, 0), math.pi / 2)))
+    d = DistanceTo(frame)(placed(type_solid(rod), lug.location @ _rod_matrix((0, 0), math.pi / 2)))
     assert d == 0.0
     # a ring too far out for the lugs to reach
     far = dict(plan.params, radius=plan.params["radius"] + 40)
-    with pytest.raises(geometry.GeometryError, match="lug chain_01.A"):
-        geometry.frame_solid("ring", far, plan.lugs)
+    with pytest.raises(GeometryError, match="lug chain_01.A"):
+        frame_solid("ring", far, plan.lugs)
     # a frame larger than the printer is reported, not refused
-    big = C.ring(6, 130, 0)
-    bplan = C.plan_frame("ring", big, catalog)
-    _, bcheck = C.build_frame(bplan, catalog, check_clearance=False)
+    big = ring(6, 130, 0)
+    bplan = plan_frame("ring", big, catalog)
+    _, bcheck = build_frame(bplan, catalog, check_clearance=False)
     assert bcheck.fits_printer is False and "does not fit the printer" in bcheck.problems[0]
 
 
 def test_two_rings_and_bars_frames_are_single_valid_solids(catalog):
-    from rodcad import geometry
+    from rodcad.cad.solids import is_valid_solid
 
-    pl = C.two_rings(4, 25, 0, 80, -120)
-    plan = C.plan_frame("two_rings", pl, catalog, bottom_side="below")
-    frame, check = C.build_frame(plan, catalog, check_clearance=False)
+    pl = two_rings(4, 25, 0, 80, -120)
+    plan = plan_frame("two_rings", pl, catalog, bottom_side="below")
+    frame, check = build_frame(plan, catalog, check_clearance=False)
     assert check.valid and check.fits_printer
     bb = frame.bounding_box()
     assert bb.max.Z > 0 and bb.min.Z < -120  # hub above the top anchors, ring below the bottom ones
     assert len(_hole_axes(frame, plan.lugs[0].hinge.hole_diameter / 2)) >= len(plan.lugs)
     sq = np.array([[0, 0, 0], [120, 0, 0], [120, 120, 0], [0, 120, 0]], float)
-    pl = C.polygon_frame(sq)
-    plan = C.plan_frame("bars", pl, catalog, vertices=sq)
-    frame, check = C.build_frame(plan, catalog)
-    assert geometry.is_valid_solid(frame) and check.ok, check.problems
+    pl = polygon_frame(sq)
+    plan = plan_frame("bars", pl, catalog, vertices=sq)
+    frame, check = build_frame(plan, catalog)
+    assert is_valid_solid(frame) and check.ok, check.problems
     with pytest.raises(ValueError, match="needs the anchors' polygon"):
-        C.plan_frame("bars", pl, catalog)
+        plan_frame("bars", pl, catalog)
 
 
 # --------------------------------------------------------------------------- preview, assembly
@@ -204,7 +211,7 @@ def test_two_rings_and_bars_frames_are_single_valid_solids(catalog):
 
 def test_preview_writes_png_and_svg(small, tmp_path):
     pl, design, plan, frame, check = small
-    files = C.preview_3d(tmp_path / "preview.png", design.chains, C.frame_outline(plan), title="t", svg=True)
+    files = preview_3d(tmp_path / "preview.png", design.chains, frame_outline(plan), title="t", svg=True)
     assert [f.name for f in files] == ["preview.png", "preview.svg"]
     assert (tmp_path / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (tmp_path / "preview.png").stat().st_size > 20_000
@@ -213,18 +220,18 @@ def test_preview_writes_png_and_svg(small, tmp_path):
 def test_assembly_holds_the_frame_and_every_chain_in_place(catalog, small, tmp_path):
     from build123d import import_step
 
-    from rodcad import geometry
+    from rodcad.cad.export import export_assembly, read_assembly
 
     pl, design, plan, frame, check = small
-    nodes = C.chandelier_nodes(frame, design.chains, catalog, frame_plan=plan)
+    nodes = chandelier_nodes(frame, design.chains, catalog, frame_plan=plan)
     assert [n.name for n in nodes] == ["frame"] + [p.name for p in pl]
     for g, c in zip(nodes[1:], design.chains):
         assert np.allclose(g.location, c.placement.transform())
         n = len(c.masses)
         assert [k.name for k in g.children[:n]] == [f"{i:02d}_{t}" for i, t in enumerate(c.type_names)]
         assert len(g.children) == 2 * n + 1
-    path = geometry.export_assembly(tmp_path / "assembly.step", nodes, "chandelier")
-    leaves = geometry.read_assembly(path)
+    path = export_assembly(tmp_path / "assembly.step", nodes, "chandelier")
+    leaves = read_assembly(path)
     n_rods = sum(len(c.masses) for c in design.chains)
     assert len(leaves) == 1 + n_rods + (n_rods + len(pl))
     root = import_step(path)
@@ -241,9 +248,9 @@ def test_assembly_holds_the_frame_and_every_chain_in_place(catalog, small, tmp_p
 
 
 def test_design_chandelier_end_to_end(catalog, arrays):
-    pl = C.ring(6, 100, 0)
+    pl = ring(6, 100, 0)
     targets = [{"form": "catenary", "length": 260}, {"form": "catenary", "length": 280}] * 3
-    d1 = C.design_chandelier(catalog, pl, targets, method="refine", seed=3, jobs=1,
+    d1 = design_chandelier(catalog, pl, targets, method="refine", seed=3, jobs=1,
                                 arrays=arrays)
     assert d1.n_distinct == 2 and len(d1.chains) == 6
     rows = d1.errors()
@@ -259,9 +266,9 @@ def test_design_chandelier_end_to_end(catalog, arrays):
     assert bom.total_mass == pytest.approx(sum(r["mass_g"] for r in rows))
     assert bom.pins == bom.n_rods - 6 and bom.anchor_pins == 12
     # parallel workers give the same design
-    d2 = C.design_chandelier(catalog, pl, targets, method="refine", seed=3, jobs=2,
+    d2 = design_chandelier(catalog, pl, targets, method="refine", seed=3, jobs=2,
                                 arrays=arrays)
     for a, b in zip(d1.chains, d2.chains):
         assert a.type_names == b.type_names and np.array_equal(a.masses, b.masses)
     with pytest.raises(ValueError, match="4 targets for 6 chains"):
-        C.design_chandelier(catalog, pl, targets[:4])
+        design_chandelier(catalog, pl, targets[:4])

@@ -10,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodcad.design import design_schema, load_design
+from rodcad.design.spec import design_schema
+from rodcad.design.loader import load_design
 from rodcad.errors import InputError
+from rodcad.catalog.massrange import mass_info
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
@@ -104,7 +106,7 @@ def test_explicit_chain_reach_and_fixed_rods_are_checked():
     assert len(got) == 1 and "anchors: the anchors are 200 mm apart but the chain is only 70 mm long" in got[0]
     d = load_design("d.yaml", text=chain.replace("[200, 0]", "[60, 0]"))
     assert [r.type for r in d.chain] == ["free-30", "free-40"]
-    assert d.chain[0].mass == pytest.approx(d.catalog["free-30"].mass_info().solid_mass)
+    assert d.chain[0].mass == pytest.approx(mass_info(d.catalog["free-30"]).solid_mass)
     fixed = GOOD + "constraints:\n  fixed:\n    - {index: 0, type: free-30, mass: 500}\n" \
                    "    - {index: 0, type: free-40}\n"
     got = "\n".join(problems(fixed))

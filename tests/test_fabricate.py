@@ -12,11 +12,14 @@ import numpy as np
 import pytest
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-from rodcad import geometry
-from rodcad.cache import DiskCache
-from rodcad.catalog import load_catalog
-from rodcad.fabricate import achievable_intervals, fabricate_chain, fabricate_rod, write_assembly, write_rod_files
-from rodcad.massrange import void_volume
+from rodcad.cad.export import import_step, read_assembly
+from rodcad.cad.solids import is_valid_solid, mass_properties, void_template
+from rodcad.catalog.cache import DiskCache
+from rodcad.catalog.loader import load_catalog
+from rodcad.fabrication.intervals import achievable_intervals
+from rodcad.cad.rods import fabricate_chain, fabricate_rod, write_assembly, write_rod_files
+from rodcad.fabrication.layout import void_volume
+from rodcad.catalog.massrange import mass_info
 
 
 @pytest.fixture(scope="module")
@@ -36,16 +39,16 @@ def catalog(cache_dir: Path):
 def chain(catalog):
     """Light (catalog minimum, mid), solid, heavy (catalog maximum), a duplicate, one above range."""
     f20, s20 = catalog["free-20"], catalog["straight-20"]
-    lo, hi = f20.mass_range
+    lo, hi = mass_info(f20).mass_range
     types = [f20, f20, s20, s20, f20, f20]
-    masses = [lo, (lo + f20.solid_mass) / 2, s20.solid_mass, s20.mass_range[1], (lo + f20.solid_mass) / 2,
+    masses = [lo, (lo + mass_info(f20).solid_mass) / 2, mass_info(s20).solid_mass, mass_info(s20).mass_range[1], (lo + mass_info(f20).solid_mass) / 2,
               hi * 1.05]
     return types, masses, fabricate_chain(types, masses, seed=3, jobs=2)
 
 
 def _measured(rod, f) -> tuple[float, np.ndarray]:
     """Mass (g) and com (x, y) from the final B-rep plus balls."""
-    props = geometry.mass_properties(f.solid)
+    props = mass_properties(f.solid)
     rho = rod.material.density / 1000
     m = props.volume * rho
     c = np.array(props.center) * m
@@ -60,15 +63,15 @@ def test_masses_and_centres_of_mass(chain) -> None:
     assert len(fab.rods) == len(types)
     kinds = set()
     for rod, m, f in zip(types, masses, fab.rods):
-        lo, hi = rod.mass_range
+        lo, hi = mass_info(rod).mass_range
         goal = min(max(m, lo), hi)
         mass, com = _measured(rod, f)
         assert mass == pytest.approx(f.mass, rel=1e-9)
         assert abs(mass - goal) <= 1e-3 * goal
-        assert np.allclose(com, rod.com, atol=1e-6), (f.index, com, rod.com)
-        assert np.allclose(f.com, rod.com, atol=1e-6)
+        assert np.allclose(com, mass_info(rod).com, atol=1e-6), (f.index, com, mass_info(rod).com)
+        assert np.allclose(f.com, mass_info(rod).com, atol=1e-6)
         kinds.add("light" if f.cavity_count and not f.ball_count else "heavy" if f.ball_count else "solid")
-        assert geometry.is_valid_solid(f.solid)
+        assert is_valid_solid(f.solid)
     assert kinds == {"light", "solid", "heavy"}
     assert fab.rods[0].cavity_count > 0 and fab.rods[3].ball_count > 0
 
@@ -76,17 +79,17 @@ def test_masses_and_centres_of_mass(chain) -> None:
 def test_convex_stop_rod_of_pla_weighted(cache_dir: Path) -> None:
     """A curve20 rod (flush ends, +10 deg top chamfers) builds to its mass and centre of mass."""
     rod = load_catalog("pla-weighted")["curve20-30"]
-    lo, hi = rod.mass_range
-    m = (lo + rod.solid_mass) / 2
+    lo, hi = mass_info(rod).mass_range
+    m = (lo + mass_info(rod).solid_mass) / 2
     assert lo < m < hi
     f = fabricate_rod(rod, m, seed=3)
     mass, com = _measured(rod, f)
     assert f.in_range and f.cavity_count > 0, f.message
     assert mass == pytest.approx(f.mass, rel=1e-9)
     assert abs(mass - m) <= 1e-3 * m
-    assert np.allclose(com, rod.com, atol=1e-6), (com, rod.com)
-    assert np.allclose(f.com, rod.com, atol=1e-6)
-    assert geometry.is_valid_solid(f.solid)
+    assert np.allclose(com, mass_info(rod).com, atol=1e-6), (com, mass_info(rod).com)
+    assert np.allclose(f.com, mass_info(rod).com, atol=1e-6)
+    assert is_valid_solid(f.solid)
     assert len(f.solid.shells()) == 1 + f.cavity_count + f.ball_count
     assert f.min_wall >= rod.material.min_wall - 1e-6
 
@@ -119,7 +122,7 @@ def test_out_of_range_is_reported_and_clipped(chain) -> None:
     types, masses, fab = chain
     last = fab.rods[-1]
     assert not last.in_range and "above the heaviest" in last.message
-    assert last.mass == pytest.approx(types[-1].mass_range[1], rel=1e-3)
+    assert last.mass == pytest.approx(mass_info(types[-1]).mass_range[1], rel=1e-3)
     assert len(fab.problems) == 1 and fab.problems[0].startswith("Rod 5 (free-20)")
     assert all(r.in_range for r in fab.rods[:-1])
 
@@ -137,9 +140,9 @@ def test_achievable_intervals_agree_with_what_is_built(catalog) -> None:
     rod = catalog["free-20"]
     cache = DiskCache()
     ivs = achievable_intervals(rod, cache=cache)
-    lo, hi = rod.mass_range
+    lo, hi = mass_info(rod).mass_range
     assert ivs[0][0] == pytest.approx(lo, rel=1e-9) and ivs[-1][1] == pytest.approx(hi, rel=1e-9)
-    assert ivs[0][1] == pytest.approx(rod.solid_mass, rel=1e-3)
+    assert ivs[0][1] == pytest.approx(mass_info(rod).solid_mass, rel=1e-3)
     assert len(ivs) >= 2 and all(a <= b < c for (a, b), (c, _) in zip(ivs, ivs[1:]))
     assert achievable_intervals(rod, cache=cache) == ivs  # cached, same
     edges = [x for a, b in ivs for x in (a, b)]
@@ -156,7 +159,7 @@ def test_achievable_intervals_agree_with_what_is_built(catalog) -> None:
 
 def test_same_input_same_layout(catalog) -> None:
     rod = catalog["free-30"]
-    m = (rod.mass_range[0] + rod.solid_mass) / 2
+    m = (mass_info(rod).mass_range[0] + mass_info(rod).solid_mass) / 2
     a = fabricate_rod(rod, m, seed=7, cache=DiskCache(enabled=False))
     b = fabricate_rod(rod, m, seed=7, cache=DiskCache(enabled=False))
     assert a.cavity_count > 0 and np.array_equal(a.cavity_centers, b.cavity_centers)
@@ -166,12 +169,12 @@ def test_same_input_same_layout(catalog) -> None:
 def test_void_shapes_are_printable_and_exact() -> None:
     r = 2.0
     for kind in ("sphere", "capped", "silo"):
-        assert geometry.void_template(kind, r).volume == pytest.approx(void_volume(kind, r), rel=1e-6)
-    capped = geometry.void_template("capped", r)
+        assert void_template(kind, r).volume == pytest.approx(void_volume(kind, r), rel=1e-6)
+    capped = void_template("capped", r)
     ys = [v.Y for v in capped.vertices()]  # flat roof and floor where the sphere reaches 45 deg
     assert max(ys) == pytest.approx(r / math.sqrt(2)) and min(ys) == pytest.approx(-r / math.sqrt(2))
     assert sorted(f.geom_type.name for f in capped.faces()) == ["PLANE", "PLANE", "SPHERE"]
-    silo = geometry.void_template("silo", r)
+    silo = void_template("silo", r)
     assert max(v.Y for v in silo.vertices()) == pytest.approx(r)  # flat roof at the sphere's top
 
 
@@ -183,8 +186,8 @@ def test_rod_files(chain, tmp_path: Path) -> None:
     assert len(paths) == 2 * len(fab.rods)
     for f in fab.rods:
         step = tmp_path / "rods" / f"{f.file_stem}.step"
-        back = geometry.import_step(step)
-        assert geometry.is_valid_solid(back)
+        back = import_step(step)
+        assert is_valid_solid(back)
         assert back.volume == pytest.approx(f.plastic_volume, rel=1e-6)
         bb = back.bounding_box()
         assert bb.min.Z == pytest.approx(0, abs=1e-6)  # on the bed
@@ -205,7 +208,7 @@ def test_assembly(chain, tmp_path: Path) -> None:
     ang = np.linspace(-0.6, 0.6, n)
     pts = np.concatenate([[[0.0, 0.0]], np.cumsum(np.c_[np.cos(ang), np.sin(ang)] * np.array(lengths)[:, None], 0)])
     path = write_assembly(fab, pts, tmp_path / "assembly.step", name="test chain")
-    parts = geometry.read_assembly(path)
+    parts = read_assembly(path)
     names = [p[0] for p in parts]
     assert names[:n] == [f.file_stem for f in fab.rods]
     assert names[n:] == [f"pin_{j:02d}" for j in range(n + 1)]

@@ -17,10 +17,12 @@ from pathlib import Path
 import pytest
 from catalog_testutil import BASE, write
 
-from rodcad import cache as cache_mod
-from rodcad import fabricate, limits, massrange
-from rodcad.cache import DiskCache, register_seed
-from rodcad.catalog import default_catalog_dir, load_catalog, shipped_catalogs
+from rodcad.catalog import cache as cache_mod
+from rodcad.catalog import limits, massrange
+from rodcad.catalog.cache import DiskCache, register_seed
+from rodcad.catalog.loader import load_catalog
+from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
+from rodcad.fabrication import intervals as fabricate
 from rodcad.cli import main
 
 KEY = "ab" * 32
@@ -102,7 +104,7 @@ def test_shipped_seeds_are_current(name: str) -> None:
         "mass": {t.name: massrange._key(t) for t in catalog},
         "limits": {f"{a.name} -> {b.name}": limits._cache_key(a.geometry, b.geometry, limits._wall(a, b))
                    for a, b in catalog.pairs()},
-        "fabint": {t.name: fabricate._intervals_key(t, 0) for t in catalog},
+        "fabint": {t.name: fabricate.intervals_key(t, 0) for t in catalog},
     }
     for kind, keys in wanted.items():
         missing = [what for what, key in keys.items() if key not in entries.get(kind, {})]
@@ -140,6 +142,6 @@ def test_precompute_writes_a_seed_that_later_runs_read(seeds: Path, tmp_path: Pa
     assert os.environ["RODCAD_CACHE_DIR"] == str(seeds) and os.environ["RODCAD_SEED_CACHE"] == "1"  # ... restored
     rod = load_catalog(path).types[0]  # registers the seed
     assert limits.is_cached(rod, rod, DiskCache()) and massrange.is_cached(rod, DiskCache())
-    table = data["entries"]["fabint"][fabricate._intervals_key(rod, 0)]
+    table = data["entries"]["fabint"][fabricate.intervals_key(rod, 0)]
     assert fabricate.achievable_intervals(rod) == [tuple(i) for i in table["intervals"]]
     assert not seeds.exists()

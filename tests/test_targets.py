@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodcad import targets as T
+from rodcad.design.targets import arc, catenary, heart, make_target, polygon, semicircle, svg_path
 
 A, B = np.array([0.0, 0.0]), np.array([200.0, 0.0])
 
@@ -26,7 +26,7 @@ A, B = np.array([0.0, 0.0]), np.array([200.0, 0.0])
     ],
 )
 def test_forms_run_from_a_to_b(form, params):
-    c = T.make_target(form, A, B, **params)
+    c = make_target(form, A, B, **params)
     assert c.ndim == 2 and c.shape[1] == 2 and len(c) >= 3
     np.testing.assert_array_equal(c[0], A)
     np.testing.assert_array_equal(c[-1], B)
@@ -34,25 +34,25 @@ def test_forms_run_from_a_to_b(form, params):
 
 
 def test_semicircle_is_a_half_circle():
-    c = T.semicircle(A, B)
+    c = semicircle(A, B)
     np.testing.assert_allclose(np.hypot(c[:, 0] - 100, c[:, 1]), 100, rtol=1e-12)
     assert c[:, 1].min() == pytest.approx(-100, rel=1e-4)
 
 
 def test_arc_sag_and_polygon_edges():
-    c = T.arc(A, B, sag=40)
+    c = arc(A, B, sag=40)
     assert c[:, 1].min() == pytest.approx(-40, rel=1e-4)
-    p = T.polygon(A, B, 3)
+    p = polygon(A, B, 3)
     np.testing.assert_allclose(np.hypot(*np.diff(p, axis=0).T), 100.0)  # half hexagon
 
 
 def test_catenary_has_the_requested_length():
-    c = T.catenary(A, B, length=300, samples=4000)
+    c = catenary(A, B, length=300, samples=4000)
     assert np.hypot(*np.diff(c, axis=0).T).sum() == pytest.approx(300, rel=1e-5)
 
 
 def test_svg_is_mapped_onto_the_anchors():
-    c = T.svg_path((10, 5), (110, 5), "M 0 0 L 50 50 L 100 0")  # a V in SVG (y down)
+    c = svg_path((10, 5), (110, 5), "M 0 0 L 50 50 L 100 0")  # a V in SVG (y down)
     assert c[:, 1].min() == pytest.approx(5 - 50, rel=1e-9)
 
 
@@ -72,11 +72,11 @@ def test_svg_is_mapped_onto_the_anchors():
 )
 def test_bad_target_parameters(form, params, match):
     with pytest.raises(ValueError, match=match):
-        T.make_target(form, A, B, **params)
+        make_target(form, A, B, **params)
 
 
 def test_heart_is_a_hangable_lower_outline():
-    c = T.heart(A, B)
+    c = heart(A, B)
     d = np.diff(c, axis=0)
     assert np.all(d[:, 0] > 0)  # every chord points from A toward B: a chain in tension
     turn = np.degrees(np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0]))))

@@ -15,7 +15,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from rodcad.design import METHOD_NAMES, load_design
+from rodcad.design.model import METHOD_NAMES
+from rodcad.design.loader import load_design
 from rodcad.progress import Progress
 
 __all__ = ["register", "run"]
@@ -40,7 +41,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
-    from rodcad import pipeline, report
+    from rodcad import pipeline
+    from rodcad.outputs.report import summary_text
 
     progress = Progress(quiet=args.quiet)
     design = load_design(args.design)
@@ -58,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         target = outdir.with_name(outdir.name + ".best-fit")
         code = 1
     data = pipeline.write_outputs(result, target, progress=progress)
-    print(report.summary_text(result, target, data))
+    print(summary_text(result, target, data))
     if code:
         err = result.distance.max_rel_span
         print(f"rodcad: the design misses its tolerance ({err:.3g} of the span > {design.tolerance:g}); "

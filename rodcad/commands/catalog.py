@@ -26,10 +26,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rodcad.cache import DiskCache
-from rodcad.catalog import Catalog, catalog_schema, load_catalog
+from rodcad.catalog.cache import DiskCache
+from rodcad.catalog.model import Catalog
+from rodcad.catalog.spec import catalog_schema
+from rodcad.catalog.loader import load_catalog
 from rodcad.errors import InputError, Problem
 from rodcad.outdir import write_atomic
+from rodcad.cad.solids import type_solid
 
 __all__ = ["check_report", "precompute", "register", "schema_text"]
 
@@ -122,23 +125,23 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
     Raises:
         InputError: a rod type's parameters make no valid solid.
     """
-    from rodcad import limits as _limits
-    from rodcad import massrange as _massrange
-    from rodcad.limits import all_pair_limits
-    from rodcad.massrange import mass_infos
+    from rodcad.catalog import limits as limits_mod
+    from rodcad.catalog import massrange as massrange_mod
+    from rodcad.catalog.limits import all_pair_limits
+    from rodcad.catalog.massrange import mass_infos
 
     cache = cache if cache is not None else DiskCache()
     t0 = time.perf_counter()
     # Build every solid that has work left before starting workers, so that
     # parameters making no valid solid are reported as bad input (cached
     # results were computed from solids that built fine).
-    needed = {t.name: t for t in catalog.types if not _massrange.is_cached(t, cache)}
+    needed = {t.name: t for t in catalog.types if not massrange_mod.is_cached(t, cache)}
     for a, b in catalog.pairs():
-        if not _limits.is_cached(a, b, cache):
+        if not limits_mod.is_cached(a, b, cache):
             needed.setdefault(a.name, a)
             needed.setdefault(b.name, b)
     for t in needed.values():
-        t.solid()
+        type_solid(t)
     masses = mass_infos(list(catalog.types), jobs=jobs, cache=cache,
                         progress=_progress("mass ranges") if progress else None)
     limits = all_pair_limits(catalog, jobs=jobs, cache=cache,
@@ -280,7 +283,7 @@ def precompute(catalog: Catalog, *, jobs: int | None = None, progress: bool = Fa
         ``{"rodcad_seed_cache": 1, "catalog": NAME, "entries": {kind: {key:
         value}}}`` for the kinds of :data:`SEED_KINDS`.
     """
-    from rodcad.fabricate import chain_intervals
+    from rodcad.fabrication.intervals import chain_intervals
 
     saved = {k: os.environ.get(k) for k in ("RODCAD_CACHE_DIR", "RODCAD_SEED_CACHE")}
     with tempfile.TemporaryDirectory(prefix="rodcad-precompute-") as tmp:
@@ -338,13 +341,13 @@ def _precompute(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from rodcad import geometry
+    from rodcad.cad.export import export_step
 
     catalog = load_catalog(args.catalog)
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise InputError([Problem(str(out), 0, 0, "", "exists and is not a directory")])
-    solids = [(t, t.solid()) for t in catalog.types]  # all or nothing: build before writing
+    solids = [(t, type_solid(t)) for t in catalog.types]  # all or nothing: build before writing
     created = not out.exists()
     staged: list[tuple[Path, Path]] = []
     try:
@@ -352,7 +355,7 @@ def _export(args: argparse.Namespace) -> int:
         with tempfile.TemporaryDirectory(dir=out, prefix=".rodcad-export-") as tmp:
             for t, solid in solids:
                 part = Path(tmp) / f"{t.name}.step"
-                geometry.export_step(solid, part, t.name)
+                export_step(solid, part, t.name)
                 staged.append((part, out / f"{t.name}.step"))
             for part, final in staged:
                 os.replace(part, final)

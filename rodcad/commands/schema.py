@@ -17,11 +17,11 @@ __all__ = ["register", "schema_text"]
 def schema_text(kind: str) -> str:
     """The JSON Schema of ``kind`` ('design' or 'catalog') as indented JSON text."""
     if kind == "design":
-        from rodcad.design import design_schema
+        from rodcad.design.spec import design_schema
 
         schema = design_schema()
     else:
-        from rodcad.catalog import catalog_schema
+        from rodcad.catalog.spec import catalog_schema
 
         schema = catalog_schema()
     return json.dumps(schema, indent=2) + "\n"

@@ -12,7 +12,7 @@ import argparse
 import json
 import math
 
-from rodcad.design import load_design
+from rodcad.design.loader import load_design
 from rodcad.progress import Progress
 
 __all__ = ["register", "run"]
@@ -32,11 +32,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
-    from rodcad import pipeline, report
+    from rodcad import pipeline
+    from rodcad.outputs.design_json import design_json
+    from rodcad.outputs.report import summary_text
 
     design = load_design(args.design)
     result = pipeline.simulate(design, progress=Progress(quiet=args.json))
-    data = report.design_json(result)
+    data = design_json(result)
     if args.json:
         keep = ("name", "units", "catalog", "anchors", "rods", "simulated", "error", "notes")
         print(json.dumps({k: data[k] for k in keep}, indent=2, allow_nan=False))
@@ -53,5 +55,5 @@ def run(args: argparse.Namespace) -> int:
         print(f"{i:>3} {result.type_names[i]:<16} {result.masses[i]:8.3f} {eq.points[i][0]:9.2f} "
               f"{eq.points[i][1]:9.2f} {math.degrees(eq.angles[i]):10.3f} {bend} {lim_s:>16}")
     print(f"    {'end':<16} {'':>8} {eq.points[-1][0]:9.2f} {eq.points[-1][1]:9.2f}")
-    print(report.summary_text(result, None, data).split("\n", 1)[1])
+    print(summary_text(result, None, data).split("\n", 1)[1])
     return 0 if eq.success else 1

@@ -11,22 +11,9 @@ from __future__ import annotations
 
 import ast
 import math
-
 import numpy as np
 
-__all__ = [
-    "TARGET_FORMS",
-    "arc",
-    "catenary",
-    "function",
-    "heart",
-    "make_target",
-    "polygon",
-    "polyline",
-    "semicircle",
-    "svg_path",
-    "triangle",
-]
+__all__ = ['polyline', 'arc', 'semicircle', 'triangle', 'polygon', 'heart', 'catenary', 'function', 'svg_path', 'TARGET_FORMS', 'make_target']
 
 
 def _frame(a, b):
@@ -174,6 +161,8 @@ _SAFE_FUNCS = {
     for name in ("sin", "cos", "tan", "exp", "log", "sqrt", "abs", "sinh", "cosh", "tanh",
                  "arcsin", "arccos", "arctan", "minimum", "maximum")
 }
+
+
 _SAFE_CONSTS = {"pi": math.pi, "e": math.e}
 
 

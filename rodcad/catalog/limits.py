@@ -5,7 +5,7 @@ hinge, the *limits* are the bend interval [lo, hi] (deg) in which the two solids
 do not interfere: phi = theta_right - theta_left, positive closing the top (+y)
 side of the joint (a sagging chain bends positive). They come from the B-rep:
 the right rod's solid is turned about the shared hinge axis
-(:class:`rodcad.geometry.PairScene`) and the first contact on each side of a
+(:class:`rodcad.cad.collision.PairScene`) and the first contact on each side of a
 free starting angle is bracketed and refined to :data:`TOLERANCE_DEG`.
 
 The search (:func:`search_limits`) is plain numerics on a distance oracle:
@@ -21,7 +21,7 @@ The search (:func:`search_limits`) is plain numerics on a distance oracle:
   bisection until it is narrower than the tolerance; report its middle.
 
 A side on which nothing collides before +-180 degrees reports None (null in
-JSON). Results are stored in the disk cache (:mod:`rodcad.cache`) under a hash
+JSON). Results are stored in the disk cache (:mod:`rodcad.catalog.cache`) under a hash
 of both rods' geometry and the code versions, so a second run is instant.
 """
 
@@ -32,34 +32,26 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Protocol
-
-from rodcad.cache import DiskCache, make_key
+from rodcad.catalog.cache import DiskCache, make_key
 from rodcad.parallel import default_jobs, worker_pool
-
 if TYPE_CHECKING:  # pragma: no cover
-    from rodcad.catalog import Catalog, RodGeometry, RodType
+    from rodcad.catalog.model import Catalog, RodGeometry, RodType
 
-__all__ = [
-    "LIMITS_VERSION",
-    "TOLERANCE_DEG",
-    "NoFreeAngle",
-    "PairLimits",
-    "all_pair_limits",
-    "nominal_middle",
-    "pair_limits",
-    "pair_limits_detail",
-    "search_limits",
-]
+__all__ = ['LIMITS_VERSION', 'TOLERANCE_DEG', 'MAX_STEP_DEG', 'SCAN_STEP_DEG', 'ProbeLike', 'NoFreeAngle', 'PairLimits', 'search_limits', 'nominal_middle', 'is_cached', 'pair_limits_detail', 'pair_limits', 'all_pair_limits']
+
 
 #: Bump when the search changes results (invalidates cached limits).
 LIMITS_VERSION = "1"
+
 
 #: Width of the final bracket around each contact angle (deg); the reported
 #: limit is its middle, so it is within half of this of the true contact.
 TOLERANCE_DEG = 0.005
 
+
 #: Largest single step of the march (deg).
 MAX_STEP_DEG = 10.0
+
 
 #: Step of the fallback scan for a free starting angle (deg).
 SCAN_STEP_DEG = 5.0
@@ -114,9 +106,6 @@ class PairLimits:
         lo = -math.inf if self.lo is None else math.radians(self.lo)
         hi = math.inf if self.hi is None else math.radians(self.hi)
         return (lo, hi)
-
-
-# --------------------------------------------------------------------------- search
 
 
 def search_limits(
@@ -229,9 +218,6 @@ def _refine(probe: Callable[[float], ProbeLike], safe: ProbeLike, hit: float, s:
     return (a.phi + b) / 2
 
 
-# --------------------------------------------------------------------------- pairs
-
-
 def nominal_middle(left: RodGeometry, right: RodGeometry) -> float:
     """The middle of the bend range the end shapes were designed for (deg).
 
@@ -244,7 +230,7 @@ def nominal_middle(left: RodGeometry, right: RodGeometry) -> float:
 
 
 def _cache_key(left: RodGeometry, right: RodGeometry, wall: float) -> str:
-    from rodcad.catalog import GEOMETRY_VERSION
+    from rodcad.catalog.model import GEOMETRY_VERSION
 
     return make_key("pair-limits", LIMITS_VERSION, GEOMETRY_VERSION, TOLERANCE_DEG,
                     asdict(left), asdict(right), wall)
@@ -252,7 +238,7 @@ def _cache_key(left: RodGeometry, right: RodGeometry, wall: float) -> str:
 
 def _compute(left: RodGeometry, right: RodGeometry, wall: float) -> dict[str, object]:
     """Run the search on the exact solids (in this process)."""
-    from rodcad.geometry import PairScene
+    from rodcad.cad.collision import PairScene
 
     t0 = time.perf_counter()
     scene = PairScene(left, right)
@@ -301,7 +287,7 @@ def pair_limits_detail(
         catalog: the catalog holding both types.
         left: left rod type (or its name).
         right: right rod type (or its name).
-        cache: disk cache (default: :class:`rodcad.cache.DiskCache` at the
+        cache: disk cache (default: :class:`rodcad.catalog.cache.DiskCache` at the
             default location).
 
     Raises:

@@ -11,7 +11,7 @@ Below it sits a read-only *seed* layer: precomputed entries shipped as JSON
 files ``{"rodcad_seed_cache": 1, "catalog": NAME, "entries": {kind: {key:
 value}}}`` (written by ``rodcad catalog precompute``). A miss on disk is looked
 up in every ``*.cache.json`` of the shipped catalog folder and in the files
-given to :func:`register_seed` (:func:`rodcad.catalog.load_catalog` registers
+given to :func:`register_seed` (:func:`rodcad.catalog.loader.load_catalog` registers
 ``<stem>.cache.json`` next to a catalog file). Seeds are never copied to disk;
 ``RODCAD_SEED_CACHE=0`` or a disabled :class:`DiskCache` turns them off.
 """
@@ -24,15 +24,19 @@ import json
 import os
 from pathlib import Path
 from typing import Any
-
 from rodcad.outdir import write_atomic
 
-__all__ = ["DiskCache", "default_cache_dir", "make_key", "register_seed", "seeds_enabled"]
+__all__ = ['default_cache_dir', 'make_key', 'register_seed', 'seeds_enabled', 'DiskCache']
+
 
 #: Seed files to look in, in registration order (resolved paths).
 _seed_paths: list[Path] = []
+
+
 #: Loaded entries per seed file ({} when missing or unreadable).
 _seed_data: dict[Path, dict[str, Any]] = {}
+
+
 #: Whether the shipped catalog folder has been scanned for seed files.
 _shipped_scanned = False
 
@@ -85,7 +89,7 @@ def _seed_get(kind: str, key: str) -> Any | None:
         return None
     if not _shipped_scanned:
         _shipped_scanned = True
-        from rodcad.catalog import default_catalog_dir  # lazily: catalog imports this module
+        from rodcad.catalog.paths import default_catalog_dir
 
         try:
             for p in sorted(default_catalog_dir().glob("*.cache.json")):

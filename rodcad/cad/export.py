@@ -1,0 +1,217 @@
+"""Writing and reading solids: STEP (single solids and named, coloured assemblies), STL,
+print orientation and placement matrices.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+import numpy as np
+from build123d import Color, Compound, Location, Solid, export_step as _export_step
+from build123d import import_step as _import_step
+from OCP.gp import gp_Trsf
+from OCP.TopLoc import TopLoc_Location
+from rodcad.cad.solids import GeometryError
+
+__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'read_assembly', 'placed']
+
+
+def export_step(solid: Solid, path: str | os.PathLike[str], name: str | None = None) -> Path:
+    """Write a solid to a STEP file (mm), its product named after the solid.
+
+    Args:
+        solid: what to write.
+        path: destination file.
+        name: product name (default: the solid's label).
+
+    Returns:
+        The path written.
+    """
+    if name is not None:
+        solid.label = name
+    path = Path(path)
+    if not _export_step(solid, path):  # pragma: no cover - writer failure
+        raise OSError(f"could not write {path}")
+    return path
+
+
+def import_step(path: str | os.PathLike[str]) -> Solid:
+    """Read a single-solid STEP file back (label = product name).
+
+    Raises:
+        GeometryError: the file does not hold exactly one solid.
+    """
+    shape = _import_step(Path(path))
+    solids = shape.solids()
+    if len(solids) != 1:
+        raise GeometryError(f"{path} holds {len(solids)} solids, expected 1")
+    solid = solids[0]
+    solid.label = shape.label or solid.label
+    return solid
+
+
+def matrix_location(matrix: np.ndarray) -> Location:
+    """The build123d Location of a rigid 4x4 matrix (mm)."""
+    m = np.asarray(matrix, dtype=float)
+    t = gp_Trsf()
+    t.SetValues(*(float(x) for x in m[:3, :4].reshape(-1)))
+    return Location(TopLoc_Location(t))
+
+
+def transformed(solid: Solid, matrix: np.ndarray) -> Solid:
+    """A copy of ``solid`` with the rigid 4x4 ``matrix`` baked into its geometry."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+
+    m = np.asarray(matrix, dtype=float)
+    t = gp_Trsf()
+    t.SetValues(*(float(x) for x in m[:3, :4].reshape(-1)))
+    out = Solid(BRepBuilderAPI_Transform(solid.wrapped, t, True).Shape())
+    out.label = solid.label
+    return out
+
+
+#: Rotation taking the rod frame to the print bed: +y (rod) -> +Z (printer),
+#: +z (rod, the hinge axes) -> -Y, x stays x; the rod lies on its -y face.
+PRINT_ROTATION = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
+
+
+def print_matrix(solid: Solid) -> np.ndarray:
+    """4x4 matrix placing a rod-frame solid on the bed: rotated by
+    :data:`PRINT_ROTATION` and moved so its bounding box starts at (0, 0, 0)
+    (Z = 0 is the bed)."""
+    m = np.eye(4)
+    m[:3, :3] = PRINT_ROTATION
+    bb = solid.bounding_box()
+    corners = np.array([[x, y, z] for x in (bb.min.X, bb.max.X) for y in (bb.min.Y, bb.max.Y)
+                        for z in (bb.min.Z, bb.max.Z)]) @ PRINT_ROTATION.T
+    m[:3, 3] = -corners.min(axis=0)
+    return m
+
+
+def export_stl(solid: Solid, path: str | os.PathLike[str], *, tolerance: float = 0.002,
+               angular_tolerance: float = 0.1) -> Path:
+    """Write a binary STL (mm).
+
+    Args:
+        solid: what to write.
+        path: destination.
+        tolerance: linear deflection of the mesh (mm).
+        angular_tolerance: angular deflection (rad).
+    """
+    from build123d import export_stl as _export_stl
+
+    path = Path(path)
+    if not _export_stl(solid, str(path), tolerance=tolerance, angular_tolerance=angular_tolerance):
+        raise OSError(f"could not write {path}")  # pragma: no cover - writer failure
+    return path
+
+
+@dataclass
+class AssemblyPart:
+    """A named solid in an assembly.
+
+    Attributes:
+        name: label (the STEP product / instance name).
+        solid: the solid in its own frame.
+        location: rigid 4x4 placement (mm) relative to the parent.
+        color: (r, g, b) in 0..1, or None.
+    """
+
+    name: str
+    solid: Solid
+    location: np.ndarray
+    color: tuple[float, float, float] | None = None
+
+
+@dataclass
+class AssemblyGroup:
+    """A named sub-assembly.
+
+    Attributes:
+        name: label.
+        children: parts and groups.
+        location: rigid 4x4 placement (mm) relative to the parent (default identity).
+    """
+
+    name: str
+    children: Sequence[AssemblyPart | AssemblyGroup]
+    location: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+
+def _assembly_node(node: AssemblyPart | AssemblyGroup) -> Compound | Solid:
+    if isinstance(node, AssemblyPart):
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+
+        # A copy per part: parts sharing one TShape would be merged into one
+        # product by the writer (one name, one colour, placements lost).
+        shape = Solid(BRepBuilderAPI_Copy(node.solid.wrapped).Shape())
+        shape.label = node.name
+        if node.color is not None:
+            shape.color = Color(*(float(c) for c in node.color))
+        shape.location = matrix_location(node.location)
+        return shape
+    kids = [_assembly_node(c) for c in node.children]
+    comp = Compound(children=kids, label=node.name)
+    comp.location = matrix_location(node.location)
+    return comp
+
+
+def export_assembly(path: str | os.PathLike[str], nodes: Sequence[AssemblyPart | AssemblyGroup],
+                    name: str = "assembly") -> Path:
+    """Write a STEP assembly: named, coloured solids placed by 4x4 matrices in
+    named groups (written through build123d's XCAF exporter: product names,
+    colours and placements survive; identical solids are written once and
+    instanced).
+
+    Args:
+        path: destination file.
+        nodes: parts and groups of the top level.
+        name: label of the root assembly.
+
+    Returns:
+        The path written.
+    """
+    root = Compound(children=[_assembly_node(n) for n in nodes], label=name)
+    path = Path(path)
+    if not _export_step(root, path):  # pragma: no cover - writer failure
+        raise OSError(f"could not write {path}")
+    return path
+
+
+def read_assembly(path: str | os.PathLike[str]) -> list[tuple[str, float]]:
+    """The leaf solids of a STEP file as (label, volume mm^3), depth first
+    (read back through build123d's XCAF importer)."""
+    root = _import_step(Path(path))
+    out: list[tuple[str, float]] = []
+
+    def walk(shape: object) -> None:
+        kids = list(getattr(shape, "children", ()) or ())
+        if kids:
+            for k in kids:
+                walk(k)
+            return
+        for s in shape.solids():  # type: ignore[attr-defined]
+            out.append((getattr(shape, "label", "") or s.label, float(s.volume)))
+
+    walk(root)
+    return out
+
+
+def _trsf_of(matrix: np.ndarray) -> gp_Trsf:
+    """gp_Trsf of a rigid 4x4 matrix."""
+    m = np.asarray(matrix, dtype=float)
+    t = gp_Trsf()
+    t.SetValues(*(float(x) for x in m[:3, :4].reshape(-1)))
+    return t
+
+
+def placed(solid: Solid, matrix: np.ndarray) -> Solid:
+    """A copy of ``solid`` moved by the rigid 4x4 ``matrix`` (geometry baked in, label kept)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+
+    shape = BRepBuilderAPI_Transform(solid.wrapped, _trsf_of(matrix), True).Shape()
+    out = Solid(shape)
+    out.label = solid.label
+    return out

@@ -1,0 +1,542 @@
+"""Fabrication: cavities and ball sockets so every printed rod has its designed mass.
+
+The data flow for one rod (type + target mass), one step per function:
+
+    type     -> achievable_intervals(): once per type (disk-cached), every
+                               symmetric ball subset of the type's socket layout
+                               and the cavity volumes its layouts can remove:
+                               the reachable masses, narrow bands above the solid
+    target   -> plan_rod():       clip to the type's mass range [m_min, m_max]
+                               (:mod:`rodcad.catalog.massrange`); look up the ball
+                               sockets and the cavity volume left to remove in
+                               that table (a target in a gap: the nearest
+                               reachable mass, reported)
+             -> place_cavities():   cavity centres by Poisson-disk (blue-noise) dart
+                               throwing on a seeded candidate pool, every dart
+                               thrown with all its mirror images about the
+                               centre of mass; the symmetric lattice of
+                               :mod:`rodcad.catalog.massrange` is the fallback when the
+                               blue-noise layouts cannot remove enough
+             -> _build():      the cavity radius tuned by a Newton/secant root
+                               solve on the exact B-rep volume (the analytic
+                               volume is the start; 1-2 booleans), walls measured
+                               on the B-rep (BRepExtrema), mass and centre of mass
+                               from the B-rep plus the balls
+    chain    -> fabricate_chain(): identical (type, mass) built once, distinct
+                               rods in worker processes (one task per type),
+                               disk-cached
+             -> write_rod_files(), write_assembly(): STEP/STL, checked on re-read
+
+Void shapes (all printable without support in the print orientation, see
+:data:`rodcad.fabrication.layout.VOIDS`): cavities are spheres cut flat at 45 degrees
+('capped'), sockets are 'silos' (half sphere + cylinder, flat bridged roof)
+all standing on one print layer, so one pause serves all balls. Every layout
+is symmetric about the rod's centre of mass (mirrors across x, y and z, or
+the half turn about the com axis with the z mirror; sockets are raised by
+:func:`rodcad.fabrication.layout.ball_offset` so socket and ball together act at their
+site), so the centre of mass stays where the design assumes.
+
+Print orientation: every rod lies on its side, the rod frame's -y face on the
+bed and +y up (:data:`rodcad.cad.export.PRINT_ROTATION`): hinge layers and pin
+holes then build without support. Curved rods have no flat side but their
+chain-plane faces, which would leave the tongue knuckle in mid-air; they print
+on their side too, resting on the lowest point of their arc (a slicer adds a
+little support under the rising ends; see :attr:`FabricatedRod.print_note`).
+
+Units: mm, mm^3, g; densities g/cm^3.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+import numpy as np
+from rodcad.catalog.cache import DiskCache, make_key
+from rodcad.catalog.massrange import MASSRANGE_VERSION
+from rodcad.fabrication.layout import UP
+from rodcad.parallel import default_jobs, worker_pool
+if TYPE_CHECKING:  # pragma: no cover
+    from rodcad.catalog.model import RodType
+from rodcad.fabrication.cavities import MASS_TOL, POOL_SIZE, RADIUS_FACTOR, SOLVE_TOL, CAPPED_K
+from rodcad.fabrication.intervals import compute_table, intervals_key, interval_table
+from rodcad.fabrication.plan import plan_rod
+
+from rodcad.cad.export import print_matrix
+from rodcad.cad.solids import mass_properties, with_voids
+from rodcad.cad.solids import type_solid
+from rodcad.fabrication.cavities import EDGE_TOL, FABRICATE_VERSION, SOLID_TOL, FabricationError
+
+__all__ = ['FABRICATE_VERSION', 'SOLID_TOL', 'EDGE_TOL', 'FabricationError', 'FabricatedRod', 'ChainFabrication', 'fabricate_rod', 'fabricate_chain', 'write_rod_files', 'mass_colors', 'rod_matrices', 'write_assembly']
+
+
+
+
+
+
+
+
+
+
+@dataclass
+class FabricatedRod:
+    """One printed rod as built.
+
+    Attributes:
+        index: chain position (0-based, as in design.json).
+        type_name: rod type.
+        target_mass: mass asked for (g), before clipping to the range.
+        mass: as-built mass (g): plastic volume x density + balls.
+        com: as-built centre of mass (along, perp) in the rod frame (mm).
+        plastic_volume: printed volume (mm^3) from the final B-rep.
+        filament_mass: plastic mass (g).
+        cavity_count: number of cavities.
+        cavity_radius: their radius (mm), 0 without cavities.
+        ball_count: number of metal balls.
+        ball_diameter: ball diameter (mm) or None without balls.
+        pause_z: print height (mm above the bed) of the (lowest) socket
+            roofs: pause when the print reaches it, drop the balls in, resume;
+            None without balls.
+        pause_zs: every distinct roof height (mm), lowest first: sockets in
+            several rows need one pause per row.
+        mass_error: (mass - clipped target) / clipped target.
+        in_range: whether the target was achievable.
+        message: '' or why not, and what would be needed.
+        solid: final solid in the rod frame (build123d ``Solid``).
+        cavity_centers: (n, 3) cavity centres (mm, rod frame).
+        socket_centers: (k, 3) socket centres (mm, rod frame) = ball centres.
+        socket_radius: socket radius (mm), 0 without balls.
+        min_wall: thinnest wall measured on the B-rep around the voids (mm;
+            inf without voids).
+        layout: how the cavities were placed: 'poisson/<symmetry>',
+            'lattice/<symmetry>' or ''.
+        print_matrix: 4x4 placing the rod-frame solid on the bed (mm).
+        file_stem: 'NN_TYPE' (NN the 0-based index, two digits or more).
+        print_note: remark on the print orientation ('' for flat-lying rods).
+        thickness: rod thickness along the hinge axes (mm), the pin length.
+        pin_diameter: hinge pin diameter (mm).
+    """
+
+    index: int
+    type_name: str
+    target_mass: float
+    mass: float
+    com: tuple[float, float]
+    plastic_volume: float
+    filament_mass: float
+    cavity_count: int
+    cavity_radius: float
+    ball_count: int
+    ball_diameter: float | None
+    pause_z: float | None
+    mass_error: float
+    in_range: bool
+    message: str
+    solid: Any = field(repr=False)
+    cavity_centers: np.ndarray = field(repr=False)
+    socket_centers: np.ndarray = field(repr=False)
+    socket_radius: float = 0.0
+    min_wall: float = math.inf
+    layout: str = ""
+    print_matrix: np.ndarray = field(default_factory=lambda: np.eye(4), repr=False)
+    file_stem: str = ""
+    print_note: str = ""
+    thickness: float = 0.0
+    pin_diameter: float = 0.0
+    pause_zs: tuple[float, ...] = ()
+
+
+@dataclass
+class ChainFabrication:
+    """Every rod of a chain as built.
+
+    Attributes:
+        rods: one per chain position (identical rods share their solid).
+        problems: one sentence per out-of-range rod.
+        distinct: how many distinct rods were built.
+        time_s: wall time (s).
+    """
+
+    rods: list[FabricatedRod]
+    problems: list[str]
+    distinct: int = 0
+    time_s: float = 0.0
+
+
+
+
+def _build(rod: RodType, plan: dict[str, Any]) -> tuple[Any, float, dict[str, Any]]:
+    """The B-rep for a plan, with the cavity radius root-solved on its volume.
+
+    Returns:
+        (solid, cavity radius, measurements).
+    """
+    from rodcad.cad.collision import void_walls
+    from rodcad.cad.solids import mass_properties, void_solids, with_voids
+
+    rho = rod.material.density / 1000.0
+    plain = type_solid(rod)
+    socks = np.array(plan["sockets"], dtype=float).reshape(-1, 3)
+    cavs = np.array(plan["cavities"], dtype=float).reshape(-1, 3)
+    rs = float(plan["socket_radius"])
+    n_balls = len(socks)
+    metal = n_balls * rod.balls.mass if n_balls and rod.balls is not None else 0.0
+    target = float(plan.get("build_mass", plan["mass"]))
+
+    def make(r: float) -> Any:
+        groups = [("silo", socks, rs)] if n_balls else []
+        if len(cavs):
+            groups.append(("capped", cavs, r))
+        return with_voids(plain, groups, rod.name)
+
+    r = float(plan["cavity_radius"])
+    solid = make(r)
+    volume = mass_properties(solid).volume
+    booleans = 1
+    if len(cavs):
+        bound = float(plan["cavity_bound"])
+        for _ in range(4):  # Newton on the B-rep volume, analytic derivative
+            err = (volume * rho + metal - target) / target
+            if abs(err) <= SOLVE_TOL:
+                break
+            dm_dr = -rho * len(cavs) * 3 * CAPPED_K * r * r
+            r = min(r - err * target / dm_dr, bound)
+            solid = make(r)
+            volume = mass_properties(solid).volume
+            booleans += 1
+    props = mass_properties(solid)
+    voids = (void_solids("silo", socks, rs) if n_balls else []) + \
+        (void_solids("capped", cavs, r) if len(cavs) else [])
+    wall = math.inf
+    if voids:
+        to_faces, between = void_walls(plain, voids, rod.material.min_wall + 1.0)
+        wall = min(float(to_faces.min()), between)
+    c = np.array(props.center) * props.volume * rho
+    if n_balls:
+        c = c + rod.balls.mass * socks.sum(axis=0)  # type: ignore[union-attr]
+    mass = props.volume * rho + metal
+    com = c / mass
+    return solid, r, {"volume": props.volume, "mass": mass, "com": [float(com[0]), float(com[1])],
+                      "min_wall": wall, "booleans": booleans}
+
+
+def _key(rod: RodType, target: float, seed: int) -> str:
+    from rodcad.catalog.model import GEOMETRY_VERSION
+
+    return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
+                    asdict(rod.geometry), asdict(rod.material),
+                    asdict(rod.balls) if rod.balls is not None else None, round(float(target), 9), int(seed))
+
+
+def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None]) -> dict[str, Any]:
+    """Worker: plan, build, root-solve and measure one rod; returns numbers only."""
+    rod, target, seed, table = args
+    plan = plan_rod(rod, target, seed, table)
+    _, r, meas = _build(rod, plan)
+    plan["cavity_radius"] = r
+    plan["measured"] = meas
+    return plan
+
+
+def _type_star(args: tuple[RodType, list[float], int, dict[str, Any] | None]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """Worker: the type's table of reachable masses (unless given), then every
+    rod of that type (the type's candidate pools are built once per worker)."""
+    rod, targets, seed, table = args
+    table = table if table is not None else compute_table(rod, seed)
+    return table, [_fabricate_star((rod, m, seed, table)) for m in targets]
+
+
+def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
+                  cache: DiskCache | None = None, _plan_data: dict[str, Any] | None = None) -> FabricatedRod:
+    """Fabricate one rod (see :func:`fabricate_chain`)."""
+
+    cache = cache if cache is not None else DiskCache()
+    plan = _plan_data
+    if plan is None:
+        key = _key(rod, target, seed)
+        plan = cache.get("fab", key)
+        if plan is None:
+            plan = _fabricate_star((rod, target, seed, interval_table(rod, seed, cache)))
+            cache.put("fab", key, plan)
+    return _assemble_result(rod, target, index, plan)
+
+
+def _assemble_result(rod: RodType, target: float, index: int, plan: dict[str, Any]) -> FabricatedRod:
+    """Rebuild the solid from a solved plan (one boolean) and collect the numbers."""
+    rho = rod.material.density / 1000.0
+    socks = np.array(plan["sockets"], dtype=float).reshape(-1, 3)
+    cavs = np.array(plan["cavities"], dtype=float).reshape(-1, 3)
+    rs = float(plan["socket_radius"])
+    r = float(plan["cavity_radius"])
+    groups = ([("silo", socks, rs)] if len(socks) else []) + ([("capped", cavs, r)] if len(cavs) else [])
+    solid = with_voids(type_solid(rod), groups, rod.name)
+    meas = plan["measured"]
+    volume = mass_properties(solid).volume
+    if abs(volume - meas["volume"]) > 1e-6 * meas["volume"]:
+        raise FabricationError(f"rod {index} ({rod.name}): rebuilt volume {volume} differs from the solved "
+                               f"{meas['volume']} mm^3")
+    wall = rod.material.min_wall
+    if meas["min_wall"] < wall - 1e-6:
+        raise FabricationError(f"rod {index} ({rod.name}): a wall of {meas['min_wall']:.3f} mm around a void is "
+                               f"thinner than the minimum {wall} mm")
+    pm = print_matrix(solid)
+    roofs: list[float] = []
+    for z in sorted(socks @ UP + rs + pm[2, 3]):  # rod +y is bed +Z
+        if not roofs or z - roofs[-1] > 1e-6:
+            roofs.append(float(z))
+    pause = roofs[0] if roofs else None
+    goal = float(plan["mass"])
+    mass = float(meas["mass"])
+    if abs(mass - goal) > MASS_TOL * goal:
+        raise FabricationError(f"rod {index} ({rod.name}): built {mass:.4f} g for {goal:.4f} g")
+    note = ""
+    if rod.geometry.curvature != 0:
+        g = rod.geometry
+        rho_c = 1 / abs(g.curvature)
+        sag = rho_c * (1 - math.cos(math.radians(abs(g.half_angle_deg))))
+        note = (f"curved: rests on its arc's lowest point, the ends rise {sag:.1f} mm (the underside overhangs up "
+                f"to {abs(g.half_angle_deg):.0f} deg from the bed; add support under the ends)")
+    return FabricatedRod(
+        index=index, type_name=rod.name, target_mass=float(target), mass=mass,
+        com=(float(meas["com"][0]), float(meas["com"][1])), plastic_volume=float(meas["volume"]),
+        filament_mass=float(meas["volume"]) * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
+        ball_count=len(socks), ball_diameter=rod.balls.diameter if len(socks) and rod.balls else None,
+        pause_z=pause, mass_error=(mass - goal) / goal, in_range=not plan["message"], message=plan["message"],
+        solid=solid, cavity_centers=cavs, socket_centers=socks, socket_radius=rs if len(socks) else 0.0,
+        min_wall=float(meas["min_wall"]), layout=plan["layout"], print_matrix=pm,
+        file_stem=f"{index:02d}_{rod.name}", print_note=note, thickness=rod.geometry.thickness,
+        pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs))
+
+
+def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: int = 0, jobs: int | None = None,
+                    progress: Callable[[int, int], None] | None = None,
+                    cache: DiskCache | None = None) -> ChainFabrication:
+    """Cavities and ball sockets for every rod of a chain, built on the B-rep.
+
+    Identical rods (same type, same target mass to 1 microgram) are built
+    once and share their solid; distinct ones are solved in ``jobs`` worker
+    processes (default: the CPUs) and cached on disk. Out-of-range targets are
+    clipped to the type's range, built, and reported in ``problems``.
+
+    Args:
+        types: rod type per chain position.
+        masses: target mass per position (g).
+        seed: seed of the Poisson-disk layouts (same input, same output).
+        jobs: worker processes.
+        progress: called with (done, total) distinct rods.
+        cache: disk cache (default :class:`DiskCache`).
+
+    Returns:
+        The :class:`ChainFabrication`; e.g. ``all(abs(r.mass_error) < 1e-3 for r in fab.rods)``.
+
+    Raises:
+        FabricationError: a built rod failed its checks (mass, walls, rebuild).
+    """
+
+    t0 = time.perf_counter()
+    if len(types) != len(masses):
+        raise ValueError(f"{len(types)} rod types but {len(masses)} masses")
+    cache = cache if cache is not None else DiskCache()
+    keys: dict[tuple[str, float], int] = {}
+    distinct: list[tuple[RodType, float]] = []
+    where: list[int] = []
+    for rod, m in zip(types, masses):
+        k = (rod.name, round(float(m), 6))
+        if k not in keys:
+            keys[k] = len(distinct)
+            distinct.append((rod, float(m)))
+        where.append(keys[k])
+    plans: list[dict[str, Any] | None] = []
+    todo: list[int] = []
+    for i, (rod, m) in enumerate(distinct):
+        hit = cache.get("fab", _key(rod, m, seed))
+        plans.append(hit)
+        if hit is None:
+            todo.append(i)
+    done = len(distinct) - len(todo)
+    if progress:
+        progress(done, len(distinct))
+    # One task per rod type (its table of reachable masses, then its rods), so
+    # each worker builds a type's candidate pools once; a type with more than
+    # its share of the rods is split so every worker has work.
+    by_type: dict[str, list[int]] = {}
+    for i in todo:
+        by_type.setdefault(distinct[i][0].name, []).append(i)
+    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
+    share = max(1, math.ceil(len(todo) / jobs)) if len(by_type) < jobs else len(todo)
+    tasks: list[list[int]] = []
+    for idx in by_type.values():
+        tasks += [idx[k:k + share] for k in range(0, len(idx), share)]
+    tasks.sort(key=len, reverse=True)
+    tables: dict[str, dict[str, Any] | None] = {}
+    for idx in tasks:
+        rod = distinct[idx[0]][0]
+        if rod.name not in tables:
+            hit = cache.get("fabint", intervals_key(rod, seed))
+            tables[rod.name] = hit if isinstance(hit, dict) and "options" in hit else None
+    pool = worker_pool(jobs) if jobs > 1 and len(tasks) > 1 else None
+    try:
+        args = [(distinct[idx[0]][0], [distinct[i][1] for i in idx], seed, tables[distinct[idx[0]][0].name])
+                for idx in tasks]
+        results = pool.map(_type_star, args, chunksize=1) if pool is not None else map(_type_star, args)
+        for idx, (table, res) in zip(tasks, results):
+            rod = distinct[idx[0]][0]
+            if tables[rod.name] is None:
+                tables[rod.name] = table
+                cache.put("fabint", intervals_key(rod, seed), table)
+            for i, plan in zip(idx, res):
+                plans[i] = plan
+                cache.put("fab", _key(distinct[i][0], distinct[i][1], seed), plan)
+                done += 1
+                if progress:
+                    progress(done, len(distinct))
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    built = [_assemble_result(rod, m, 0, plans[i]) for i, (rod, m) in enumerate(distinct)]
+    rods: list[FabricatedRod] = []
+    problems: list[str] = []
+    for index, (rod, m) in enumerate(zip(types, masses)):
+        b = built[where[index]]
+        fr = FabricatedRod(**{**b.__dict__, "index": index, "target_mass": float(m),
+                              "file_stem": f"{index:02d}_{rod.name}"})
+        rods.append(fr)
+        if fr.message:
+            problems.append(f"Rod {index} ({rod.name}): {fr.message}.")
+    return ChainFabrication(rods, problems, len(distinct), time.perf_counter() - t0)
+
+
+def _check_files(step: Path, stl: Path, volume: float) -> None:
+    import trimesh
+
+    from rodcad.cad.export import import_step
+    from rodcad.cad.solids import is_valid_solid
+
+    back = import_step(step)
+    if not is_valid_solid(back):
+        raise FabricationError(f"{step} does not re-import as a valid solid")
+    if abs(back.volume - volume) > 1e-6 * volume:
+        raise FabricationError(f"{step} re-imports with volume {back.volume:.4f} instead of {volume:.4f} mm^3")
+    mesh = trimesh.load(str(stl), force="mesh")
+    if not mesh.is_watertight:
+        # OCCT's sphere poles give zero-area triangles: drop them and rewrite.
+        mesh.update_faces(mesh.nondegenerate_faces())
+        mesh.remove_unreferenced_vertices()
+        mesh.merge_vertices()
+        if mesh.is_watertight:
+            mesh.export(str(stl), file_type="stl")
+            mesh = trimesh.load(str(stl), force="mesh")
+    if not mesh.is_watertight:
+        raise FabricationError(f"{stl} is not watertight")
+    if abs(mesh.volume - volume) > MASS_TOL * volume:
+        raise FabricationError(f"{stl} encloses {mesh.volume:.3f} mm^3, the solid {volume:.3f} mm^3 "
+                               f"({(mesh.volume - volume) / volume:+.2%})")
+
+
+def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
+    """Write outdir/rods/NN_TYPE.step and .stl for every chain position.
+
+    NN is the rod's 0-based index (as in design.json), two digits or more.
+    The solids are in print orientation on the bed (rod frame +y up, the -y
+    face on Z = 0, see :data:`rodcad.cad.export.PRINT_ROTATION`). Rods that share
+    a solid are written and checked once, then copied. Checks: the STEP
+    re-imports as one valid solid of the same volume (1e-6), the STL is
+    watertight and encloses the B-rep's volume within 0.1 %.
+
+    Returns:
+        The paths written (STEP, STL per rod).
+
+    Raises:
+        FabricationError: a check failed.
+    """
+    from rodcad.cad.export import export_step, export_stl, transformed
+
+    rods_dir = Path(outdir) / "rods"
+    rods_dir.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    first: dict[int, tuple[Path, Path]] = {}
+    for r in fab.rods:
+        step = rods_dir / f"{r.file_stem}.step"
+        stl = rods_dir / f"{r.file_stem}.stl"
+        src = first.get(id(r.solid))
+        if src is None:
+            on_bed = transformed(r.solid, r.print_matrix)
+            export_step(on_bed, step, r.file_stem)
+            export_stl(on_bed, stl)
+            _check_files(step, stl, r.plastic_volume)
+            first[id(r.solid)] = (step, stl)
+        else:
+            shutil.copyfile(src[0], step)
+            shutil.copyfile(src[1], stl)
+        written += [step, stl]
+    return written
+
+
+def mass_colors(masses: Sequence[float]) -> list[tuple[float, float, float]]:
+    """(r, g, b) per mass from blue (lightest) to red (heaviest) (matplotlib 'coolwarm')."""
+    import matplotlib
+
+    m = np.asarray(masses, dtype=float)
+    lo, hi = float(m.min()), float(m.max())
+    t = (m - lo) / (hi - lo) if hi - lo > 1e-12 * max(hi, 1.0) else np.full(len(m), 0.5)
+    cmap = matplotlib.colormaps["coolwarm"]
+    return [tuple(float(c) for c in cmap(v)[:3]) for v in t]
+
+
+def rod_matrices(points: np.ndarray) -> list[np.ndarray]:
+    """4x4 placement of each rod frame: origin at points[i], x towards points[i+1], z = +z."""
+    pts = np.asarray(points, dtype=float)
+    out = []
+    for p, q in zip(pts[:-1], pts[1:]):
+        d = q - p
+        c, s = d / np.hypot(*d)
+        m = np.eye(4)
+        m[:2, :2] = [[c, -s], [s, c]]
+        m[:2, 3] = p
+        out.append(m)
+    return out
+
+
+def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain") -> Path:
+    """Write the chain in its simulated pose as a STEP assembly.
+
+    Each rod is a solid named 'NN_TYPE' (its rods/ file stem), placed with its
+    frame origin at ``points[i]`` and x along points[i] -> points[i+1] (chain
+    plane xy, y up, hinge axes along z), coloured by mass from blue (lightest)
+    to red (heaviest); every joint gets a pin 'pin_NN' (pin diameter, through
+    the rod thickness).
+
+    Args:
+        fab: the fabricated chain.
+        points: (N+1, 2) joint positions (mm).
+        path: destination file.
+        name: root assembly name.
+    """
+    from rodcad.cad.export import AssemblyPart, export_assembly
+    from rodcad.cad.frame import pin_solid
+
+    pts = np.asarray(points, dtype=float)
+    if pts.shape != (len(fab.rods) + 1, 2):
+        raise ValueError(f"points must have shape ({len(fab.rods) + 1}, 2), not {pts.shape}")
+    colors = mass_colors([r.mass for r in fab.rods])
+    nodes: list[Any] = []
+    for r, m, col in zip(fab.rods, rod_matrices(pts), colors):
+        nodes.append(AssemblyPart(r.file_stem, r.solid, m, col))
+    for j, p in enumerate(pts):
+        rod = fab.rods[min(j, len(fab.rods) - 1)]
+        hinge_t, pin_d = _pin_size(rod)
+        m = np.eye(4)
+        m[:2, 3] = p
+        m[2, 3] = -hinge_t / 2
+        nodes.append(AssemblyPart(f"pin_{j:02d}", pin_solid(pin_d, hinge_t), m,
+                                           (0.75, 0.75, 0.78)))
+    return export_assembly(path, nodes, name)
+
+
+def _pin_size(rod: FabricatedRod) -> tuple[float, float]:
+    """(length, diameter) of a pin through a rod (its thickness, the pin diameter)."""
+    return rod.thickness, rod.pin_diameter

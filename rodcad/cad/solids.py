@@ -1,0 +1,332 @@
+"""Exact rod solids and the kernel queries on them (build123d / OCP).
+
+This is the only module of rodcad that imports build123d or OCP; everything
+else works with the plain parameters of :class:`rodcad.catalog.model.RodGeometry` and
+the results returned here.
+
+A rod is built in the rod frame (first hinge axis through the origin, second
+through (length, 0, 0), axes along +z, chain plane xy) as:
+
+1. the body: a bar of section height x thickness along the centreline (a
+   straight segment, or an arc of the given curvature through both hinge axes,
+   continued by straight tangent stubs past them);
+2. the end faces: per end, a top (+y) and a bottom half-plane through the point
+   ``setback`` behind the hinge axis, tilted by the chamfer angles
+   (:class:`rodcad.catalog.model.EndShape`); everything beyond them is cut off;
+3. the hinge: a tongue knuckle (disc of ``knuckle_radius`` in the middle layer)
+   at one end and a fork (two discs in the outer layers) at the other; around
+   each axis the layers the partner's knuckle uses are cleared out to the
+   hinge-zone radius ``knuckle_radius + radial_gap``, so two joined rods never
+   touch inside the hinge zone at any angle;
+4. the pin holes (pins are separate parts).
+
+Every boolean step is followed by a validity check. All lengths in mm, angles in
+degrees unless a name says ``_rad``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+import numpy as np
+from build123d import CenterOf, Location, Plane, Solid, Vector, Wire, Face
+from rodcad.catalog.model import RodGeometry, RodType
+from rodcad.errors import InputError
+
+
+__all__ = ['CONTACT_TOL', 'GeometryError', 'build_rod', 'rod_solid', 'hinge_zone', 'collision_proxy', 'MassProperties', 'mass_properties', 'with_spherical_voids', 'is_valid_solid', 'void_template', 'void_solids', 'with_voids',]
+
+
+#: Distances at or below this count as contact (mm).
+CONTACT_TOL = 1e-6
+
+
+class GeometryError(ValueError):
+    """The parameters make no valid solid."""
+
+
+def prism_solid(points: Sequence[Sequence[float]], z0: float, z1: float) -> Solid:
+    """Extrude a closed xy polygon from z0 to z1."""
+    wire = Wire.make_polygon([Vector(p[0], p[1], z0) for p in points], close=True)
+    return Solid.extrude(Face(wire), Vector(0, 0, z1 - z0))
+
+
+def cylinder_solid(center: Sequence[float], radius: float, z0: float, z1: float) -> Solid:
+    return Solid.make_cylinder(radius, z1 - z0, Plane((center[0], center[1], z0)))
+
+
+def one_solid(shape: object, step: str) -> Solid:
+    """The single valid solid ``shape`` should be after ``step``."""
+    solids = shape.solids()  # type: ignore[attr-defined]
+    if len(solids) != 1:
+        raise GeometryError(f"{step} leaves {len(solids)} separate pieces instead of one rod")
+    solid = solids[0]
+    if not solid.is_valid:
+        raise GeometryError(f"{step} gives an invalid solid")
+    return solid
+
+
+def _frame(g: RodGeometry, joint: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pin position P, outward tangent u and the rod's +y normal v at a joint."""
+    psi = math.radians(g.half_angle_deg)
+    if joint == 0:
+        p = np.array([0.0, 0.0])
+        forward = np.array([math.cos(-psi), math.sin(-psi)])
+        u = -forward
+    else:
+        p = np.array([g.length, 0.0])
+        forward = np.array([math.cos(psi), math.sin(psi)])
+        u = forward
+    v = np.array([-forward[1], forward[0]])
+    return p, u, v
+
+
+def _stub_length(g: RodGeometry) -> float:
+    """How far the raw body continues past each hinge axis before the end cut."""
+    return 1.2 * g.height + 2.0
+
+
+def _body(g: RodGeometry) -> Solid:
+    """The raw bar: centreline segment or arc plus straight stubs past the axes."""
+    h, t, L = g.height, g.thickness, g.length
+    stub = _stub_length(g)
+    z0, z1 = -t / 2, t / 2
+    if g.curvature == 0:
+        return Solid.make_box(L + 2 * stub, h, t, Plane((-stub, -h / 2, z0)))
+    rho = 1 / abs(g.curvature)
+    sigma = 1 if g.curvature > 0 else -1
+    psi = math.radians(abs(g.half_angle_deg))
+    centre = (L / 2, sigma * rho * math.cos(psi))
+    # The arc runs from the first axis to the second, around -90 deg (sigma=+1)
+    # or +90 deg (sigma=-1) as seen from the centre.
+    mid = -90.0 if sigma > 0 else 90.0
+    start = mid - math.degrees(psi)
+    s = math.radians(start)
+    plane = Plane((centre[0], centre[1], z0), x_dir=(math.cos(s), math.sin(s), 0), z_dir=(0, 0, 1))
+    outer = Solid.make_cylinder(rho + h / 2, t, plane, angle=2 * math.degrees(psi))
+    inner = Solid.make_cylinder(rho - h / 2, t + 2, Plane((centre[0], centre[1], z0 - 1)))
+    band = one_solid(outer.cut(inner), "the curved body")
+    parts = [band]
+    for joint in (0, 1):
+        p, u, v = _frame(g, joint)
+        a, b = p - v * h / 2, p + v * h / 2
+        parts.append(prism_solid([a, a + u * stub, b + u * stub, b], z0, z1))
+    return one_solid(parts[0].fuse(*parts[1:]).clean(), "the curved body with its stubs")
+
+
+def _end_cuts(g: RodGeometry) -> list[Solid]:
+    """Prisms removing everything beyond the end faces (top and bottom, both ends)."""
+    h, t = g.height, g.thickness
+    stub = _stub_length(g) + 1.0
+    out = []
+    for joint, end in ((0, g.first), (1, g.second)):
+        p, u, v = _frame(g, joint)
+        a = p - end.setback * u
+        for side, chamfer in ((1, end.top_chamfer), (-1, end.bottom_chamfer)):
+            n = side * v
+            tan_b = math.tan(math.radians(chamfer))
+            reach = h / 2 + 1.0
+            behind = reach * max(tan_b, 0.0)
+            reach += behind**2 * abs(g.curvature) / 2 + 1.0  # covers the arc bending away
+            top = a + n * reach - u * reach * tan_b
+            pts = [a, a + u * stub, a + u * stub + n * reach, top]
+            out.append(prism_solid(pts, -t, t))
+    return out
+
+
+def build_rod(g: RodGeometry, name: str = "") -> Solid:
+    """Build a rod's exact B-rep solid in the rod frame.
+
+    Args:
+        g: the rod's geometry.
+        name: label of the solid (becomes the STEP product name).
+
+    Returns:
+        A valid build123d ``Solid``.
+
+    Raises:
+        GeometryError: when a step gives no single valid solid.
+    """
+    t = g.thickness
+    hg = g.hinge
+    a = hg.tongue_thickness / 2
+    gap = hg.layer_gap
+    body = _body(g)
+    for cut in _end_cuts(g):
+        body = one_solid(body.cut(cut), "cutting the end faces (chamfers too steep for this length "
+                          "and curvature?)")
+    knuckles = []
+    for joint in (0, 1):
+        p, _, _ = _frame(g, joint)
+        if hg.knuckle(joint) == "tongue":
+            knuckles.append(cylinder_solid(p, hg.knuckle_radius, -a, a))
+        else:
+            knuckles.append(cylinder_solid(p, hg.knuckle_radius, a + gap, t / 2))
+            knuckles.append(cylinder_solid(p, hg.knuckle_radius, -t / 2, -a - gap))
+    body = one_solid(body.fuse(*knuckles).clean(), "adding the knuckles")
+    clear = []
+    for joint in (0, 1):
+        p, _, _ = _frame(g, joint)
+        r = hg.zone_radius
+        if hg.knuckle(joint) == "tongue":  # room for the partner's fork prongs
+            clear.append(cylinder_solid(p, r, a, t / 2 + 1))
+            clear.append(cylinder_solid(p, r, -t / 2 - 1, -a))
+        else:  # slot for the partner's tongue
+            clear.append(cylinder_solid(p, r, -a - gap, a + gap))
+        clear.append(cylinder_solid(p, hg.hole_diameter / 2, -t / 2 - 1, t / 2 + 1))
+    for cut in clear:
+        body = one_solid(body.cut(cut), "clearing the hinge zones and pin holes")
+    body = one_solid(body.clean(), "cleaning up")
+    body.label = name
+    return body
+
+
+@lru_cache(maxsize=128)
+def rod_solid(g: RodGeometry, name: str = "") -> Solid:
+    """:func:`build_rod`, cached per process. Do not modify the result."""
+    return build_rod(g, name)
+
+
+def hinge_zone(g: RodGeometry, joint: int) -> Solid:
+    """The full-thickness cylinder of the hinge zone around a joint's axis."""
+    p, _, _ = _frame(g, joint)
+    t = g.thickness
+    return cylinder_solid(p, g.hinge.zone_radius, -t, t)
+
+
+@lru_cache(maxsize=128)
+def collision_proxy(g: RodGeometry, joint: int) -> Solid:
+    """The rod without the hinge zone around ``joint`` (0 or 1).
+
+    Two rods joined at that hinge interfere exactly when their proxies do: by
+    construction, inside the hinge zone one rod only has material in the layers
+    the other rod has cleared, at every angle, and material inside the zone
+    cannot meet material outside it. The proxies are smaller and, unlike the
+    full solids, their distance is not stuck at the layer gap, which lets the
+    limit search take safe steps.
+    """
+    return one_solid(rod_solid(g).cut(hinge_zone(g, joint)).clean(), "cutting the hinge zone")
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Exact B-rep mass properties of a solid of uniform density.
+
+    Attributes:
+        volume: mm^3.
+        center: centre of mass (x, y, z) in mm.
+    """
+
+    volume: float
+    center: tuple[float, float, float]
+
+
+def mass_properties(solid: Solid) -> MassProperties:
+    """Volume and centre of mass from the B-rep (build123d / OCP GProp)."""
+    c = solid.center(CenterOf.MASS)
+    return MassProperties(float(solid.volume), (float(c.X), float(c.Y), float(c.Z)))
+
+
+def with_spherical_voids(solid: Solid, centers: np.ndarray, radius: float, name: str = "") -> Solid:
+    """The solid with closed spherical voids (cavities or ball sockets) cut out.
+
+    Args:
+        solid: the rod solid.
+        centers: (n, 3) sphere centres (mm); the spheres must lie inside.
+        radius: sphere radius (mm).
+        name: label of the result.
+
+    Raises:
+        GeometryError: if the result is not one valid solid.
+    """
+    spheres = [Solid.make_sphere(radius, Plane((float(x), float(y), float(z)))) for x, y, z in centers]
+    if not spheres:
+        return solid
+    result = one_solid(solid.cut(*spheres), "cutting spherical voids")
+    result.label = name or solid.label
+    return result
+
+
+def is_valid_solid(shape: object) -> bool:
+    """True for a single valid closed solid."""
+    try:
+        solids = shape.solids()  # type: ignore[attr-defined]
+    except AttributeError:
+        return False
+    return len(solids) == 1 and bool(solids[0].is_valid)
+
+
+def void_template(kind: str, radius: float) -> Solid:
+    """One void of shape ``kind`` around the origin (see :data:`rodcad.fabrication.layout.VOIDS`).
+
+    The print's up direction is the rod frame's +y: 'capped' is the sphere cut
+    flat at y = +-r/sqrt(2) (overhangs at most 45 degrees, a bridged roof of
+    diameter r sqrt(2)); 'silo' is the lower half sphere plus a cylinder of the
+    same radius from y = 0 to y = r (a flat roof bridged over the ball);
+    'sphere' is the plain sphere.
+
+    Args:
+        kind: 'sphere', 'capped' or 'silo'.
+        radius: mm.
+    """
+    sphere = Solid.make_sphere(radius)
+    if kind == "sphere":
+        return sphere
+    if kind == "capped":
+        h = radius / math.sqrt(2)
+        slab = Solid.make_box(2 * radius + 2, 2 * h, 2 * radius + 2, Plane((-radius - 1, -h, -radius - 1)))
+        return one_solid(sphere.intersect(slab), "capping a cavity")
+    if kind == "silo":
+        up = Plane((0, 0, 0), x_dir=(1, 0, 0), z_dir=(0, 1, 0))
+        return one_solid(sphere.fuse(Solid.make_cylinder(radius, radius, up)).clean(), "shaping a ball socket")
+    raise GeometryError(f"unknown void shape {kind!r}")
+
+
+def void_solids(kind: str, centers: np.ndarray, radius: float) -> list[Solid]:
+    """Voids of one shape and radius placed at ``centers`` ((n, 3), mm)."""
+    if len(centers) == 0:
+        return []
+    tpl = void_template(kind, radius)
+    return [tpl.moved(Location((float(x), float(y), float(z)))) for x, y, z in np.asarray(centers, dtype=float)]
+
+
+def with_voids(solid: Solid, voids: Sequence[tuple[str, np.ndarray, float]], name: str = "") -> Solid:
+    """The solid with closed voids cut out, each checked to stay closed.
+
+    Args:
+        solid: the rod solid.
+        voids: (shape, centres (n, 3), radius) groups, see :func:`void_template`.
+        name: label of the result (default: the solid's).
+
+    Raises:
+        GeometryError: the result is not one valid solid, or a void broke the
+            surface or merged with another (the shell count is off).
+    """
+    tools = [v for kind, centers, radius in voids for v in void_solids(kind, centers, radius)]
+    if not tools:
+        return solid
+    result = one_solid(solid.cut(*tools), "cutting the cavities and ball sockets")
+    shells = len(result.shells())
+    if shells != 1 + len(tools):
+        raise GeometryError(f"cutting {len(tools)} closed voids leaves {shells - 1} inner surfaces: a void "
+                            "breaks an outer face or touches another")
+    result.label = name or solid.label
+    return result
+
+
+
+
+def type_solid(rod: RodType) -> Solid:
+    """The exact B-rep solid of a catalog rod type in the rod frame, labelled with the
+    type's name. Built once per process.
+
+    Raises:
+        InputError: when the parameters make no valid solid (pointing at the family
+            in the catalog).
+    """
+    try:
+        return rod_solid(rod.geometry, rod.name)
+    except GeometryError as err:
+        raise InputError([rod.origin.problem(f"rod type {rod.name!r}: {err}")]) from None

@@ -1,0 +1,401 @@
+"""Reading a catalog: resolve a shipped name or a path, validate it, apply defaults and
+expand each family into named rod types, with FILE:LINE:COL for every problem.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from rodcad.catalog.cache import register_seed
+from rodcad.errors import InputError, Problem
+from rodcad.yamlio import MISSING, Pos, Validator, suggest, child_path, format_number, load_yaml
+from rodcad.yamlspec import Checked, check_document
+from rodcad.yamlspec import Nullable, Obj
+if TYPE_CHECKING:  # pragma: no cover
+    pass
+from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
+from rodcad.catalog.model import Balls, CATALOG_FORMAT, Catalog, EndShape, Family, Hinge, MAX_ARC_HALF_ANGLE_DEG, Material, Origin, Printer, RodGeometry, RodType
+from rodcad.catalog.spec import family_spec, catalog_spec
+
+__all__ = ['default_catalog_dir', 'shipped_catalogs', 'resolve_catalog', 'load_catalog', 'catalog_from_text']
+
+
+def resolve_catalog(name_or_path: str | Path, base_dir: str | Path | None = None) -> Path:
+    """Find a catalog file from a path or a shipped catalog's name.
+
+    Args:
+        name_or_path: a path to a YAML file, or a name such as ``pla-pinned``
+            (looked up as ``<base_dir>/<name>.yaml``).
+        base_dir: folder of named catalogs (default: :func:`default_catalog_dir`).
+
+    Returns:
+        The catalog file's path (as given when it exists).
+
+    Raises:
+        InputError: nothing found, with the names of the shipped catalogs.
+    """
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    folder = Path(base_dir) if base_dir is not None else default_catalog_dir()
+    text = str(name_or_path)
+    if "/" not in text and "\\" not in text:
+        stem = text[:-5] if text.endswith(".yaml") else text[:-4] if text.endswith(".yml") else text
+        for suffix in (".yaml", ".yml"):
+            candidate = folder / f"{stem}{suffix}"
+            if candidate.is_file():
+                return candidate
+    names = shipped_catalogs(folder)
+    hint = suggest(text, names).replace("expected one of", "shipped catalogs")
+    if path.is_dir():
+        raise InputError([Problem(text, 0, 0, "", "is a directory, expected a catalog file")])
+    raise InputError([Problem(text, 0, 0, "", f"no such catalog file or shipped catalog{hint}")])
+
+
+def load_catalog(name_or_path: str | Path, base_dir: str | Path | None = None) -> Catalog:
+    """Load and validate a catalog.
+
+    Everything is checked at once: unknown keys, wrong types, out-of-range
+    values and parameters that make no solid (knuckle wider than the rod, wall
+    thicker than half the section, ends that cut through the rod, ...).
+
+    Args:
+        name_or_path: a catalog file or a shipped catalog's name (see
+            :func:`resolve_catalog`).
+        base_dir: folder of named catalogs.
+
+    Returns:
+        The catalog, its families expanded into rod types.
+
+    Raises:
+        InputError: every problem as ``FILE:LINE:COL: key.path: message``.
+
+    A ``<stem>.cache.json`` next to the file (precomputed limits and masses,
+    ``rodcad catalog precompute``) is registered as a seed of the disk cache.
+    """
+    path = resolve_catalog(name_or_path, base_dir)
+    display = str(name_or_path) if Path(name_or_path) == path else str(path)
+    doc = check_document(load_yaml(path, display), catalog_spec(), filename=display, defer=True)
+    catalog = _build(doc, path)
+    seed = path.with_name(f"{path.stem}.cache.json")
+    if seed.is_file():
+        register_seed(seed)
+    return catalog
+
+
+def catalog_from_text(text: str, filename: str = "<catalog>") -> Catalog:
+    """Validate catalog YAML given as text (for tests and tools)."""
+    from rodcad.yamlio import load_yaml_text
+
+    doc = check_document(load_yaml_text(text, filename), catalog_spec(), filename=filename, defer=True)
+    return _build(doc, None)
+
+
+def _merge(base: Any, over: Any, base_path: str, over_path: str, sources: dict[str, str], rel: str) -> Any:
+    """Deep-merge ``over`` onto ``base`` (mappings key by key, anything else
+    replaced), recording for every leaf which key path it came from."""
+    if isinstance(base, dict) and isinstance(over, dict):
+        out: dict[str, Any] = {}
+        for key in list(base) + [k for k in over if k not in base]:
+            r = child_path(rel, key)
+            if key in over and key in base:
+                out[key] = _merge(base[key], over[key], child_path(base_path, key),
+                                  child_path(over_path, key), sources, r)
+            elif key in over:
+                out[key] = _record(over[key], child_path(over_path, key), sources, r)
+            else:
+                out[key] = _record(base[key], child_path(base_path, key), sources, r)
+        sources[rel] = over_path
+        return out
+    return _record(over, over_path, sources, rel)
+
+
+def _record(value: Any, path: str, sources: dict[str, str], rel: str) -> Any:
+    sources[rel] = path
+    if isinstance(value, dict):
+        for key, val in value.items():
+            _record(val, child_path(path, key), sources, child_path(rel, key))
+    elif isinstance(value, list):
+        for i, val in enumerate(value):
+            _record(val, child_path(path, i), sources, child_path(rel, i))
+    return copy.deepcopy(value)
+
+
+def _complete(spec: Obj, value: dict[str, Any], rel: str, missing: list[str]) -> None:
+    """Fill defaults into ``value`` and list required keys still missing."""
+    for key, f in spec.fields.items():
+        r = child_path(rel, key)
+        if key not in value:
+            if f.required:
+                missing.append(r)
+                continue
+            if f.default is MISSING:
+                continue
+            value[key] = copy.deepcopy(f.default)
+        sub = f.spec.inner if isinstance(f.spec, Nullable) else f.spec
+        if isinstance(sub, Obj) and isinstance(value.get(key), dict):
+            _complete(sub, value[key], r, missing)
+
+
+@dataclass
+class _FamilyContext:
+    """Reports problems about one family at the position each value came from."""
+
+    v: Validator
+    name: str
+    index: int
+    sources: dict[str, str]
+    seen: set[tuple[str, str]] = field(default_factory=set)
+
+    @property
+    def path(self) -> str:
+        return f"families[{self.index}]"
+
+    def source(self, rel: str) -> str:
+        while rel and rel not in self.sources:
+            rel = rel.rsplit(".", 1)[0] if "." in rel else ""
+        return self.sources.get(rel, self.path)
+
+    def report(self, rel: str, message: str) -> None:
+        key = self.source(rel) if rel else self.path
+        if not (key == self.path or key.startswith((self.path + ".", self.path + "["))):
+            message = f"{message} (in family {self.name!r})"
+        if (key, message) in self.seen:
+            return
+        self.seen.add((key, message))
+        self.v.report_at(key, message, fallback=self.path)
+
+    def origin(self, rel: str = "") -> Origin:
+        key = self.source(rel) if rel else self.path
+        pos = self.v.positions.get(key, self.v.positions.get(self.path, Pos()))
+        return Origin(self.v.filename, key, pos.line, pos.column)
+
+
+def _build(doc: Checked, path: Path | None) -> Catalog:
+    """Expand a schema-checked document into a catalog, running the cross-field
+    checks on every family whose own keys (and the defaults) checked cleanly."""
+    v = doc.validator
+    schema_failed = set(v.failed)
+    data = doc.value if isinstance(doc.value, dict) else {}
+    if "catalog" in data and data["catalog"] != CATALOG_FORMAT:
+        v.report_at("catalog", f"unsupported catalog format {data['catalog']} "
+                    f"(this rodcad reads format {CATALOG_FORMAT})")
+    full = family_spec()
+    defaults = data.get("defaults", {})
+    defaults_ok = v.ok("defaults", schema_failed)
+    printer = None
+    if "printer" in data and v.ok("printer", schema_failed):
+        p = data["printer"]
+        bv = p["build_volume"]
+        if len(bv) != 3:
+            v.report_at("printer.build_volume", f"expected 3 numbers (x, y, z), got {len(bv)}")
+        else:
+            printer = Printer(tuple(bv), p["nozzle"], p.get("name", ""))  # type: ignore[arg-type]
+
+    types: list[RodType] = []
+    families: list[Family] = []
+    family_names: dict[str, int] = {}
+    type_names: dict[str, str] = {}
+    entries = data.get("families")
+    for i, entry in enumerate(entries if isinstance(entries, list) else []):
+        fpath = f"families[{i}]"
+        if not isinstance(entry, dict) or "name" not in entry:
+            continue
+        sources: dict[str, str] = {}
+        merged = _merge(defaults, entry, "defaults", fpath, sources, "")
+        ctx = _FamilyContext(v, entry["name"], i, sources)
+        if entry["name"] in family_names:
+            ctx.report("name", f"duplicate family name {entry['name']!r} "
+                       f"(also families[{family_names[entry['name']]}])")
+            continue
+        family_names[entry["name"]] = i
+        if not (defaults_ok and v.ok(fpath, schema_failed)):
+            continue  # its schema problems are reported; cross-checks would add noise
+        missing: list[str] = []
+        _complete(full, merged, "", missing)
+        for key in missing:
+            v.report_at(fpath, f"missing required key {key!r} (give it in the family or under 'defaults')")
+        if missing:
+            continue
+        family_types = _expand(merged, ctx, printer)
+        for t in family_types:
+            if t.name in type_names:
+                v.report(Pos(t.origin.line, t.origin.column), t.origin.key,
+                         f"rod type name {t.name!r} is also made by {type_names[t.name]}")
+                continue
+            type_names[t.name] = f"family {merged['name']!r}"
+            types.append(t)
+        families.append(Family(merged["name"], merged.get("description", ""),
+                               tuple(t.name for t in family_types), ctx.origin()))
+    v.raise_if_any()
+    return Catalog(data["name"], data.get("description", ""), path, tuple(types), tuple(families), printer)
+
+
+def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None) -> list[RodType]:
+    """The rod types of one complete family, after cross-field checks."""
+    sec, jt, ends, mat = f["section"], f["joint"], f["ends"], f["material"]
+    material = Material(mat.get("name", ""), mat["density"], mat["min_wall"])
+    balls = None
+    if f.get("balls") is not None:
+        b = f["balls"]
+        balls = Balls(b["diameter"], b["density"], b.get("clearance", 0.2), b.get("name", ""))
+
+    def end(which: str) -> EndShape:
+        over = ends.get(which, {})
+        return EndShape(
+            over.get("setback", ends["setback"]),
+            over.get("top_chamfer", ends["top_chamfer"]),
+            over.get("bottom_chamfer", ends["bottom_chamfer"]),
+        )
+
+    def end_key(which: str, key: str) -> str:
+        return f"ends.{which}.{key}" if key in ends.get(which, {}) else f"ends.{key}"
+
+    first, second = end("first"), end("second")
+    w = material.min_wall
+    if printer is not None and w < printer.nozzle:
+        ctx.report("material.min_wall", f"minimum wall {format_number(w)} mm is thinner than the "
+                   f"printer's nozzle ({format_number(printer.nozzle)} mm)")
+    multi_scale = len(f["scale"]) > 1
+    multi_curv = len(f["curvature"]) > 1
+    out: list[RodType] = []
+    ok = True
+    per_scale: dict[int, tuple[float, float, Hinge, str]] = {}
+    for si, scale in enumerate(f["scale"]):
+        h, t = sec["height"] * scale, sec["thickness"] * scale
+        hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
+                      jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
+        at = f" at scale {format_number(scale)}" if scale != 1 else ""
+        ok &= _check_section(ctx, h, t, hinge, material, balls, first, second, end_key, at)
+        per_scale[si] = (h, t, hinge, at)
+    for li, length in enumerate(f["length"]):
+        l_rel = f"length[{li}]" if len(f["length"]) > 1 else "length"
+        for si, scale in enumerate(f["scale"]):
+            h, t, hinge, at = per_scale[si]
+            ok &= _check_length(ctx, l_rel, length, h, hinge, material, first, second, end_key, at)
+            for ci, curv in enumerate(f["curvature"]):
+                c_rel = f"curvature[{ci}]" if multi_curv else "curvature"
+                ok &= _check_curvature(ctx, c_rel, curv, length, h)
+                geom = RodGeometry(length, h, t, curv, hinge, first, second)
+                if printer is not None:
+                    ok &= _check_printer(ctx, l_rel, geom, printer)
+                name = f"{f['name']}-{format_number(length)}"
+                if multi_scale:
+                    name += f"-s{format_number(scale)}"
+                if multi_curv:
+                    name += f"-k{format_number(curv)}"
+                out.append(RodType(name, f["name"], length, scale, curv, geom, material, balls,
+                                   ctx.origin(l_rel)))
+    return out if ok else []
+
+
+def _check_section(ctx: _FamilyContext, h: float, t: float, hinge: Hinge, m: Material,
+                   balls: Balls | None, first: EndShape, second: EndShape, end_key: Any, at: str) -> bool:
+    """Checks on the cross-section and hinge that make a rod impossible to build."""
+    ok = True
+    fmt = format_number
+    w = m.min_wall
+    if w >= min(h, t) / 2:
+        ctx.report("material.min_wall", f"minimum wall {fmt(w)} mm is thicker than half the section "
+                   f"({fmt(min(h, t) / 2)} mm{at}): no room inside the rod")
+        return False  # every wall check below would fail for the same reason
+    if hinge.zone_radius >= h / 2:
+        ctx.report("joint.knuckle_radius", f"knuckle radius {fmt(hinge.knuckle_radius)} mm + radial gap "
+                   f"{fmt(hinge.radial_gap)} mm is wider than the rod: it must stay below half the section "
+                   f"height ({fmt(h / 2)} mm{at})")
+        ok = False
+    elif h / 2 - hinge.zone_radius < w:
+        ctx.report("joint.knuckle_radius", f"knuckle radius {fmt(hinge.knuckle_radius)} mm + radial gap "
+                   f"{fmt(hinge.radial_gap)} mm leaves {fmt(round(h / 2 - hinge.zone_radius, 6))} mm of end face "
+                   f"between the hinge zone and the rod's edge ({fmt(h / 2)} mm from the axis{at}), less than "
+                   f"the minimum wall {fmt(w)} mm")
+        ok = False
+    knuckle_wall = hinge.knuckle_radius - hinge.hole_diameter / 2
+    if knuckle_wall < w:
+        ctx.report("joint.knuckle_radius", f"knuckle radius {fmt(hinge.knuckle_radius)} mm leaves a wall of "
+                   f"{fmt(knuckle_wall)} mm around the {fmt(hinge.hole_diameter)} mm pin hole, less than "
+                   f"the minimum wall {fmt(w)} mm{at}")
+        ok = False
+    prong = (t - hinge.tongue_thickness - 2 * hinge.layer_gap) / 2
+    if hinge.tongue_thickness < w:
+        ctx.report("joint.tongue_thickness", f"tongue thickness {fmt(hinge.tongue_thickness)} mm is less than "
+                   f"the minimum wall {fmt(w)} mm{at}")
+        ok = False
+    elif prong < w:
+        ctx.report("joint.tongue_thickness", f"tongue {fmt(hinge.tongue_thickness)} mm + 2 layer gaps of "
+                   f"{fmt(hinge.layer_gap)} mm leave fork prongs {fmt(prong)} mm thick in a {fmt(t)} mm "
+                   f"thick rod, less than the minimum wall {fmt(w)} mm{at}")
+        ok = False
+    for which, e in (("first", first), ("second", second)):
+        if e.setback >= hinge.knuckle_radius:
+            ctx.report(end_key(which, "setback"),
+                       f"setback {fmt(e.setback)} mm detaches the end face from the "
+                       f"{fmt(hinge.knuckle_radius)} mm knuckle: must be less than the knuckle radius{at}")
+            ok = False
+    if balls is not None:
+        need = balls.socket_diameter + 2 * w
+        if need > min(h, t):
+            ctx.report("balls.diameter", f"a {fmt(balls.diameter)} mm ball in a {fmt(balls.socket_diameter)} mm "
+                       f"socket with {fmt(w)} mm walls needs a section of at least {fmt(need)} mm; the rod is "
+                       f"{fmt(h)} x {fmt(t)} mm{at}")
+            ok = False
+    return ok
+
+
+def _check_length(ctx: _FamilyContext, l_rel: str, length: float, h: float, hinge: Hinge,
+                  m: Material, first: EndShape, second: EndShape, end_key: Any, at: str) -> bool:
+    fmt = format_number
+    need = 2 * hinge.zone_radius + m.min_wall
+    if length < need:
+        ctx.report(l_rel, f"length {fmt(length)} mm is too short: the two hinge zones and a minimum wall "
+                   f"need {fmt(round(need, 6))} mm{at}")
+        return False
+    ok = True
+    for half in ("top", "bottom"):
+        b1 = getattr(first, f"{half}_chamfer")
+        b2 = getattr(second, f"{half}_chamfer")
+        cut = first.setback + second.setback + h / 2 * (math.tan(math.radians(b1)) + math.tan(math.radians(b2)))
+        left = length - cut
+        if left < m.min_wall:
+            what = (f"the two {half} end faces would cross" if left <= 0 else
+                    f"they leave {fmt(round(left, 3))} mm of {half} edge between the end faces, less than "
+                    f"the minimum wall {fmt(m.min_wall)} mm")
+            ctx.report(end_key("second", f"{half}_chamfer"),
+                       f"{half} chamfers of {fmt(b1)} and {fmt(b2)} deg cut through a {fmt(length)} mm rod: "
+                       f"{what}{at}")
+            ok = False
+    return ok
+
+
+def _check_curvature(ctx: _FamilyContext, c_rel: str, curv: float, length: float, h: float) -> bool:
+    if curv == 0:
+        return True
+    fmt = format_number
+    limit = math.sin(math.radians(MAX_ARC_HALF_ANGLE_DEG)) * 2 / length
+    if abs(curv) > limit:
+        ctx.report(c_rel, f"curvature {fmt(curv)} /mm bends a {fmt(length)} mm rod past a "
+                   f"{fmt(2 * MAX_ARC_HALF_ANGLE_DEG)} deg arc (at most {fmt(round(limit, 6))} /mm)")
+        return False
+    if abs(curv) * h > 1:
+        ctx.report(c_rel, f"curvature {fmt(curv)} /mm (radius {fmt(round(1 / abs(curv), 3))} mm) is too tight "
+                   f"for a {fmt(h)} mm high section: the radius must be at least the section height")
+        return False
+    return True
+
+
+def _check_printer(ctx: _FamilyContext, l_rel: str, g: RodGeometry, printer: Printer) -> bool:
+    sag = 0.0
+    if g.curvature:
+        sag = (1 - math.cos(math.radians(g.half_angle_deg))) / abs(g.curvature)  # arc's depth below the chord
+    extent = sorted((g.length + 2 * g.hinge.knuckle_radius, g.height + sag, g.thickness))
+    bed = sorted(printer.build_volume)
+    if any(e > b for e, b in zip(extent, bed)):
+        fmt = format_number
+        ctx.report(l_rel, f"a {fmt(g.length)} mm rod ({' x '.join(fmt(round(e, 2)) for e in reversed(extent))} mm) "
+                   f"does not fit the printer's build volume "
+                   f"({' x '.join(fmt(b) for b in printer.build_volume)} mm)")
+        return False
+    return True

@@ -1,0 +1,195 @@
+"""Mass properties and the achievable mass range of a rod type.
+
+A rod's mass is tuned by removing plastic (closed spherical cavities) or by
+adding metal (balls in closed sockets, inserted at a print pause). This module
+computes, from the exact B-rep:
+
+* the plain solid's volume, mass and centre of mass;
+* ``m_min``: the solid less the most plastic that equal spherical cavities can
+  remove while keeping the catalog's minimum wall from every face (outer faces
+  and pin holes) and between cavities;
+* ``m_max``: the solid with the most balls it can hold (socket = ball diameter
+  + fit clearance, minimum wall around every socket), plus the plastic left.
+
+Layouts are deterministic: sphere centres on a lattice (cubic, or hexagonal
+rows in the chain plane) of pitch ``2 r + wall`` centred on the rod's centre of
+mass, keeping a site only when all its mirror images fit too (mirror planes through the centre of mass across x, y
+and z, or the point reflection through the com axis combined with the z
+mirror; whichever keeps more). The removed or added volume is then centred on
+the centre of mass, so **the com does not move across the mass range**.
+
+The voids are the printable shapes :mod:`rodcad.cad.rods` cuts (see
+:data:`VOIDS`): cavities are spheres capped flat at 45 degrees, sockets are
+"silos" (half sphere + cylinder with a bridged roof) standing on one print
+layer, raised slightly so socket and ball together keep the com.
+
+The building blocks (:func:`lattice_sites`, :func:`symmetric_subset`,
+:func:`sphere_layout`, :func:`max_cavity_layout`, :func:`max_ball_layout`,
+:class:`rodcad.cad.collision.Clearance`) are meant to be reused by the fabrication
+step that places the real cavities (e.g. Poisson-disk sampling in the same core
+with a tuned radius). Units: mm, mm^3, g; densities g/cm^3.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
+from rodcad.catalog.cache import DiskCache, make_key
+from rodcad.parallel import default_jobs, worker_pool
+if TYPE_CHECKING:  # pragma: no cover
+    from rodcad.catalog.model import RodType
+from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, RADIUS_STEP, SphereLayout, ball_offset, max_ball_layout, max_cavity_layout
+from rodcad.cad.solids import type_solid
+
+__all__ = ['MASSRANGE_VERSION', 'MassInfo', 'layouts', 'compute_mass_info', 'is_cached', 'mass_info', 'mass_infos']
+
+
+#: Bump when results change (invalidates cached mass ranges).
+#: 2: printable void shapes (capped cavities, silo sockets on one print layer).
+MASSRANGE_VERSION = "2"
+
+
+@dataclass(frozen=True)
+class MassInfo:
+    """Mass properties and mass range of a rod type.
+
+    Attributes:
+        volume: plastic volume of the plain solid (mm^3).
+        solid_mass: mass of the plain solid (g).
+        com: centre of mass (along, perp) in the rod frame (mm); the same over
+            the whole mass range (layouts are symmetric about it).
+        m_min: lightest achievable mass, with the most cavities (g).
+        m_max: heaviest achievable mass, with the most balls (g).
+        cavity_radius: radius of the cavities at m_min (mm), 0 if none fit.
+        cavity_count: number of cavities at m_min.
+        ball_count: number of balls at m_max.
+    """
+
+    volume: float
+    solid_mass: float
+    com: tuple[float, float]
+    m_min: float
+    m_max: float
+    cavity_radius: float
+    cavity_count: int
+    ball_count: int
+
+    @property
+    def mass_range(self) -> tuple[float, float]:
+        """Achievable mass [m_min, m_max] (g): cavities to metal balls."""
+        return (self.m_min, self.m_max)
+
+    def to_json(self) -> dict[str, object]:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: dict[str, object]) -> MassInfo:
+        data = dict(data)
+        data["com"] = tuple(data["com"])  # type: ignore[arg-type]
+        return cls(**data)  # type: ignore[arg-type]
+
+
+def _key(rod: RodType) -> str:
+    from rodcad.catalog.model import GEOMETRY_VERSION
+
+    return make_key("mass", MASSRANGE_VERSION, GEOMETRY_VERSION, MIN_CAVITY_RADIUS, RADIUS_STEP,
+                    asdict(rod.geometry), asdict(rod.material),
+                    asdict(rod.balls) if rod.balls is not None else None)
+
+
+def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
+    """The cavity layout at m_min ('capped' voids) and the ball socket layout
+    at m_max ('silo' voids, raised by :func:`ball_offset`) of a rod type."""
+    from rodcad.cad.collision import Clearance as _Clearance
+    from rodcad.cad.solids import mass_properties
+
+    solid = type_solid(rod)
+    props = mass_properties(solid)
+    clearance = _Clearance(solid)
+    wall = rod.material.min_wall
+    cavities = max_cavity_layout(clearance, clearance.bounds, props.center, wall, void="capped")
+    if rod.balls is None:
+        return cavities, SphereLayout.empty()
+    rs = rod.balls.socket_diameter / 2
+    lift = ball_offset(rs, rod.balls.mass, rod.material.density)
+    balls = max_ball_layout(clearance, clearance.bounds, props.center, rod.balls.socket_diameter, wall,
+                            void="silo", raise_by=lift)
+    return cavities, balls
+
+
+def compute_mass_info(rod: RodType) -> MassInfo:
+    """Compute :class:`MassInfo` from the B-rep (no cache)."""
+    from rodcad.cad.solids import mass_properties
+
+    props = mass_properties(type_solid(rod))
+    cavities, balls = layouts(rod)
+    rho = rod.material.density / 1000.0  # g/mm^3
+    solid_mass = props.volume * rho
+    m_min = (props.volume - cavities.volume) * rho
+    if rod.balls is not None and balls.count:
+        m_max = (props.volume - balls.volume) * rho + balls.count * rod.balls.mass
+    else:
+        m_max = solid_mass
+    return MassInfo(props.volume, solid_mass, (props.center[0], props.center[1]), m_min,
+                    max(m_max, solid_mass), cavities.radius, cavities.count, balls.count)
+
+
+def is_cached(rod: RodType, cache: DiskCache) -> bool:
+    """Whether the mass information of ``rod`` is in the disk cache."""
+    return cache.get("mass", _key(rod)) is not None
+
+
+def mass_info(rod: RodType, *, cache: DiskCache | None = None) -> MassInfo:
+    """:class:`MassInfo` of a rod type, from the disk cache when possible."""
+    cache = cache if cache is not None else DiskCache()
+    key = _key(rod)
+    hit = cache.get("mass", key)
+    if hit is not None:
+        try:
+            return MassInfo.from_json(hit)
+        except (TypeError, KeyError, ValueError):
+            pass
+    info = compute_mass_info(rod)
+    cache.put("mass", key, info.to_json())
+    return info
+
+
+def _compute_star(rod: RodType) -> dict[str, object]:
+    return compute_mass_info(rod).to_json()
+
+
+def mass_infos(rods: Sequence[RodType], *, jobs: int | None = None, cache: DiskCache | None = None,
+               progress: Callable[[int, int], None] | None = None) -> dict[str, MassInfo]:
+    """:class:`MassInfo` of several rod types (name -> info), computing the
+    uncached ones in ``jobs`` processes (default: the number of CPUs)."""
+    cache = cache if cache is not None else DiskCache()
+    out: dict[str, MassInfo] = {}
+    todo: list[tuple[str, RodType]] = []
+    for rod in rods:
+        key = _key(rod)
+        hit = cache.get("mass", key)
+        if hit is not None:
+            try:
+                out[rod.name] = MassInfo.from_json(hit)
+                continue
+            except (TypeError, KeyError, ValueError):
+                pass
+        todo.append((key, rod))
+    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
+    if len(todo) <= 1 or jobs == 1:
+        results: Iterable[dict[str, object]] = (_compute_star(r) for _, r in todo)
+        pool = None
+    else:
+        pool = worker_pool(jobs)
+        results = pool.map(_compute_star, [r for _, r in todo], chunksize=1)
+    try:
+        for i, ((key, rod), res) in enumerate(zip(todo, results)):
+            cache.put("mass", key, res)
+            out[rod.name] = MassInfo.from_json(res)
+            if progress:
+                progress(i + 1, len(todo))
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    return {r.name: out[r.name] for r in rods}

@@ -1,0 +1,362 @@
+"""Rod catalogs: parameterized rod families expanded into named rod types.
+
+A catalog (``catalogs/*.yaml``) is the single source for the simulator (joint
+limits, mass ranges, centres of mass) and the CAD (exact rod solids). This
+module reads and validates it; the CAD and the numbers derived from the CAD
+live in :mod:`rodcad.cad`, :mod:`rodcad.catalog.limits` and
+:mod:`rodcad.catalog.massrange`.
+
+The format, in short (``catalogs/pla-pinned.yaml`` is a commented example, and
+``catalogs/catalog.schema.json`` the generated JSON Schema)::
+
+    catalog: 1                  # format version
+    name: pla-pinned
+    printer: {build_volume: [220, 220, 250], nozzle: 0.4}   # optional
+    defaults: {...}             # any family key; every family inherits it
+    families:
+      - name: free
+        length: [20, 30, 40]    # pin to pin, mm; a list makes several types
+        scale: 1                # multiplies the cross-section and knuckles
+        curvature: 0            # 1/mm, signed; > 0 bulges toward -y
+        section: {height: 10, thickness: 8}
+        joint: {pin_diameter: 1.75, pin_clearance: 0.25, knuckle_radius: 3.5,
+                tongue_thickness: 2.8, layer_gap: 0.3, radial_gap: 0.4}
+        ends: {setback: 0.2, top_chamfer: 50, bottom_chamfer: 50}
+        material: {name: PLA, density: 1.24, min_wall: 1.2}
+        balls: {diameter: 5, density: 7.85, clearance: 0.2}
+
+Rod types are named ``<family>-<length>`` (plus ``-s<scale>`` / ``-k<curvature>``
+when a family lists several scales / curvatures); they are listed family by
+family, then by length, scale and curvature in the order written.
+
+Conventions: millimetres, grams, degrees; densities in g/cm^3. Rod frame: the
+first hinge axis through the origin, the second through (length, 0, 0), axes
+along +z, chain plane xy. Top means +y. A chamfer angle tilts an end face away
+from the partner rod (positive) or toward it (negative); see :class:`EndShape`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+from rodcad.errors import Problem
+from rodcad.yamlio import suggest
+
+__all__ = ['CATALOG_FORMAT', 'GEOMETRY_VERSION', 'MAX_ARC_HALF_ANGLE_DEG', 'EndShape', 'Hinge', 'RodGeometry', 'Material', 'Balls', 'Printer', 'Origin', 'RodType', 'Family', 'Catalog']
+
+
+def json_digest(data: Any) -> str:
+    """SHA-256 of a JSON-serialisable value (keys sorted): a stable cache key."""
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"), default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+#: The catalog format this code reads (the ``catalog:`` key).
+CATALOG_FORMAT = 1
+
+
+#: Version of how :mod:`rodcad.cad` turns a :class:`RodGeometry` into a
+#: solid. Bump it with any change there: it is part of every disk-cache key
+#: (kept here so that cache hits need not import the CAD kernel).
+GEOMETRY_VERSION = "1"
+
+
+#: Largest half-angle of a curved rod's arc (the arc spans at most twice this).
+MAX_ARC_HALF_ANGLE_DEG = 60.0
+
+
+@dataclass(frozen=True)
+class EndShape:
+    """Shape of one rod end outside the hinge zone (the part that limits bending).
+
+    The end face is two planes, one for the top (+y) half and one for the bottom
+    half of the section, each parallel to the hinge axis. Each passes through
+    the point ``setback`` mm back from the hinge axis along the rod's centreline
+    tangent and is tilted by its chamfer angle: positive tilts the face away from
+    the partner rod (cuts the corner back, more room to bend that way), negative
+    tilts it toward the partner (the corner reaches past the hinge plane, so the
+    joint stops before straight). Two facing square ends with setback s each and
+    the pin at mid-height of a section of height h collide at
+    ``2 * atan(2 s / h)``; faces with zero setback meet flush exactly at the sum
+    of their chamfers.
+
+    Attributes:
+        setback: distance from the hinge axis to the face on the centreline (mm).
+        top_chamfer: tilt of the top (+y) half face (deg).
+        bottom_chamfer: tilt of the bottom (-y) half face (deg).
+    """
+
+    setback: float
+    top_chamfer: float
+    bottom_chamfer: float
+
+
+@dataclass(frozen=True)
+class Hinge:
+    """Pinned hinge geometry shared by both ends of a rod (after scaling).
+
+    The rod's thickness (z) is split into three layers: a middle *tongue* layer
+    of ``tongue_thickness`` and two outer *fork prong* layers, separated by
+    ``layer_gap``. One end of the rod carries the tongue knuckle, the other the
+    fork (``layout``); a knuckle is a disc of ``knuckle_radius`` around the hinge
+    axis with a pin hole of ``pin_diameter + pin_clearance``. Around each hinge
+    axis, the layers the partner's knuckle occupies are cleared out to
+    ``knuckle_radius + radial_gap`` (the *hinge zone*), so nothing inside the
+    hinge zone ever collides; bending is limited by the end faces outside it.
+
+    Attributes:
+        layout: 'tongue-fork' (tongue at the first joint) or 'fork-tongue'.
+        pin_diameter: diameter of the pin, which is not part of the rods (mm).
+        pin_clearance: pin hole diameter minus pin diameter (mm).
+        knuckle_radius: outer radius of the knuckles (mm).
+        tongue_thickness: thickness of the middle layer (mm).
+        layer_gap: axial clearance between tongue and prongs (mm).
+        radial_gap: clearance around a partner's knuckle (mm).
+    """
+
+    layout: str
+    pin_diameter: float
+    pin_clearance: float
+    knuckle_radius: float
+    tongue_thickness: float
+    layer_gap: float
+    radial_gap: float
+
+    @property
+    def hole_diameter(self) -> float:
+        """Diameter of the pin hole (mm)."""
+        return self.pin_diameter + self.pin_clearance
+
+    @property
+    def zone_radius(self) -> float:
+        """Radius of the hinge zone around each axis (mm)."""
+        return self.knuckle_radius + self.radial_gap
+
+    def knuckle(self, joint: int) -> str:
+        """'tongue' or 'fork': the knuckle at the first (0) or second (1) joint."""
+        first, second = self.layout.split("-")
+        return first if joint == 0 else second
+
+
+@dataclass(frozen=True)
+class RodGeometry:
+    """Everything that shapes a rod's solid (mm, deg), after scaling.
+
+    Attributes:
+        length: distance between the hinge axes (mm).
+        height: section height in y, in the chain plane (mm).
+        thickness: section thickness in z, along the hinge axes (mm).
+        curvature: signed curvature of the body's centreline arc through both
+            hinge axes (1/mm). Positive turns counter-clockwise going from the
+            first to the second joint, so the arc bulges toward -y (like a
+            sagging chain) and the centre of mass lies below the chord.
+        hinge: the hinge geometry.
+        first: end shape at the first joint (origin).
+        second: end shape at the second joint (length, 0, 0).
+    """
+
+    length: float
+    height: float
+    thickness: float
+    curvature: float
+    hinge: Hinge
+    first: EndShape
+    second: EndShape
+
+    @property
+    def half_angle_deg(self) -> float:
+        """Signed angle between the chord and the body's tangent at the second
+        joint (deg); the tangent at the first joint is at minus this angle."""
+        return math.degrees(math.asin(max(-1.0, min(1.0, self.curvature * self.length / 2))))
+
+    def interface(self, joint: int) -> tuple[Any, ...]:
+        """What must match for another rod's hinge to mate with ``joint`` (0 or 1)."""
+        h = self.hinge
+        return (self.thickness, h.pin_diameter, h.pin_clearance, h.knuckle_radius,
+                h.tongue_thickness, h.layer_gap, h.radial_gap)
+
+    def digest(self) -> str:
+        """Stable hash of every parameter (used for disk caches)."""
+        return json_digest(asdict(self))
+
+
+@dataclass(frozen=True)
+class Material:
+    """Printing material.
+
+    Attributes:
+        name: e.g. 'PLA'.
+        density: g/cm^3 (PLA about 1.24).
+        min_wall: thinnest wall printed reliably, also the least plastic kept
+            around cavities and ball sockets (mm).
+    """
+
+    name: str
+    density: float
+    min_wall: float
+
+
+@dataclass(frozen=True)
+class Balls:
+    """Metal balls a rod may hold in closed sockets (inserted at a print pause).
+
+    Attributes:
+        diameter: ball diameter (mm).
+        density: g/cm^3 (steel 7.85).
+        clearance: socket diameter minus ball diameter (mm).
+        name: free text, e.g. 'steel 5 mm'.
+    """
+
+    diameter: float
+    density: float
+    clearance: float
+    name: str = ""
+
+    @property
+    def mass(self) -> float:
+        """Mass of one ball (g)."""
+        return math.pi / 6 * self.diameter**3 * self.density / 1000.0
+
+    @property
+    def socket_diameter(self) -> float:
+        """Diameter of the spherical socket holding one ball (mm)."""
+        return self.diameter + self.clearance
+
+
+@dataclass(frozen=True)
+class Printer:
+    """The printer a catalog is sized for.
+
+    Attributes:
+        build_volume: (x, y, z) of the build volume (mm).
+        nozzle: nozzle diameter (mm).
+        name: free text.
+    """
+
+    build_volume: tuple[float, float, float]
+    nozzle: float
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where something was defined, for problems found after loading."""
+
+    file: str
+    key: str
+    line: int
+    column: int
+
+    def problem(self, message: str, key: str | None = None) -> Problem:
+        return Problem(self.file, self.line, self.column, self.key if key is None else key, message)
+
+
+@dataclass(frozen=True)
+class RodType:
+    """One rod type of a catalog: a family with one length, scale and curvature.
+
+    Attributes:
+        name: unique within the catalog, e.g. 'free-30'.
+        family: family name.
+        length: pin to pin (mm).
+        scale: cross-section scale factor.
+        curvature: signed curvature (1/mm), positive bulges toward -y.
+        geometry: everything that shapes the solid.
+        material: printing material.
+        balls: metal balls it may hold, or None.
+        origin: where the type's family (or length) is written in the catalog.
+    """
+
+    name: str
+    family: str
+    length: float
+    scale: float
+    curvature: float
+    geometry: RodGeometry
+    material: Material
+    balls: Balls | None
+    origin: Origin = field(compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Family:
+    """A family as written (after defaults): its name, types and origin."""
+
+    name: str
+    description: str
+    type_names: tuple[str, ...]
+    origin: Origin = field(compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Catalog:
+    """A validated catalog.
+
+    Attributes:
+        name: catalog name.
+        description: free text.
+        path: the file it was loaded from (None if built in code).
+        types: rod types in catalog order.
+        families: families in catalog order.
+        printer: the printer it is sized for, if given.
+    """
+
+    name: str
+    description: str
+    path: Path | None
+    types: tuple[RodType, ...]
+    families: tuple[Family, ...]
+    printer: Printer | None = None
+
+    @cached_property
+    def _by_name(self) -> dict[str, RodType]:
+        return {t.name: t for t in self.types}
+
+    @property
+    def names(self) -> list[str]:
+        """Type names in catalog order."""
+        return [t.name for t in self.types]
+
+    def __iter__(self) -> Iterator[RodType]:
+        return iter(self.types)
+
+    def __len__(self) -> int:
+        return len(self.types)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._by_name
+
+    def __getitem__(self, name: str) -> RodType:
+        """The rod type called ``name``.
+
+        Raises:
+            KeyError: with a did-you-mean suggestion.
+        """
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise KeyError(f"unknown rod type {name!r}{suggest(name, self.names)}") from None
+
+    def type(self, name_or_type: str | RodType) -> RodType:
+        """Look up a type by name (a RodType is returned as is)."""
+        return name_or_type if isinstance(name_or_type, RodType) else self[name_or_type]
+
+    def can_join(self, left: str | RodType, right: str | RodType) -> bool:
+        """Whether ``right`` can follow ``left`` in a chain: the knuckle at the
+        left rod's second joint mates with the one at the right rod's first
+        (a tongue with a fork, of identical hinge dimensions)."""
+        a, b = self.type(left).geometry, self.type(right).geometry
+        return (a.hinge.knuckle(1) != b.hinge.knuckle(0)) and a.interface(1) == b.interface(0)
+
+    def pairs(self) -> list[tuple[RodType, RodType]]:
+        """Every ordered pair (left, right) that can be joined, in catalog order."""
+        return [(a, b) for a in self.types for b in self.types if self.can_join(a, b)]
+
+
+mm_pos = dict(exclusive_minimum=0, unit="mm")

@@ -1,0 +1,236 @@
+"""The catalog file format as a spec tree: the validator of catalog YAML and its JSON Schema.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+from rodcad.yamlio import MISSING
+from rodcad.yamlspec import Field, ListOf, Nullable, Num, Obj, OneOrList, Str
+if TYPE_CHECKING:  # pragma: no cover
+    pass
+from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
+
+__all__ = ['catalog_spec', 'catalog_schema']
+
+
+_NAME = r"[A-Za-z0-9][A-Za-z0-9_.+-]*"
+
+
+_NAME_HINT = "a name of letters, digits, '.', '_', '+' or '-'"
+
+
+_LAYOUTS = ("tongue-fork", "fork-tongue")
+
+
+def _end_fields(with_overrides: bool) -> dict[str, Field]:
+    fields = {
+        "setback": Field(
+            Num(minimum=0, maximum=20, unit="mm"),
+            default=0.2,
+            description="Distance from the hinge axis back to the end face, along the rod's "
+            "centreline (mm). Two facing ends leave the sum as a gap at straight; 0 makes "
+            "faces that meet flush exactly at the sum of their chamfers.",
+        ),
+        "top_chamfer": Field(
+            Num(minimum=-60, maximum=80, unit="deg"),
+            default=0.0,
+            description="Tilt of the top (+y) half of the end face (deg). Positive cuts the "
+            "corner back (the joint can bend further in the sagging, positive direction); "
+            "negative makes the corner reach past the hinge plane (the joint stops before "
+            "straight: a concave stop).",
+        ),
+        "bottom_chamfer": Field(
+            Num(minimum=-60, maximum=80, unit="deg"),
+            default=0.0,
+            description="Tilt of the bottom (-y) half of the end face (deg); positive lets the "
+            "joint bend further in the negative (concave) direction.",
+        ),
+    }
+    if with_overrides:
+        sub = Obj(_end_fields(False)).replace(all_optional=True)
+        for key, which in (("first", "first joint (origin)"), ("second", "second joint")):
+            fields[key] = Field(
+                Obj(
+                    {k: Field(f.spec, description=f.description) for k, f in sub.fields.items()},
+                    description=f"Overrides for the end at the {which}.",
+                ),
+                description=f"Overrides for the end at the {which}; unset keys come from above.",
+            )
+    return fields
+
+
+def family_spec() -> Obj:
+    """Spec of a complete family (after defaults are applied): required flags
+    and defaults here are the ones enforced after merging."""
+    num_list = lambda spec, **kw: OneOrList(spec, unique=True, **kw)  # noqa: E731
+    return Obj(
+        {
+            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT), required=True,
+                          description="Family name; types are named '<family>-<length>'."),
+            "description": Field(Str(), description="Free text."),
+            "length": Field(
+                num_list(Num(exclusive_minimum=0, maximum=1000, unit="mm")),
+                required=True,
+                description="Distance between the two hinge axes (mm); a list makes one type per value.",
+            ),
+            "scale": Field(
+                num_list(Num(exclusive_minimum=0, maximum=10)),
+                default=[1.0],
+                description="Cross-section scale factor: multiplies section height and thickness, "
+                "knuckle radius and tongue thickness (not pins, gaps or setbacks); a list makes "
+                "one type per value. Types of different scale do not join.",
+            ),
+            "curvature": Field(
+                num_list(Num(minimum=-1, maximum=1, unit="1/mm")),
+                default=[0.0],
+                description="Signed curvature of the body's arc through both hinge axes (1/mm; "
+                "1/radius). Positive bulges toward -y (below the chord, like a sagging chain), "
+                "negative toward +y; 0 is straight. A list makes one type per value.",
+            ),
+            "section": Field(
+                Obj(
+                    {
+                        "height": Field(Num(maximum=200, **mm_pos), required=True,
+                                        description="Section height in the chain plane, y (mm)."),
+                        "thickness": Field(Num(maximum=200, **mm_pos), required=True,
+                                           description="Section thickness along the hinge axes, z (mm)."),
+                    },
+                    description="Rod cross-section before scaling.",
+                ),
+                required=True,
+            ),
+            "joint": Field(
+                Obj(
+                    {
+                        "layout": Field(
+                            Str(choices=_LAYOUTS), default="tongue-fork",
+                            description="Which knuckle each end carries: 'tongue-fork' puts the "
+                            "tongue (middle layer) at the first joint and the fork (two outer "
+                            "layers) at the second. A rod's second joint mates with a rod whose "
+                            "first joint has the other knuckle.",
+                        ),
+                        "pin_diameter": Field(Num(maximum=50, **mm_pos), required=True,
+                                              description="Pin diameter (mm); pins are separate parts, "
+                                              "e.g. pieces of 1.75 mm filament."),
+                        "pin_clearance": Field(Num(minimum=0, maximum=5, unit="mm"), default=0.25,
+                                               description="Pin hole diameter minus pin diameter (mm)."),
+                        "knuckle_radius": Field(Num(maximum=100, **mm_pos), required=True,
+                                                description="Outer radius of the knuckles around the "
+                                                "hinge axis (mm, before scaling)."),
+                        "tongue_thickness": Field(Num(maximum=100, **mm_pos), required=True,
+                                                  description="Thickness of the middle (tongue) layer "
+                                                  "(mm, before scaling)."),
+                        "layer_gap": Field(Num(maximum=5, **mm_pos), default=0.3,
+                                           description="Axial clearance between tongue and fork prongs (mm)."),
+                        "radial_gap": Field(Num(maximum=5, **mm_pos), default=0.4,
+                                            description="Radial clearance around the partner's knuckle (mm)."),
+                    },
+                    description="Pinned hinge knuckles (see rodcad.catalog.model.Hinge).",
+                ),
+                required=True,
+            ),
+            "ends": Field(
+                Obj(_end_fields(True), description="End faces outside the hinge zone: they set the "
+                    "joint limits (see rodcad.catalog.model.EndShape)."),
+                default={},
+            ),
+            "material": Field(
+                Obj(
+                    {
+                        "name": Field(Str(), default="", description="e.g. PLA."),
+                        "density": Field(Num(maximum=25, exclusive_minimum=0, unit="g/cm^3"), required=True,
+                                         description="Density (g/cm^3)."),
+                        "min_wall": Field(Num(maximum=50, **mm_pos), required=True,
+                                          description="Minimum wall (mm): thinnest printed wall, also kept "
+                                          "around cavities, ball sockets and pin holes."),
+                    },
+                    description="Printing material.",
+                ),
+                required=True,
+            ),
+            "balls": Field(
+                Nullable(
+                    Obj(
+                        {
+                            "name": Field(Str(), default="", description="e.g. steel 5 mm."),
+                            "diameter": Field(Num(maximum=100, **mm_pos), required=True,
+                                              description="Ball diameter (mm)."),
+                            "density": Field(Num(maximum=25, exclusive_minimum=0, unit="g/cm^3"),
+                                             required=True, description="Ball density (g/cm^3)."),
+                            "clearance": Field(Num(minimum=0, maximum=5, unit="mm"), default=0.2,
+                                               description="Socket diameter minus ball diameter (mm)."),
+                        },
+                    ),
+                    description="Metal balls the rods may hold in closed sockets to add mass; "
+                    "null for none.",
+                ),
+                default=None,
+            ),
+        },
+        title="Rod family",
+        description="A parameterized rod family; lists in length, scale or curvature make several types.",
+    )
+
+
+def _partial(spec: Any) -> Any:
+    """The spec with nothing required and no defaults filled in, recursively
+    (for family entries and 'defaults', which are merged before the required
+    keys are enforced)."""
+    if isinstance(spec, Obj):
+        return Obj(
+            {k: Field(_partial(f.spec), False, MISSING, f.description or "") for k, f in spec.fields.items()},
+            title=spec.title,
+            description=spec.description,
+        )
+    if isinstance(spec, Nullable):
+        return Nullable(_partial(spec.inner), spec.description)
+    return spec
+
+
+def catalog_spec() -> Obj:
+    """The spec of a whole catalog file."""
+    family = family_spec()
+    entry = _partial(family)
+    entry.fields["name"] = family.fields["name"]
+    defaults = _partial(family)
+    del defaults.fields["name"]
+    defaults.title = "Defaults for every family"
+    defaults.description = "Any family key except 'name'; a family's own keys win (mappings merge key by key)."
+    return Obj(
+        {
+            "catalog": Field(Num(integer=True, minimum=1), required=True,
+                             description=f"Catalog format version; this rodcad reads {CATALOG_FORMAT}."),
+            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT), required=True,
+                          description="Catalog name."),
+            "description": Field(Str(), description="Free text."),
+            "printer": Field(
+                Obj(
+                    {
+                        "name": Field(Str(), default="", description="Free text."),
+                        "build_volume": Field(
+                            ListOf(Num(maximum=5000, **mm_pos), min_items=3),
+                            required=True,
+                            description="Build volume x, y, z (mm); every rod must fit.",
+                        ),
+                        "nozzle": Field(Num(maximum=5, **mm_pos), required=True,
+                                        description="Nozzle diameter (mm); the minimum wall must not be thinner."),
+                    },
+                    description="The printer the catalog is sized for (optional; enables size checks).",
+                )
+            ),
+            "defaults": Field(defaults),
+            "families": Field(ListOf(entry, min_items=1), required=True,
+                              description="Rod families, in the order their types are listed."),
+        },
+        title="rodcad rod catalog",
+        description="Parameterized rod families for rodcad (units: mm, g, deg; densities g/cm^3).",
+    )
+
+
+def catalog_schema() -> dict[str, Any]:
+    """The JSON Schema of catalog files, generated from the validating specs."""
+    schema = catalog_spec().json_schema()
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        **schema,
+    }

@@ -1,0 +1,155 @@
+"""Design files: what a user asks ``rodcad build`` / ``rodcad simulate`` for.
+
+A design file is YAML (units: mm, g, degrees)::
+
+    design: 1                     # format version
+    name: semicircle              # default output folder outputs/<name>
+    catalog: pla-pinned           # shipped catalog name, or a path relative to this file
+    anchors: [[0, 0], [200, 0]]   # anchor A and anchor B (mm, y up)
+    target:                       # the shape to hang in (for `build`)
+      form: semicircle            # polyline, arc, semicircle, triangle, polygon, heart,
+                                  # catenary, function, svg (see rodcad.design.targets)
+    constraints:                  # optional
+      types: [free-20, free-30]   # rod types allowed (default: all)
+      lengths: [30]               # rod lengths allowed (default: all)
+      rods: 8                     # number of rods (default: what the chord walk gives)
+      fixed:                      # rods whose type (and mass) is imposed
+        - {index: 0, type: free-30, mass: 6.5}
+    method: refine                # exact, refine (default), guided-pso, pso
+    seed: 0
+    tolerance: 0.01               # optional: largest acceptable error / span
+    fabrication: {cad: true, seed: 0}
+
+or, for ``rodcad simulate``, an explicit chain instead of (or besides) a target::
+
+    chain:
+      - {type: free-30, mass: 6.5}
+      - {type: straight-30}       # mass defaults to the type's solid mass
+
+Loading checks everything at once (:func:`load_design`): schema problems, then
+names against the catalog (did-you-mean), the target's parameters and the
+anchors against the chain's reach, each reported as ``FILE:LINE:COL: key.path:
+message``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+import numpy as np
+from rodcad.catalog.model import Catalog
+from rodcad.errors import Problem
+from rodcad.yamlspec import Checked
+
+__all__ = ['DESIGN_FORMAT', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'Design']
+
+
+#: Design file format this rodcad reads.
+DESIGN_FORMAT = 1
+
+
+#: Inverse-design methods (mirrors optimize.inverse.METHODS).
+METHOD_NAMES = ("exact", "refine", "guided-pso", "pso")
+
+
+@dataclass(frozen=True)
+class FixedRod:
+    """A rod whose type (and optionally mass) the user imposes.
+
+    Attributes:
+        index: position in the chain (0 = the rod at anchor A).
+        type: rod type name.
+        mass: imposed mass (g), or None to let the design choose it.
+    """
+
+    index: int
+    type: str
+    mass: float | None = None
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Optional restrictions on the designed chain.
+
+    Attributes:
+        types: rod type names allowed (None: all).
+        lengths: rod lengths allowed (mm; None: all).
+        rods: number of rods (None: what the chord walk gives).
+        preferred_length: the length to use most (mm; None: chosen by the walk).
+        fixed: imposed rods.
+    """
+
+    types: tuple[str, ...] | None = None
+    lengths: tuple[float, ...] | None = None
+    rods: int | None = None
+    preferred_length: float | None = None
+    fixed: tuple[FixedRod, ...] = ()
+
+
+@dataclass(frozen=True)
+class ChainRod:
+    """One rod of an explicit chain: its type and mass (g)."""
+
+    type: str
+    mass: float
+
+
+@dataclass
+class Design:
+    """A validated design file.
+
+    Attributes:
+        path: the design file.
+        name: design name (default output folder ``outputs/<name>``).
+        description: free text.
+        catalog: the loaded rod catalog.
+        catalog_ref: the catalog as written in the file.
+        anchors: (2, 2) anchors A and B (mm).
+        target_form: target form name, or None (explicit chain only).
+        target_params: the form's parameters.
+        target_curve: (M, 2) dense target polyline from A to B, or None.
+        chain: explicit chain, or None.
+        constraints: restrictions on the designed chain.
+        method: inverse-design method.
+        seed: random seed of the design (PSO, multi-start).
+        tolerance: largest acceptable max error / span, or None.
+        g: gravitational acceleration (m/s^2; only scales moments and reactions).
+        cad: build the solids (False: design and check only).
+        fabrication_seed: seed of the cavity layouts.
+        source: the checked document (positions of every key, for later problems).
+    """
+
+    path: Path
+    name: str
+    description: str
+    catalog: Catalog
+    catalog_ref: str
+    anchors: np.ndarray
+    target_form: str | None
+    target_params: dict[str, Any]
+    target_curve: np.ndarray | None
+    chain: list[ChainRod] | None
+    constraints: Constraints
+    method: str
+    seed: int
+    tolerance: float | None
+    g: float
+    cad: bool
+    fabrication_seed: int
+    source: Checked | None = field(default=None, repr=False)
+    chandelier: dict[str, Any] | None = None
+    placements: list[Any] | None = None
+    chain_targets: list[dict[str, Any]] | None = None
+
+    @property
+    def span(self) -> float:
+        """Distance between the anchors (mm)."""
+        return float(np.hypot(*(self.anchors[1] - self.anchors[0])))
+
+    def problem(self, key: str, message: str) -> Problem:
+        """A problem pointing at ``key`` in the design file (for later stages)."""
+        pos = self.source.pos(key) if self.source is not None else None
+        return Problem(str(self.path), pos.line if pos else 0, pos.column if pos else 0, key, message)
+
+

@@ -1,0 +1,263 @@
+"""Cavity layout of a printed rod: a pool of Poisson-disk (blue-noise) candidate centres,
+dart throwing with a minimum wall, mirror-symmetric orbits, and the ball sockets' layout.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
+import numpy as np
+from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, UP, symmetric_images, sphere_layout, void_volume
+if TYPE_CHECKING:  # pragma: no cover
+    from rodcad.catalog.model import RodType
+from rodcad.cad.solids import type_solid
+from rodcad.catalog.massrange import mass_info
+
+__all__ = ['MASS_TOL', 'SOLVE_TOL', 'POOL_SIZE', 'RADIUS_FACTOR']
+
+
+#: Relative mass error the issue allows (0.1 %); the root solve aims 100x tighter.
+MASS_TOL = 1e-3
+
+
+#: Relative tolerance of the B-rep root solve on the mass.
+SOLVE_TOL = 1e-6
+
+
+#: Candidate cavity sites per symmetry group (orbit representatives); each is
+#: also projected onto every mirror plane / axis so symmetric sites exist.
+POOL_SIZE = 160
+
+
+#: Design radii tried for cavity layouts shrink by this factor.
+RADIUS_FACTOR = 0.87
+
+
+CAPPED_K = void_volume("capped", 1.0)
+
+
+@dataclass(frozen=True)
+class CavityPool:
+    """Seeded candidate cavity sites of one rod type and symmetry group.
+
+    Attributes:
+        images: per candidate, its distinct images under the group ((g, 3) each).
+        clearance: per candidate, the smallest solid clearance over its images.
+        intra: per candidate, the smallest distance between its images (inf if one).
+        order: the random order in which darts are thrown.
+    """
+
+    images: tuple[np.ndarray, ...]
+    clearance: np.ndarray
+    intra: np.ndarray
+    order: np.ndarray
+
+
+def _distinct(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    out: list[np.ndarray] = []
+    for p in points:
+        if all(np.linalg.norm(p - q) > tol for q in out):
+            out.append(p)
+    return np.array(out)
+
+
+@lru_cache(maxsize=64)
+def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
+    """The candidate pool: orbit representatives drawn uniformly in the
+    fundamental domain of ``symmetry`` about the com, each also projected onto
+    the group's mirror planes and axes (so orbits of 1, 2, 4 sites exist)."""
+    from rodcad.cad.collision import Clearance
+    from rodcad.cad.solids import mass_properties
+
+    solid = type_solid(rod)
+    com = np.array(mass_properties(solid).center)
+    clearance = Clearance(solid)
+    lo, hi = (np.array(b) for b in clearance.bounds)
+    rng = np.random.default_rng([seed, 0 if symmetry == "mirror-xyz" else 1])
+    dom_lo = lo.copy()
+    dom_lo[2] = com[2]
+    dom_lo[0] = com[0]
+    if symmetry == "mirror-xyz":
+        dom_lo[1] = com[1]
+        subsets = [(), (0,), (1,), (2,), (0, 1), (0, 2), (1, 2), (0, 1, 2)]
+    else:  # half turn about the com axis (z) + z mirror
+        subsets = [(), (2,), (0, 1), (0, 1, 2)]
+    reps = dom_lo + rng.random((POOL_SIZE, 3)) * (hi - dom_lo)
+    cands = []
+    for sub in subsets:
+        p = reps.copy()
+        for axis in sub:
+            p[:, axis] = com[axis]
+        cands.append(p)
+    pts = np.concatenate(cands)
+    images = tuple(_distinct(np.concatenate([p[None], *symmetric_images(p[None], com, symmetry)])) for p in pts)
+    flat = np.concatenate(images)
+    clr = clearance(flat)
+    sizes = np.array([len(im) for im in images])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    cmin = np.minimum.reduceat(clr, starts)
+    intra = np.array([np.min([np.linalg.norm(a - b) for i, a in enumerate(im) for b in im[i + 1:]])
+                      if len(im) > 1 else math.inf for im in images])
+    return CavityPool(images, cmin, intra, rng.permutation(len(images)))
+
+
+def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float) -> np.ndarray:
+    """Distance (mm) from points to the nearest silo socket (0 inside one)."""
+    pts = np.atleast_2d(points)
+    if len(centers) == 0:
+        return np.full(len(pts), math.inf)
+    d = pts[:, None, :] - np.asarray(centers)[None, :, :]  # (n, k, 3)
+    h = d @ UP
+    radial = np.linalg.norm(d - h[..., None] * UP, axis=-1)
+    ball = np.maximum(np.linalg.norm(d, axis=-1) - radius, 0.0)
+    cyl = np.hypot(np.maximum(radial - radius, 0.0), np.maximum(np.maximum(-h, h - radius), 0.0))
+    return np.minimum(ball, cyl).min(axis=1)
+
+
+@dataclass(frozen=True)
+class _CavityLayout:
+    centers: np.ndarray
+    radius: float  # analytic radius removing the wanted volume
+    bound: float  # largest radius the sites are checked for
+    layout: str
+
+
+def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float) -> list[np.ndarray]:
+    """Poisson-disk dart throwing of symmetric orbits: returns the accepted
+    orbits (their distinct points) in acceptance order (memoised)."""
+    key = (id(pool), radius, wall, np.asarray(sockets, dtype=float).tobytes(), socket_r)
+    if key not in THROWS:
+        if len(THROWS) > 4096:
+            THROWS.clear()
+        THROWS[key] = _throw(pool, radius, wall, sockets, socket_r)
+    return THROWS[key]
+
+
+def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float) -> list[np.ndarray]:
+    need = radius + wall
+    spacing = 2 * radius + wall
+    ok = (pool.clearance >= need) & (pool.intra >= spacing - 1e-9)
+    accepted: list[np.ndarray] = []
+    placed = np.zeros((0, 3))
+    for i in pool.order:
+        if not ok[i]:
+            continue
+        im = pool.images[i]
+        if len(sockets) and silo_distance(im, sockets, socket_r).min() < need:
+            continue
+        if len(placed) and np.min(np.linalg.norm(im[:, None, :] - placed[None], axis=-1)) < spacing:
+            continue
+        accepted.append(im)
+        placed = np.concatenate([placed, im])
+    return accepted
+
+
+def cavity_radii(rod: RodType) -> list[float]:
+    g = rod.geometry
+    r = min(g.height, g.thickness) / 2 - rod.material.min_wall
+    out = []
+    while r >= MIN_CAVITY_RADIUS - 1e-12:
+        out.append(r)
+        r *= RADIUS_FACTOR
+    return out
+
+
+def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: float, seed: int) -> _CavityLayout | None:
+    """Symmetric cavities removing ``volume`` (mm^3), as few and as large as
+    possible: Poisson-disk layouts first, the symmetric lattice as fallback.
+
+    For each design radius r_d, the layout's sites fit cavities up to r_d; a
+    prefix of its orbits (in dart order) with n sites removes ``volume`` with
+    radius r = (volume / (n k))^(1/3) <= r_d. The largest such r wins.
+    """
+    from rodcad.cad.collision import Clearance
+    from rodcad.cad.solids import mass_properties
+
+    wall = rod.material.min_wall
+    best: _CavityLayout | None = None
+    for symmetry in ("mirror-xyz", "point-xy"):
+        pool = cavity_pool(rod, symmetry, seed)
+        for rd in cavity_radii(rod):
+            if best is not None and rd <= best.radius:
+                break
+            orbits = dart_throw(pool, rd, wall, sockets, socket_r)
+            n = 0
+            for j, orb in enumerate(orbits):
+                n += len(orb)
+                r = (volume / (n * CAPPED_K)) ** (1 / 3)
+                if r <= rd + 1e-12:
+                    if r >= MIN_CAVITY_RADIUS and (best is None or r > best.radius + 1e-12):
+                        best = _CavityLayout(np.concatenate(orbits[: j + 1]), r, rd, f"poisson/{symmetry}")
+                    break
+    if best is not None:
+        return best
+    # Fallback: the deterministic lattice (it reaches the catalog's m_min).
+    solid = type_solid(rod)
+    com = mass_properties(solid).center
+    clr = Clearance(solid)
+
+    def clearance(p: np.ndarray) -> np.ndarray:
+        return np.minimum(clr(p), silo_distance(p, sockets, socket_r))
+
+    info = mass_info(rod)
+    radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
+    for rd in radii:
+        lay = sphere_layout(clearance, clr.bounds, com, rd, wall, void="capped")
+        if lay.count == 0:
+            continue
+        r = (volume / (lay.count * CAPPED_K)) ** (1 / 3)
+        if r <= rd * (1 + 1e-9) and r >= MIN_CAVITY_RADIUS and (best is None or r > best.radius):
+            best = _CavityLayout(lay.centers, min(r, rd), rd, f"lattice/{lay.symmetry}")
+    return best
+
+
+@lru_cache(maxsize=64)
+def socket_layout(rod: RodType) -> Any:
+    """The type's largest symmetric socket layout (the one behind m_max; the
+    ball half of :func:`rodcad.catalog.massrange.layouts`)."""
+    from rodcad.cad.collision import Clearance
+    from rodcad.cad.solids import mass_properties
+    from rodcad.fabrication.layout import SphereLayout, ball_offset, max_ball_layout
+
+    if rod.balls is None:
+        return SphereLayout.empty()
+    solid = type_solid(rod)
+    clearance = Clearance(solid)
+    lift = ball_offset(rod.balls.socket_diameter / 2, rod.balls.mass, rod.material.density)
+    return max_ball_layout(clearance, clearance.bounds, mass_properties(solid).center, rod.balls.socket_diameter,
+                           rod.material.min_wall, void="silo", raise_by=lift)
+
+
+def orbits(points: np.ndarray, center: Sequence[float], symmetry: str) -> list[np.ndarray]:
+    """Split a symmetric point set into orbits (index arrays), sorted by size then position."""
+    left = list(range(len(points)))
+    out = []
+    while left:
+        i = left[0]
+        imgs = [points[i]] + list(symmetric_images(points[i][None], center, symmetry))
+        orb = sorted({j for j in left for q in imgs if np.linalg.norm(points[j] - np.ravel(q)) < 1e-6})
+        out.append(np.array(orb))
+        left = [j for j in left if j not in orb]
+    return out
+
+
+#: Bump when results change (invalidates cached fabrication plans).
+FABRICATE_VERSION = "3"
+
+
+#: Targets this close (relative) to the plain solid's mass are built solid.
+SOLID_TOL = 1e-4
+
+
+#: Relative slack on the edges of the reachable intervals (round-off).
+EDGE_TOL = 1e-7
+
+
+class FabricationError(RuntimeError):
+    """A fabricated solid or an exported file failed a check."""
+
+
+THROWS: dict[tuple[int, float, float, bytes, float], list[np.ndarray]] = {}

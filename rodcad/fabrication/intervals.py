@@ -1,0 +1,219 @@
+"""Masses a rod type can really be built at: per ball count, the interval that cavities
+beside the balls reach; the union over ball counts, merged (disk-cached tables).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict
+from typing import TYPE_CHECKING, Any
+import numpy as np
+from rodcad.catalog.cache import DiskCache, make_key
+from rodcad.catalog.massrange import MASSRANGE_VERSION
+from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, UP, sphere_layout, void_volume
+from rodcad.parallel import default_jobs, worker_pool
+if TYPE_CHECKING:  # pragma: no cover
+    from rodcad.catalog.model import RodType
+from rodcad.fabrication.cavities import EDGE_TOL, FABRICATE_VERSION, SOLID_TOL
+from rodcad.fabrication.cavities import POOL_SIZE, RADIUS_FACTOR, CAPPED_K, dart_throw, orbits, cavity_pool, cavity_radii, silo_distance, socket_layout
+from rodcad.cad.solids import type_solid
+from rodcad.catalog.massrange import mass_info
+
+__all__ = ['INTERVALS_VERSION', 'GAP_MERGE', 'achievable_intervals', 'chain_intervals']
+
+
+#: Bump when the tables of reachable masses change (:func:`achievable_intervals`).
+INTERVALS_VERSION = "1"
+
+
+#: Gaps between reachable masses narrower than this (relative) are bridged:
+#: a target there is built at the nearest reachable mass (within half of it).
+GAP_MERGE = 5e-4
+
+
+def fmt_mass(x: float) -> str:
+    return f"{x:.3f}"
+
+
+def _merge(pieces: Sequence[tuple[float, float]], gap: float = 0.0) -> list[tuple[float, float]]:
+    """Sorted union of closed intervals; gaps narrower than ``gap`` x the mass are bridged."""
+    out: list[list[float]] = []
+    for a, b in sorted(pieces):
+        if out and a <= out[-1][1] * (1 + gap):
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return [(float(a), float(b)) for a, b in out]
+
+
+def _ball_options(rod: RodType) -> list[tuple[float, np.ndarray, float]]:
+    """(mass without cavities, socket centres, socket radius) per symmetric ball
+    subset, the plain solid first, sorted by mass then ball count."""
+    info = mass_info(rod)
+    rho = rod.material.density / 1000.0
+    ms = info.volume * rho
+    options: list[tuple[float, np.ndarray, float]] = [(ms, np.zeros((0, 3)), 0.0)]
+    if rod.balls is None:
+        return options
+    balls = socket_layout(rod)
+    if not balls.count:
+        return options
+    rs = balls.radius
+    net = rod.balls.mass - void_volume("silo", rs) * rho
+    sites = balls.centers - UP * (balls.centers[0] @ UP - info.com[1])
+    orbs = orbits(sites, (info.com[0], info.com[1], 0.0), balls.symmetry)
+    for mask in range(1, 2 ** len(orbs)):
+        idx = np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1])
+        options.append((ms + len(idx) * net, balls.centers[np.sort(idx)], rs))
+    options.sort(key=lambda o: (o[0], len(o[1])))
+    return options
+
+
+def _removable(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int,
+               lattice_counts: dict[float, int] | None = None) -> list[tuple[float, float]]:
+    """The cavity volumes (mm^3) :func:`place_cavities` can remove beside these
+    sockets, as sorted disjoint intervals (exactly its acceptance rule: a
+    prefix of j orbits with n_j sites is used for volumes in
+    (n_{j-1} k r_d^3, n_j k r_d^3] and needs a radius >= MIN_CAVITY_RADIUS).
+
+    The symmetric-lattice fallback is included too (it reaches the catalog's
+    m_min), except for radii where even the lattice without sockets
+    (``lattice_counts``: radius -> cavities, filled in when given empty) could
+    not remove more than the Poisson layouts: leaving reachable masses out only
+    makes the table conservative, never wrong.
+    """
+    wall = rod.material.min_wall
+    k_min = CAPPED_K * MIN_CAVITY_RADIUS**3
+    pieces: list[tuple[float, float]] = []
+    for symmetry in ("mirror-xyz", "point-xy"):
+        pool = cavity_pool(rod, symmetry, seed)
+        for rd in cavity_radii(rod):
+            n_prev = 0
+            for orb in dart_throw(pool, rd, wall, sockets, socket_r):
+                n = n_prev + len(orb)
+                lo, hi = max(n * k_min, n_prev * CAPPED_K * rd**3), n * CAPPED_K * rd**3
+                if lo < hi:
+                    pieces.append((lo, hi))
+                n_prev = n
+    top = max((b for _, b in pieces), default=0.0)
+    if True:
+        from rodcad.cad.collision import Clearance
+        from rodcad.cad.solids import mass_properties
+
+        solid = type_solid(rod)
+        com = mass_properties(solid).center
+        clr = Clearance(solid)
+
+        def clearance(p: np.ndarray) -> np.ndarray:
+            return np.minimum(clr(p), silo_distance(p, sockets, socket_r))
+
+        info = mass_info(rod)
+        radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()),
+                       reverse=True)
+        for rd in radii:
+            if lattice_counts is not None and len(sockets) and rd in lattice_counts \
+                    and lattice_counts[rd] * CAPPED_K * rd**3 <= top:
+                continue
+            lay = sphere_layout(clearance, clr.bounds, com, rd, wall, void="capped")
+            if lattice_counts is not None and not len(sockets):
+                lattice_counts[rd] = lay.count
+            if lay.count:
+                pieces.append((lay.count * k_min, lay.count * CAPPED_K * rd**3))
+    # a hair inside every edge, so that the edges themselves solve
+    return [(a * (1 + 1e-9), b * (1 - 1e-9)) for a, b in _merge(pieces) if b * (1 - 1e-9) > a * (1 + 1e-9)]
+
+
+def intervals_key(rod: RodType, seed: int) -> str:
+    from rodcad.catalog.model import GEOMETRY_VERSION
+
+    return make_key("fabint", INTERVALS_VERSION, FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION,
+                    POOL_SIZE, RADIUS_FACTOR, MIN_CAVITY_RADIUS, SOLID_TOL, GAP_MERGE,
+                    asdict(rod.geometry), asdict(rod.material),
+                    asdict(rod.balls) if rod.balls is not None else None, int(seed))
+
+
+def compute_table(rod: RodType, seed: int) -> dict[str, Any]:
+    """Every ball option with the masses its cavities reach, and the merged
+    achievable intervals (numbers only; JSON-serialisable)."""
+    info = mass_info(rod)
+    rho = rod.material.density / 1000.0
+    options = []
+    pieces: list[tuple[float, float]] = []
+    counts: dict[float, int] = {}
+    for mass_k, socks, rs in _ball_options(rod):  # the ball-free rod first
+        reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in _removable(rod, socks, rs, seed, counts)]
+        options.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs,
+                         "pieces": [list(p) for p in sorted(reach)]})
+        pieces += reach + [(mass_k * (1 - SOLID_TOL), mass_k * (1 + SOLID_TOL))]
+    intervals = []
+    for a, b in _merge(pieces, GAP_MERGE):
+        # the catalog's extremes are built (within round-off) when reached
+        a = info.m_min if abs(a - info.m_min) <= EDGE_TOL * info.m_min else max(a, info.m_min)
+        b = info.m_max if abs(b - info.m_max) <= EDGE_TOL * info.m_max else min(b, info.m_max)
+        if a <= b:
+            intervals.append([a, b])
+    return {"options": options, "intervals": intervals, "m_min": info.m_min, "m_max": info.m_max}
+
+
+def interval_table(rod: RodType, seed: int, cache: DiskCache | None = None) -> dict[str, Any]:
+    """:func:`compute_table`, from the disk cache when possible."""
+    cache = cache if cache is not None else DiskCache()
+    key = intervals_key(rod, seed)
+    hit = cache.get("fabint", key)
+    if isinstance(hit, dict) and "options" in hit and "intervals" in hit:
+        return hit
+    table = compute_table(rod, seed)
+    cache.put("fabint", key, table)
+    return table
+
+
+def achievable_intervals(rod: RodType, *, seed: int = 0, cache: DiskCache | None = None) -> list[tuple[float, float]]:
+    """The masses (g) this rod type can really be built at, as sorted disjoint intervals.
+
+    Without balls the rod reaches [m_min, solid mass] (cavities); with k balls,
+    from k balls and the most cavities that fit beside them up to k balls and
+    no cavities. Above the solid mass these are narrow bands (a ball adds far
+    more than the cavities beside the sockets can remove), so the catalog's
+    [m_min, m_max] is not continuous. Gaps narrower than :data:`GAP_MERGE` x the
+    mass (where the smallest printable cavity is still too big) are bridged:
+    such targets are built at the nearest reachable mass, within that
+    tolerance, and are not reported as problems.
+
+    :func:`fabricate_rod` and :func:`fabricate_chain` plan with the same table,
+    so a target inside an interval builds within :data:`MASS_TOL` and one in a
+    gap is built at the nearest interval edge and reported (``in_range=False``).
+    Computed once per type (and seed) and cached on disk.
+
+    Args:
+        rod: the rod type.
+        seed: seed of the Poisson-disk layouts (as for :func:`fabricate_chain`).
+        cache: disk cache (default :class:`DiskCache`).
+
+    Returns:
+        [(lo, hi), ...] in g, ascending, within the type's [m_min, m_max];
+        e.g. ``achievable_intervals(cat['free-20'])[0] == (m_min, ~solid mass)``.
+    """
+    return [(float(a), float(b)) for a, b in interval_table(rod, seed, cache)["intervals"]]
+
+
+def chain_intervals(types: Sequence[RodType], *, seed: int = 0, jobs: int | None = None,
+                    cache: DiskCache | None = None) -> dict[str, list[tuple[float, float]]]:
+    """:func:`achievable_intervals` of several rod types (name -> intervals),
+    the uncached ones computed in ``jobs`` worker processes (default: the CPUs)."""
+    cache = cache if cache is not None else DiskCache()
+    uniq = list({rod.name: rod for rod in types}.values())
+    todo = [rod for rod in uniq if not isinstance(cache.get("fabint", intervals_key(rod, seed)), dict)]
+    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
+    if jobs > 1:
+        pool = worker_pool(jobs)
+        try:
+            for rod, table in zip(todo, pool.map(_table_star, [(rod, seed) for rod in todo], chunksize=1)):
+                cache.put("fabint", intervals_key(rod, seed), table)
+        finally:
+            pool.shutdown()
+    return {rod.name: achievable_intervals(rod, seed=seed, cache=cache) for rod in uniq}
+
+
+def _table_star(args: tuple[RodType, int]) -> dict[str, Any]:
+    rod, seed = args
+    return compute_table(rod, seed)

@@ -1,0 +1,100 @@
+"""The fabrication plan of one rod: which balls and which cavities give its designed mass.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+import numpy as np
+from rodcad.fabrication.layout import void_volume
+if TYPE_CHECKING:  # pragma: no cover
+    from rodcad.catalog.model import RodType
+from rodcad.fabrication.cavities import EDGE_TOL, FabricationError, SOLID_TOL
+from rodcad.fabrication.cavities import place_cavities
+from rodcad.fabrication.intervals import compute_table, fmt_mass
+from rodcad.catalog.massrange import mass_info
+
+__all__ = []
+
+
+def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
+
+    The ball subset and the cavity volume come from the type's table of
+    reachable masses (:func:`achievable_intervals`); one cavity layout search
+    follows for the chosen subset.
+    """
+    info = mass_info(rod)
+    rho = rod.material.density / 1000.0
+    table = table if table is not None else compute_table(rod, seed)
+    m_lo, m_hi = info.m_min, info.m_max
+    message = ""
+    m = float(target)
+    if m < m_lo * (1 - 1e-12):
+        short = (m_lo - m) / rho
+        message = (f"target {fmt_mass(target)} g is {fmt_mass(m_lo - m)} g ({(m_lo - m) / m_lo:.1%}) below the lightest "
+                   f"printable {rod.name} ({fmt_mass(m_lo)} g with {info.cavity_count} cavities); it would need "
+                   f"{short:.0f} mm^3 more cavity volume than the walls allow (a lighter type, a thinner "
+                   "minimum wall or a lighter material)")
+        m = m_lo
+    elif m > m_hi * (1 + 1e-12):
+        extra = m - m_hi
+        if rod.balls is not None:
+            rs = rod.balls.socket_diameter / 2
+            net = rod.balls.mass - void_volume("silo", rs) * rho
+            need = f"about {math.ceil(extra / net)} more {rod.balls.diameter:g} mm balls than fit ({info.ball_count})"
+        else:
+            need = "metal balls, which this catalog does not give it"
+        message = (f"target {fmt_mass(target)} g is {fmt_mass(extra)} g ({extra / m_hi:.1%}) above the heaviest printable "
+                   f"{rod.name} ({fmt_mass(m_hi)} g); it would need {need}, denser balls or a larger section")
+        m = m_hi
+    options = table["options"]
+
+    def exact(mass: float) -> tuple[int, float] | None:
+        """(option, cavity volume) building ``mass`` as the original search would: the
+        lightest ball subset that is solid at it or whose cavities reach it."""
+        for i, opt in enumerate(options):
+            mass_k = opt["mass"]
+            if mass_k < mass * (1 - SOLID_TOL):
+                continue
+            if mass_k - mass <= SOLID_TOL * mass:
+                return i, 0.0
+            if any(a <= mass <= b for a, b in opt["pieces"]):
+                return i, (mass_k - mass) / rho
+        return None
+
+    build = m
+    found = exact(m)
+    if found is None:  # the nearest reachable mass: a piece edge or a ball count's solid mass
+        cands = [(abs(o["mass"] - m), o["mass"]) for o in options]
+        cands += [(abs(min(max(m, a), b) - m), min(max(m, a), b)) for o in options for a, b in o["pieces"]]
+        build = min(cands)[1]
+        found = exact(build)
+        assert found is not None
+        inside = (any(a * (1 - EDGE_TOL) <= m <= b * (1 + EDGE_TOL) for a, b in table["intervals"])
+                  or abs(build - m) <= 1e-6 * m)  # an interval edge met to round-off
+        if not inside:
+            message = (message + "; " if message else "") + (
+                f"{fmt_mass(m)} g lies in a gap between the ball counts of {rod.name} (balls come in symmetric "
+                f"groups and the cavities beside them cannot bridge it); built at {fmt_mass(build)} g with "
+                f"{len(options[found[0]]['sockets'])} balls")
+            m = build
+    i, remove = found
+    opt = options[i]
+    socks = np.array(opt["sockets"], dtype=float).reshape(-1, 3)
+    rs = float(opt["socket_radius"])
+    cav = place_cavities(rod, remove, socks, rs, seed) if remove > 0 else None
+    if remove > 0 and cav is None:  # pragma: no cover - the table says it fits
+        raise FabricationError(f"{rod.name}: no cavity layout removes {remove:.3f} mm^3 beside "
+                               f"{len(socks)} balls, although the table of reachable masses says one does")
+    return {
+        "mass": m,
+        "build_mass": build,
+        "sockets": socks.tolist(),
+        "socket_radius": rs if len(socks) else 0.0,
+        "cavities": [] if cav is None else cav.centers.tolist(),
+        "cavity_radius": 0.0 if cav is None else cav.radius,
+        "cavity_bound": 0.0 if cav is None else cav.bound,
+        "layout": "" if cav is None else cav.layout,
+        "message": message,
+    }

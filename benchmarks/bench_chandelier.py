@@ -25,6 +25,7 @@ from rodcad.design.chandelier import design_chandelier, ring
 from rodcad.design.frame import frame_outline, plan_frame
 from rodcad.outputs.preview3d import preview_3d
 from rodcad.catalog.loader import load_catalog
+from rodcad.design.model import Constraints
 from rodcad.design.plan import catalog_arrays
 from rodcad.parallel import default_jobs
 
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         t = time.perf_counter()
         design = design_chandelier(cat, placements, targets, method="refine", seed=0, jobs=jobs,
                                      arrays=arrays,
-                                     plan_options=None if args.any_length else {"lengths": [20.0]})
+                                     constraints=None if args.any_length else Constraints(lengths=(20.0,)))
         stage(f"design 6 chains, jobs={jobs}", t)
     t = time.perf_counter()
     plan = plan_frame("ring", placements, cat, design.chains)

@@ -1,22 +1,25 @@
-"""The pipeline: a design file in, a designed, checked and fabricated chain out.
+"""The pipeline: a design file in, designed, checked and fabricated chains out.
 
-One function per step of the data flow (style.md)::
+It sequences the steps and owns none of them. A single chain and every chain of a
+chandelier take the same path::
 
-    design.yaml + catalog -> load_design()         (rodcad.design)
-    -> joint limits and mass ranges from the rods  catalog_arrays()
-    -> rod positions and types on the target       plan()
-    -> masses by inverse design                    design_masses()
-    -> equilibrium check from scratch              check_equilibrium()
-    -> cavities, sockets, exact B-rep              fabricate()
-    -> as-built re-simulation                      as_built()
-    -> design.json, report.md, previews, STEP/STL  rodcad.outputs.report, write_outputs()
+    design.yaml + catalog -> load_design()                      rodcad.design.loader
+    -> joint limits and mass ranges from the rods             rodcad.design.plan.catalog_arrays
+    -> per chain: plan (every constraint), masses (buildable  rodcad.design.chains.design_chains
+       intervals with CAD), one equilibrium + multi-start check
+    -> a chandelier's frame                                   rodcad.design.frame, rodcad.cad.chandelier
+    -> cavities, sockets, exact B-rep of every rod            rodcad.cad.rods.fabricate_chain
+    -> as-built re-simulation per chain                       as_built()
+    -> design.json, report.md, previews, STEP/STL             rodcad.outputs, write_outputs()
 
 Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,13 +28,26 @@ import numpy as np
 
 from optimize import EquilibriumResult, find_equilibria, shape_distance, solve_equilibrium
 from optimize.distance import ShapeDistance
-from rodcad.design.masses import ChainDesign, design_chain
-from rodcad.design.plan import ChainPlan, catalog_arrays, plan_chain
+from rodcad.cad.chandelier import build_frame, chandelier_nodes
+from rodcad.cad.export import export_assembly, export_step, export_stl
+from rodcad.cad.rods import ChainFabrication, FabricatedRod, fabricate_chain, write_assembly, write_rod_files
+from rodcad.design.chains import ChainSpec, design_chains
+from rodcad.design.chandelier import ChandelierDesign, design_chandelier
+from rodcad.design.frame import FramePlan, frame_outline, plan_frame
+from rodcad.design.masses import ChainDesign
 from rodcad.design.model import Design
+from rodcad.design.plan import CatalogArrays, ChainPlan, catalog_arrays
 from rodcad.errors import InputError
+from rodcad.fabrication.intervals import chain_intervals
+from rodcad.outdir import staged_output
+from rodcad.outputs.design_json import chandelier_json, design_json, write_json
+from rodcad.outputs.preview import plot_chain
+from rodcad.outputs.preview3d import preview_3d
+from rodcad.outputs.report import chandelier_markdown, report_markdown
 from rodcad.progress import Progress
 
-__all__ = ["AsBuilt", "BuildResult", "build", "simulate", "write_outputs"]
+__all__ = ["AsBuilt", "BuildResult", "ChandelierBuild", "N_STARTS", "build", "build_chandelier", "simulate",
+           "write_chandelier_outputs", "write_outputs"]
 
 #: Multi-start count of the uniqueness check.
 N_STARTS = 12
@@ -56,7 +72,7 @@ class AsBuilt:
 
 @dataclass
 class BuildResult:
-    """Everything one run found, for the report and the output files.
+    """Everything one run found for one chain, for the report and the output files.
 
     Attributes:
         design: the validated design.
@@ -91,7 +107,7 @@ class BuildResult:
     unique: bool
     plan: ChainPlan | None = None
     chain_design: ChainDesign | None = None
-    fabrication: Any = None
+    fabrication: ChainFabrication | None = None
     as_built: AsBuilt | None = None
     notes: list[str] = field(default_factory=list)
     time_s: float = 0.0
@@ -107,93 +123,81 @@ class BuildResult:
         return tol is None or self.distance is None or self.distance.max_rel_span <= tol
 
 
-# --------------------------------------------------------------------------- steps
+@dataclass
+class ChandelierBuild:
+    """A designed (and optionally fabricated) chandelier.
 
-
-def _limits_of(names: list[str], index: dict[str, int], pair: np.ndarray) -> np.ndarray:
-    """(N-1, 2) joint limits of a sequence of types; (-inf, inf) for free sides."""
-    lim = np.array([pair[index[a], index[b]] for a, b in zip(names[:-1], names[1:])]).reshape(-1, 2)
-    return np.where(np.isfinite(lim), lim, np.array([-np.inf, np.inf]))
-
-
-def plan(design: Design, arrays: tuple, progress: Progress | None = None) -> ChainPlan:
-    """Lay rods on the design's target, honouring its constraints.
-
-    Raises:
-        InputError: the constraints cannot be met (pointing at the key).
+    Attributes:
+        design: the validated design.
+        result: per-chain designs and the bill of materials.
+        frame_plan: the frame's layout (lugs, members).
+        frame: the frame solid and its check (None without CAD).
+        fabrications: per chain, the fabricated rods (None without CAD).
+        as_built: per chain, the as-built re-simulation (None without CAD).
+        notes: things the user should know.
+        time_s: wall time.
     """
-    c = design.constraints
-    lengths = c.lengths
-    candidates: list[float | None] = [c.preferred_length]
-    if c.rods is not None and c.preferred_length is None:
-        types, t_len = arrays[0], arrays[1]
-        allowed = {float(x) for x, t in zip(t_len, types) if c.types is None or t.name in c.types}
-        if lengths is not None:
-            allowed &= {float(x) for x in lengths}
-        candidates = [None, *sorted(allowed)]
-    counts: dict[int, ChainPlan] = {}
-    for pref in candidates:
-        try:
-            p = plan_chain(design.catalog, design.target_curve, allowed_types=c.types, lengths=lengths,
-                           preferred_length=pref, arrays=arrays)
-        except ValueError as err:
-            raise InputError([design.problem("target", str(err))]) from None
-        counts.setdefault(len(p.type_names), p)
-        if c.rods is None or len(p.type_names) == c.rods:
-            break
-    if c.rods is not None and c.rods not in counts:
-        have = ", ".join(str(k) for k in sorted(counts))
-        raise InputError([design.problem(
-            "constraints.rods", f"the allowed rod lengths lay {have} rods on this target, not {c.rods}; "
-            "change the rod count, the lengths allowed or preferred_length")])
-    p = counts[c.rods] if c.rods is not None else next(iter(counts.values()))
-    if c.fixed:
-        _apply_fixed(design, p, arrays)
-    return p
+
+    design: Design
+    result: ChandelierDesign
+    frame_plan: FramePlan
+    frame: tuple[Any, Any] | None = None
+    fabrications: list[ChainFabrication] | None = None
+    as_built: list[AsBuilt] | None = None
+    notes: list[str] = field(default_factory=list)
+    time_s: float = 0.0
+
+    @property
+    def meets_tolerance(self) -> bool:
+        tol = self.design.tolerance
+        return tol is None or all(c.distance.max_rel_span <= tol for c in self.result.chains)
 
 
-def _apply_fixed(design: Design, p: ChainPlan, arrays: tuple) -> None:
-    """Impose the design's fixed rods on a plan (types, then masses)."""
-    types, t_len, t_com, t_bounds, t_lim = arrays
-    index = {t.name: i for i, t in enumerate(types)}
-    n = len(p.type_names)
-    problems = []
-    for i, f in enumerate(design.constraints.fixed):
-        key = f"constraints.fixed[{i}]"
-        if f.index >= n:
-            problems.append(design.problem(f"{key}.index", f"the chain has {n} rods (indices 0 to {n - 1})"))
-            continue
-        need = float(p.problem.lengths[f.index])
-        k = index[f.type]
-        if not np.isclose(t_len[k], need):
-            problems.append(design.problem(f"{key}.type", f"rod {f.index} is {need:g} mm long on this target "
-                                           f"but {f.type!r} is {t_len[k]:g} mm"))
-            continue
-        p.type_names[f.index] = f.type
-        p.problem.com[f.index] = t_com[k]
-        lo, hi = t_bounds[k]
-        if f.mass is not None:
-            lo, hi = f.mass * (1 - 1e-9), f.mass * (1 + 1e-9)
-        p.problem.mass_bounds[f.index] = (lo, hi)
-    if problems:
-        raise InputError(problems)
-    lim = _limits_of(p.type_names, index, t_lim)
-    bad = [j for j in range(n - 1) if not lim[j, 0] <= lim[j, 1]]
-    if bad:
-        j = bad[0]
-        raise InputError([design.problem("constraints.fixed", f"rods {j} ({p.type_names[j]}) and {j + 1} "
-                                         f"({p.type_names[j + 1]}) cannot be joined")])
-    if n > 1:
-        p.problem.limits = lim
-    p.notes.append(f"{len(design.constraints.fixed)} rod(s) fixed by the design")
+# --------------------------------------------------------------------------- shared steps
 
 
-def check_equilibrium(lengths, masses, a, b, *, com, limits, g, seed: int):
-    """Solve from scratch and look for other stable equilibria (multi-start)."""
+def _arrays(design: Design, jobs: int | None, progress: Progress) -> CatalogArrays:
+    with progress.step("joint limits and mass ranges of the catalog's rods") as st:
+        return catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
+
+
+def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
+    """The achievable mass intervals of the planned types (CAD on)."""
+    def intervals(names: Sequence[str]) -> dict[str, list[tuple[float, float]]]:
+        with progress.step("masses each rod type can really be built at"):
+            return chain_intervals([design.catalog[n] for n in names], seed=design.fabrication_seed, jobs=jobs)
+    return intervals
+
+
+def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]], *, jobs: int | None,
+               progress: Progress, label: str) -> tuple[list[ChainFabrication], list[str]]:
+    """Every rod of every chain built in one go (identical rods once); split per chain."""
+    types = [design.catalog[name] for names, _ in chains for name in names]
+    masses = np.concatenate([np.asarray(m, float) for _, m in chains])
+    with progress.step(label) as st:
+        fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count)
+    if len(chains) == 1:
+        return [fab], list(fab.problems)
+    out, k = [], 0
+    for names, _ in chains:
+        rods = [dataclasses.replace(r, index=i, file_stem=f"{i:02d}_{r.type_name}")
+                for i, r in enumerate(fab.rods[k:k + len(names)])]
+        k += len(names)
+        out.append(ChainFabrication(rods, [], len({id(r.solid) for r in rods}), 0.0))
+    return out, list(fab.problems)
+
+
+def as_built(rods: Sequence[FabricatedRod], lengths: np.ndarray, limits: np.ndarray | None, anchors: np.ndarray,
+             target: np.ndarray, g: float) -> AsBuilt:
+    """Re-simulate a chain with the masses and centres of mass of its real solids."""
+    masses = np.array([r.mass for r in rods], float)
+    com = np.array([r.com for r in rods], float)
+    a, b = anchors
     eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None, g=g)
-    multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None,
-                            g=g, n_starts=N_STARTS, seed=seed)
-    return eq, multi.n_distinct, multi.unique
+    return AsBuilt(masses, com, eq, shape_distance(target, eq.points))
+
+
+# --------------------------------------------------------------------------- one chain
 
 
 def build(design: Design, *, method: str | None = None, seed: int | None = None, cad: bool | None = None,
@@ -219,45 +223,36 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     method = method or design.method
     seed = design.seed if seed is None else seed
     cad = design.cad if cad is None else cad
-    with progress.step("joint limits and mass ranges of the catalog's rods") as st:
-        arrays = catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
-    with progress.step("laying rods on the target"):
-        p = plan(design, arrays)
-    if cad:
-        # masses only where fabrication can really make them (ball counts leave gaps)
-        from rodcad.design.masses import design_buildable
-        from rodcad.fabrication.intervals import chain_intervals
-
-        with progress.step("masses each rod type can really be built at"):
-            intervals = chain_intervals([design.catalog[n] for n in p.type_names],
-                                        seed=design.fabrication_seed, jobs=jobs)
-        with progress.step(f"inverse design ({method}, {len(p.type_names)} rods, buildable masses)"):
-            cd = design_buildable(p, method, intervals=intervals, seed=seed, n_starts=N_STARTS)
-    else:
-        with progress.step(f"inverse design ({method}, {len(p.type_names)} rods)"):
-            cd = design_chain(p, method, seed=seed, n_starts=N_STARTS)
-    pr = cd.plan.problem
-    a, b = design.anchors
-    with progress.step("equilibrium check from scratch"):
-        eq, n_stable, unique = check_equilibrium(pr.lengths, cd.result.masses, a, b, com=pr.com,
-                                                 limits=pr.limits, g=design.g, seed=seed)
+    arrays = _arrays(design, jobs, progress)
+    spec = ChainSpec("", np.asarray(design.anchors, float), design.target_curve)
+    (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
+                             n_starts=N_STARTS, g=design.g, progress=progress,
+                             intervals=_intervals_fn(design, jobs, progress) if cad else None)
+    cd = chain.design
+    p, pr, chk = cd.plan, cd.plan.problem, cd.check
     result = BuildResult(
         design=design, method=method, seed=seed, type_names=list(p.type_names),
         lengths=np.asarray(pr.lengths, float), masses=np.asarray(cd.result.masses, float),
         com=np.asarray(pr.com, float), limits=_as_limits(pr.limits, len(p.type_names)),
-        target_points=np.asarray(pr.target, float), equilibrium=eq,
-        distance=shape_distance(eq.points, pr.target), n_stable=n_stable, unique=unique,
+        target_points=np.asarray(pr.target, float), equilibrium=chk.equilibrium,
+        distance=shape_distance(pr.target, chk.equilibrium.points), n_stable=chk.n_stable, unique=chk.unique,
         plan=p, chain_design=cd, notes=list(p.notes),
     )
     result.notes += _design_notes(result)
-    snap = cd.result.info.get("buildable") if isinstance(cd.result.info, dict) else None
-    if snap and snap.get("snapped"):
+    snap = cd.buildable
+    if snap is not None and snap.snapped:
         result.notes.append(
-            f"{snap['snapped']} rod mass(es) moved onto masses the rods can really be built at (metal balls "
-            f"come in whole numbers): max error {100 * snap['error_before']:.3g} % -> "
-            f"{100 * snap['error_after']:.3g} % of the span")
+            f"{snap.snapped} rod mass(es) moved onto masses the rods can really be built at (metal balls "
+            f"come in whole numbers): max error {100 * snap.error_before:.3g} % -> "
+            f"{100 * snap.error_after:.3g} % of the span")
     if cad:
-        fabricate(result, jobs=jobs, progress=progress)
+        (fab,), problems = _fabricate(design, [(result.type_names, result.masses)], jobs=jobs, progress=progress,
+                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)")
+        result.fabrication = fab
+        result.notes += problems
+        with progress.step("as-built check (masses and centres of mass from the solids)"):
+            result.as_built = as_built(fab.rods, result.lengths, result.limits, design.anchors,
+                                       result.target_points, design.g)
     result.time_s = time.perf_counter() - t0
     return result
 
@@ -272,33 +267,32 @@ def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult
     t0 = time.perf_counter()
     if design.chain is None:
         raise InputError([design.problem("", "this design has no explicit 'chain' to simulate")])
-    with progress.step("joint limits of the catalog's rods") as st:
-        arrays = catalog_arrays(design.catalog, progress=st.count)
-    types, t_len, t_com, _, t_lim = arrays
-    index = {t.name: i for i, t in enumerate(types)}
+    arrays = _arrays(design, None, progress)
     names = [r.type for r in design.chain]
-    lim = _limits_of(names, index, t_lim)
+    lim = arrays.limits_of(names)
     bad = [j for j in range(len(names) - 1) if not lim[j, 0] <= lim[j, 1]]
     if bad:
         raise InputError([design.problem(f"chain[{j + 1}].type", f"{names[j]!r} and {names[j + 1]!r} "
                                          "cannot be joined (the rods interfere at every angle)") for j in bad])
-    lengths = t_len[[index[n] for n in names]]
-    com = t_com[[index[n] for n in names]]
+    k = [arrays.index[n] for n in names]
+    lengths, com = arrays.lengths[k], arrays.com[k]
     masses = np.array([r.mass for r in design.chain], float)
     a, b = design.anchors
+    limits = lim if len(names) > 1 else None
     try:
-        eq, n_stable, unique = check_equilibrium(lengths, masses, a, b, com=com, limits=lim, g=design.g,
-                                                 seed=design.seed)
+        eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=design.g)
+        multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=design.g, n_starts=N_STARTS,
+                                seed=design.seed)
     except ValueError as err:
         raise InputError([design.problem("anchors", str(err))]) from None
     target = None
     dist = None
     if design.target_curve is not None and len(design.target_curve) == len(names) + 1:
         target = design.target_curve
-        dist = shape_distance(eq.points, target)
+        dist = shape_distance(target, eq.points)
     res = BuildResult(design=design, method="", seed=design.seed, type_names=names, lengths=lengths,
                       masses=masses, com=com, limits=lim, target_points=target, equilibrium=eq,
-                      distance=dist, n_stable=n_stable, unique=unique)
+                      distance=dist, n_stable=multi.n_distinct, unique=multi.unique)
     res.notes += _design_notes(res)
     res.time_s = time.perf_counter() - t0
     return res
@@ -334,27 +328,6 @@ def _design_notes(r: BuildResult) -> list[str]:
     return notes
 
 
-def fabricate(result: BuildResult, *, jobs: int | None = None, progress: Progress | None = None) -> None:
-    """Build every rod's solid with its designed mass, then re-simulate the as-built chain."""
-    from rodcad.cad.rods import fabricate_chain
-
-    progress = progress or Progress(quiet=True)
-    types = [result.design.catalog[n] for n in result.type_names]
-    with progress.step(f"building {result.n} rods (cavities, ball sockets, exact B-rep)") as st:
-        fab = fabricate_chain(types, result.masses, seed=result.design.fabrication_seed, jobs=jobs,
-                              progress=st.count)
-    result.fabrication = fab
-    result.notes += list(fab.problems)
-    masses = np.array([r.mass for r in fab.rods], float)
-    com = np.array([r.com for r in fab.rods], float)
-    a, b = result.design.anchors
-    with progress.step("as-built check (masses and centres of mass from the solids)"):
-        eq = solve_equilibrium(result.lengths, masses, a, b, com=com,
-                               limits=result.limits if result.n > 1 else None, g=result.design.g)
-    target = result.target_points if result.target_points is not None else result.equilibrium.points
-    result.as_built = AsBuilt(masses, com, eq, shape_distance(eq.points, target))
-
-
 def write_outputs(result: BuildResult, outdir: str | Path, *,
                   progress: Progress | None = None) -> dict[str, Any]:
     """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files.
@@ -363,19 +336,12 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     end: a failed or interrupted run leaves ``outdir`` as it was.
 
     Returns:
-        The data written to design.json (for the terminal summary).
+        The data written to design.json.
     """
-    from rodcad.outputs.design_json import design_json, write_json
-    from rodcad.outputs.report import report_markdown
-    from rodcad.outdir import staged_output
-    from rodcad.outputs.preview import plot_chain
-
     progress = progress or Progress(quiet=True)
     outdir = Path(outdir)
     with staged_output(outdir) as tmp:
         if result.fabrication is not None:
-            from rodcad.cad.rods import write_assembly, write_rod_files
-
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
                 write_rod_files(result.fabrication, tmp)
             with progress.step("writing assembly.step"):
@@ -392,160 +358,61 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
 # --------------------------------------------------------------------------- chandeliers
 
 
-@dataclass
-class ChandelierBuild:
-    """A designed (and optionally fabricated) chandelier.
-
-    Attributes:
-        design: the validated design.
-        result: :class:`rodcad.design.chandelier.ChandelierDesign` (per-chain designs, bill of materials).
-        frame_plan: the frame's layout (lugs, members).
-        frame: the frame solid and its check (None without CAD).
-        fabrications: per chain, the fabricated rods (None without CAD).
-        as_built: per chain, the as-built re-simulation (None without CAD).
-        notes: things the user should know.
-        time_s: wall time.
-    """
-
-    design: Design
-    result: Any
-    frame_plan: Any
-    frame: tuple[Any, Any] | None = None
-    fabrications: list[Any] | None = None
-    as_built: list[AsBuilt] | None = None
-    notes: list[str] = field(default_factory=list)
-    time_s: float = 0.0
-
-    @property
-    def meets_tolerance(self) -> bool:
-        tol = self.design.tolerance
-        return tol is None or all(c.distance.max_rel_span <= tol for c in self.result.chains)
-
-
 def build_chandelier(design: Design, *, method: str | None = None, seed: int | None = None,
                      cad: bool | None = None, jobs: int | None = None,
                      progress: Progress | None = None) -> ChandelierBuild:
-    """Design every chain of a chandelier, lay out its frame and (optionally) build it all."""
-    from rodcad.cad.chandelier import build_frame
-    from rodcad.design.chandelier import design_chandelier
-    from rodcad.design.frame import plan_frame
-
+    """Design every chain of a chandelier (the path of a single chain, chain by chain), lay
+    out its frame and (optionally) build it all."""
     progress = progress or Progress(quiet=True)
     t0 = time.perf_counter()
     method = method or design.method
     seed = design.seed if seed is None else seed
     cad = design.cad if cad is None else cad
-    c = design.constraints
-    plan_options = {k: v for k, v in (("allowed_types", c.types), ("lengths", c.lengths),
-                                      ("preferred_length", c.preferred_length)) if v is not None}
-    with progress.step("joint limits and mass ranges of the catalog's rods") as st:
-        arrays = catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
-    n = len(design.placements)
-    with progress.step(f"inverse design of {n} chains ({method})"):
-        try:
-            res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
-                                      seed=seed, jobs=jobs or 1, arrays=arrays, plan_options=plan_options,
-                                      design_options={"n_starts": N_STARTS})
-        except ValueError as err:
-            raise InputError([design.problem("chandelier", str(err))]) from None
-    if cad:
-        _buildable_chains(design, res, method, seed, jobs, progress)
-    frame_cfg = dict(design.chandelier.get("frame") or {})
-    kind = frame_cfg.pop("kind", None) or _frame_kind(design)
+    spec = design.chandelier
+    arrays = _arrays(design, jobs, progress)
+    try:
+        res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
+                                seed=seed, jobs=jobs or 1, arrays=arrays, constraints=design.constraints,
+                                problem=design.problem, n_starts=N_STARTS, g=design.g, progress=progress,
+                                intervals=_intervals_fn(design, jobs, progress) if cad else None)
+    except ValueError as err:
+        raise InputError([design.problem("chandelier", str(err))]) from None
     extra = {}
-    if kind == "bars":
+    if spec.frame_kind == "bars":
         # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order
-        extra["vertices"] = design.chandelier.get("vertices") or [
+        extra["vertices"] = spec.vertices or [
             list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
-    frame_plan = plan_frame(kind, design.placements, design.catalog, res.chains, **frame_cfg, **extra)
+    frame_plan = plan_frame(spec.frame_kind, design.placements, design.catalog, res.chains, **spec.frame,
+                            **extra)
     out = ChandelierBuild(design, res, frame_plan)
     for ch in res.chains:
-        eq = ch.design.result.equilibrium
-        if not eq.stable:
+        if not ch.equilibrium.stable:
             out.notes.append(f"{ch.name}: the designed shape is not a stable equilibrium")
         if not ch.design.unique:
             out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
     if cad:
-        from rodcad.cad.rods import fabricate_chain
-
         with progress.step("frame solid and clearance checks"):
             out.frame = build_frame(frame_plan, design.catalog, res.chains)
         out.notes += [f"frame: {p}" for p in out.frame[1].problems]
-        types = [design.catalog[name] for ch in res.chains for name in ch.type_names]
-        masses = np.concatenate([ch.masses for ch in res.chains])
-        with progress.step(f"building {len(types)} rods") as st:
-            fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count)
-        out.notes += list(fab.problems)
-        out.fabrications, out.as_built = [], []
-        k = 0
+        out.fabrications, problems = _fabricate(design, [(ch.type_names, ch.masses) for ch in res.chains],
+                                                jobs=jobs, progress=progress,
+                                                label=f"building {res.bom.n_rods} rods")
+        out.notes += problems
         with progress.step("as-built check of every chain"):
-            for ch in res.chains:
-                m = len(ch.masses)
-                rods = fab.rods[k:k + m]
-                k += m
-                out.fabrications.append(_chain_fabrication(fab, rods))
-                pr = ch.design.plan.problem
-                a2, b2 = ch.placement.plane_anchors()
-                bm = np.array([r.mass for r in rods], float)
-                bc = np.array([r.com for r in rods], float)
-                eq = solve_equilibrium(pr.lengths, bm, a2, b2, com=bc, limits=pr.limits, g=design.g)
-                out.as_built.append(AsBuilt(bm, bc, eq, shape_distance(eq.points, pr.target)))
+            out.as_built = [as_built(fab.rods, ch.design.plan.problem.lengths, ch.design.plan.problem.limits,
+                                     np.array(ch.placement.plane_anchors()), ch.target, design.g)
+                            for ch, fab in zip(res.chains, out.fabrications)]
     out.time_s = time.perf_counter() - t0
     return out
-
-
-def _buildable_chains(design: Design, res: Any, method: str, seed: int, jobs: int | None,
-                      progress: Progress) -> None:
-    """Re-design every chain with masses the rods can really be built at (shared chains once)."""
-    from rodcad.design.masses import design_buildable
-    from rodcad.fabrication.intervals import chain_intervals
-
-    names = sorted({n for ch in res.chains for n in ch.type_names})
-    with progress.step("masses each rod type can really be built at"):
-        intervals = chain_intervals([design.catalog[n] for n in names], seed=design.fabrication_seed, jobs=jobs)
-    done: dict[int, Any] = {}
-    with progress.step("inverse design with buildable masses"):
-        for ch in res.chains:
-            key = id(ch.design)
-            if key not in done:
-                done[key] = design_buildable(ch.design.plan, method, intervals=intervals, seed=seed,
-                                             n_starts=N_STARTS)
-            ch.design = done[key]
-
-
-def _frame_kind(design: Design) -> str:
-    from rodcad.design.spec import FRAME_OF_PATTERN
-
-    return FRAME_OF_PATTERN[design.chandelier["pattern"]]
-
-
-def _chain_fabrication(fab: Any, rods: list[Any]) -> Any:
-    """The part of a fabrication that belongs to one chain, re-indexed from 0."""
-    import dataclasses
-
-    from rodcad.cad.rods import ChainFabrication
-
-    rods = [dataclasses.replace(r, index=i, file_stem=f"{i:02d}_{r.type_name}") for i, r in enumerate(rods)]
-    return ChainFabrication(rods, [], len({id(r.solid) for r in rods}), 0.0)
 
 
 def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
                              progress: Progress | None = None) -> dict[str, Any]:
     """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
     and <chain>/rods/*.step|stl; staged like :func:`write_outputs`, whose return it shares."""
-    from rodcad.cad.chandelier import chandelier_nodes
-    from rodcad.design.frame import frame_outline
-    from rodcad.outputs.preview3d import preview_3d
-    from rodcad.outputs.design_json import chandelier_json, write_json
-    from rodcad.outputs.report import chandelier_markdown
-    from rodcad.outdir import staged_output
-
     progress = progress or Progress(quiet=True)
     with staged_output(outdir) as tmp:
         if b.frame is not None:
-            from rodcad.cad.export import export_assembly, export_step, export_stl
-            from rodcad.cad.rods import write_rod_files
-
             with progress.step("writing and checking the rods' STEP/STL files"):
                 for ch, fab in zip(b.result.chains, b.fabrications):
                     write_rod_files(fab, tmp / ch.name)
@@ -554,12 +421,12 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
                 export_step(frame, tmp / "frame.step", name="frame")
                 export_stl(frame, tmp / "frame.stl")
                 nodes = chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
-                                           rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
+                                         rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
                 export_assembly(tmp / "assembly.step", nodes, b.design.name)
         with progress.step("writing design.json, report.md, preview.png"):
             data = chandelier_json(b)
             write_json(tmp / "design.json", data)
             preview_3d(tmp / "preview.png", b.result.chains, frame_outline(b.frame_plan),
-                         title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
+                       title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
             (tmp / "report.md").write_text(chandelier_markdown(b, data), encoding="utf-8")
     return data

@@ -105,7 +105,7 @@ def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr("rodcad.outputs.preview.plot_chain", boom)
+    monkeypatch.setattr("rodcad.pipeline.plot_chain", boom)
     with pytest.raises(RuntimeError):
         main(["build", str(ex), "-o", str(out), "--no-cad", "-q"])
     assert [p.name for p in out.iterdir()] == ["mine.txt"]
@@ -224,3 +224,54 @@ def test_semicircle_example_rests_on_curve_stops_and_says_so(tmp_path):
     assert disc["hanging_curve_error_mm"] < 5.0
     report = (out / "report.md").read_text()
     assert "rest on stops" in report and "hangs within" in report
+
+
+CHANDELIER_CONSTRAINED = """\
+design: 1
+name: two
+catalog: pla-pinned
+chandelier:
+  pattern: explicit
+  chains:
+    - anchors: [[0, 0, 0], [150, 0, 0]]
+    - anchors: [[0, 50, 0], [0, 180, 20]]
+  target: {form: catenary, length: 220}
+constraints:
+  lengths: [20]
+  rods: RODS
+  fixed: [{index: INDEX, type: free-20, mass: MASS}]
+"""
+
+
+def _free20_mass() -> float:
+    lo, hi = mass_info(load_design(ROOT / "examples" / "chandelier.yaml").catalog["free-20"]).mass_range
+    return round(0.5 * (lo + hi), 4)
+
+
+def test_chandelier_chains_honour_rod_count_and_fixed_rods(tmp_path):
+    m = _free20_mass()
+    text = CHANDELIER_CONSTRAINED.replace("RODS", "11").replace("INDEX", "3").replace("MASS", str(m))
+    b = pipeline.build_chandelier(load_design(tmp_path / "d.yaml", text=text), cad=False)
+    assert len(b.result.chains) == 2
+    for ch in b.result.chains:  # every chain: 11 rods, rod 3 a free-20 of the given mass
+        assert len(ch.type_names) == 11 and ch.type_names[3] == "free-20"
+        assert ch.masses[3] == pytest.approx(m, rel=1e-8)
+        assert any("fixed by the design" in n for n in ch.design.plan.notes)
+        assert ch.equilibrium.success and ch.distance.max_rel_span < 0.05
+
+
+def test_chandelier_constraints_that_cannot_apply_point_at_the_key(tmp_path, capsys):
+    m = str(_free20_mass())
+    bad_count = CHANDELIER_CONSTRAINED.replace("RODS", "7").replace("INDEX", "3").replace("MASS", m)
+    path = tmp_path / "d.yaml"
+    path.write_text(bad_count)
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:12:9: constraints.rods: chain_01: the allowed rod lengths lay 11 rods" in err
+    assert "Traceback" not in err and not (tmp_path / "out").exists()
+    bad_index = CHANDELIER_CONSTRAINED.replace("  rods: RODS\n", "").replace("INDEX", "30").replace("MASS", m)
+    path.write_text(bad_index)
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad", "-q"]) == 2
+    err = capsys.readouterr().err
+    for name in ("chain_01", "chain_02"):  # every chain's problem, at once
+        assert f"{path}:12:19: constraints.fixed[0].index: {name}: the chain has 11 rods" in err

@@ -39,18 +39,18 @@ def test_snapped_masses_are_buildable_and_reported(catalog_and_arrays):
     ivs = _gappy(plan, 0.6)
     free = design_chain(plan, "refine", n_starts=4)
     d = design_buildable(plan, "refine", intervals=ivs, n_starts=4, rescale=False)
-    info = d.result.info["buildable"]
+    info = d.buildable
     assert _inside(d.result.masses, ivs)
-    assert not _inside(free.result.masses, ivs) and info["snapped"] >= 1
+    assert not _inside(free.result.masses, ivs) and info.snapped >= 1
     # re-simulated for the buildable masses, and no better than the continuous design
     eq = plan.problem.simulate(d.result.masses)
     assert np.allclose(eq.points, d.result.equilibrium.points, atol=1e-9)
-    assert info["error_after"] == pytest.approx(d.result.distance.max_rel_span)
-    assert info["error_before"] == pytest.approx(free.result.distance.max_rel_span, rel=1e-6)
-    assert info["error_after"] >= info["error_before"] * (1 - 1e-6) - 1e-12
-    assert info["error_after"] < 0.01
+    assert info.error_after == pytest.approx(d.result.distance.max_rel_span)
+    assert info.error_before == pytest.approx(free.result.distance.max_rel_span, rel=1e-6)
+    assert info.error_after >= info.error_before * (1 - 1e-6) - 1e-12
+    assert info.error_after < 0.01
     assert isinstance(d.unique, bool) and d.n_stable >= 1
-    for k, (designed, built) in info["moved"].items():
+    for k, (designed, built) in info.moved.items():
         assert not _inside([designed], [ivs[k]]) and _inside([built], [ivs[k]])
     # same input, same output
     again = design_buildable(plan, "refine", intervals=ivs, n_starts=4, rescale=False)
@@ -64,8 +64,8 @@ def test_common_scale_keeps_an_exact_shape(catalog_and_arrays):
     ivs = _gappy(plan, 0.5)
     d = design_buildable(plan, "refine", intervals=ivs, n_starts=4)
     assert _inside(d.result.masses, ivs)
-    assert d.result.exact and d.result.info["buildable"]["snapped"] == 0
-    assert d.result.info["buildable"]["scale"] != 1.0
+    assert d.result.exact and d.buildable.snapped == 0
+    assert d.buildable.scale != 1.0
 
 
 def test_max_rounds_zero_snaps_without_redesign(catalog_and_arrays):
@@ -73,7 +73,7 @@ def test_max_rounds_zero_snaps_without_redesign(catalog_and_arrays):
     plan = plan_chain(cat, semicircle((0, 0), (200, 0)), arrays=arrays, lengths=[30])
     ivs = _gappy(plan, 0.6)
     d = design_buildable(plan, "exact", intervals=ivs, n_starts=2, max_rounds=0, rescale=False)
-    assert _inside(d.result.masses, ivs) and d.result.info["buildable"]["rounds"] == 0
+    assert _inside(d.result.masses, ivs) and d.buildable.rounds == 0
 
 
 def test_real_intervals_of_the_catalog(catalog_and_arrays):

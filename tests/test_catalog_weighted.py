@@ -20,7 +20,7 @@ import pytest
 from rodcad.design.targets import heart, make_target
 from rodcad.catalog.loader import load_catalog
 from rodcad.design.masses import design_chain
-from rodcad.design.plan import plan_chain
+from rodcad.design.plan import CatalogArrays, plan_chain
 from rodcad.catalog.limits import all_pair_limits
 
 CHECK = Path(__file__).with_name("data") / "pla-weighted.check.json"
@@ -65,7 +65,7 @@ def arrays(cat, check):
         lo, hi = p["limits_deg"]
         lim[index[p["left"]], index[p["right"]]] = [
             -math.inf if lo is None else math.radians(lo), math.inf if hi is None else math.radians(hi)]
-    return types, lengths, com, bounds, lim
+    return CatalogArrays(tuple(types), lengths, com, bounds, lim)
 
 
 def _family(check, name):

@@ -20,7 +20,7 @@ from rodcad.catalog.model import RodGeometry
 from rodcad.cad.solids import CONTACT_TOL, GeometryError, collision_proxy, rod_solid
 from collections.abc import Sequence
 
-__all__ = ['Probe', 'PairScene', 'Clearance', 'shape_distance', 'DistanceTo', 'void_walls']
+__all__ = ['Probe', 'PairScene', 'Clearance', 'solid_distance', 'DistanceTo', 'void_walls']
 
 
 def faces_compound(solid: Solid) -> TopoDS_Compound:
@@ -177,7 +177,7 @@ class Clearance:
         return out
 
 
-def shape_distance(a: Solid, b: object) -> float:
+def solid_distance(a: Solid, b: object) -> float:
     """Smallest distance between two shapes (BRepExtrema, mm); 0 if they touch."""
     ext = BRepExtrema_DistShapeShape(a.wrapped, b.wrapped if hasattr(b, "wrapped") else b)  # type: ignore[attr-defined]
     if not ext.IsDone():  # pragma: no cover - kernel failure
@@ -224,7 +224,7 @@ def void_walls(solid: Solid, voids: Sequence[Solid], near: float) -> tuple[np.nd
         between two voids (mm, inf for fewer than two)).
     """
     faces = faces_compound(solid)
-    to_faces = np.array([shape_distance(v, faces) for v in voids])
+    to_faces = np.array([solid_distance(v, faces) for v in voids])
     between = math.inf
     boxes = [v.bounding_box() for v in voids]
     for i in range(len(voids)):
@@ -233,5 +233,5 @@ def void_walls(solid: Solid, voids: Sequence[Solid], near: float) -> tuple[np.nd
             gap = max(a.min.X - b.max.X, b.min.X - a.max.X, a.min.Y - b.max.Y, b.min.Y - a.max.Y,
                       a.min.Z - b.max.Z, b.min.Z - a.max.Z)
             if gap <= near:
-                between = min(between, shape_distance(voids[i], voids[j]))
+                between = min(between, solid_distance(voids[i], voids[j]))
     return to_faces, between

@@ -59,8 +59,8 @@ def run(args: argparse.Namespace) -> int:
     if not result.meets_tolerance:
         target = outdir.with_name(outdir.name + ".best-fit")
         code = 1
-    data = pipeline.write_outputs(result, target, progress=progress)
-    print(summary_text(result, target, data))
+    pipeline.write_outputs(result, target, progress=progress)
+    print(summary_text(result, target))
     if code:
         err = result.distance.max_rel_span
         print(f"rodcad: the design misses its tolerance ({err:.3g} of the span > {design.tolerance:g}); "
@@ -70,25 +70,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
     from rodcad import pipeline
+    from rodcad.outputs.report import chandelier_summary
 
     b = pipeline.build_chandelier(design, method=args.method, seed=args.seed,
                                   cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
     target = outdir if b.meets_tolerance else outdir.with_name(outdir.name + ".best-fit")
-    data = pipeline.write_chandelier_outputs(b, target, progress=progress)
-    res = b.result
-    print(f"rodcad: {design.name}: chandelier of {len(res.chains)} chains, {res.bom.n_rods} rods, "
-          f"method {res.method}, {b.time_s:.1f} s")
-    for ch in data["chains"]:
-        ab = f", as built {100 * ch['as_built']['error']['max_rel_span']:.3g} %" if "as_built" in ch else ""
-        print(f"  {ch['name']:<10} {len(ch['rods']):>3} rods  max error {ch['error']['max_mm']:.3g} mm "
-              f"({100 * ch['error']['max_rel_span']:.3g} % of span{ab})")
-    bom = data["bill_of_materials"]
-    print("  rods      " + ", ".join(f"{v} x {k}" for k, v in bom["rods_by_type"].items()))
-    if "filament_g" in bom:
-        print(f"  filament  {bom['filament_g']:.1f} g for the rods; frame in frame.stl")
-    for note in b.notes:
-        print(f"  note: {note}")
-    print(f"  files     {target}/")
+    pipeline.write_chandelier_outputs(b, target, progress=progress)
+    print(chandelier_summary(b, target))
     if target != outdir:
         print(f"rodcad: a chain misses the tolerance; {outdir} left as it was, the best achievable design "
               f"is in {target}", file=sys.stderr)

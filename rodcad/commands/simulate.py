@@ -55,5 +55,5 @@ def run(args: argparse.Namespace) -> int:
         print(f"{i:>3} {result.type_names[i]:<16} {result.masses[i]:8.3f} {eq.points[i][0]:9.2f} "
               f"{eq.points[i][1]:9.2f} {math.degrees(eq.angles[i]):10.3f} {bend} {lim_s:>16}")
     print(f"    {'end':<16} {'':>8} {eq.points[-1][0]:9.2f} {eq.points[-1][1]:9.2f}")
-    print(summary_text(result, None, data).split("\n", 1)[1])
+    print(summary_text(result, None).split("\n", 1)[1])
     return 0 if eq.success else 1

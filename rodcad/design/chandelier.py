@@ -25,11 +25,20 @@ This module is numpy/matplotlib only; the solids come from :mod:`rodcad.cad`
 from __future__ import annotations
 
 import math
+import time
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 import numpy as np
+
+from optimize import EquilibriumResult, ShapeDistance, shape_distance
+from rodcad.catalog.model import Catalog
+from rodcad.design.chains import ChainSpec, IntervalsFn, design_chains
+from rodcad.design.model import Constraints
+from rodcad.design.plan import CatalogArrays, catalog_arrays
+from rodcad.errors import Problem
+from rodcad.progress import Progress
 
 __all__ = ['MIN_HORIZONTAL_SPAN', 'ChainPlacement', 'ring', 'two_rings', 'polygon_frame', 'explicit', 'BillOfMaterials', 'ChainResult', 'ChandelierDesign', 'TargetLike', 'design_chandelier']
 
@@ -328,14 +337,19 @@ class ChainResult:
         return np.asarray(self.design.result.masses, dtype=float)
 
     @property
+    def equilibrium(self) -> EquilibriumResult:
+        """The designed chain solved from scratch (in the chain plane)."""
+        return self.design.check.equilibrium
+
+    @property
     def points(self) -> np.ndarray:
         """Simulated joints (N+1, 2) in the chain plane (mm)."""
-        return np.asarray(self.design.result.equilibrium.points, dtype=float)
+        return np.asarray(self.equilibrium.points, dtype=float)
 
     @property
     def angles(self) -> np.ndarray:
         """Rod chord angles theta_i (N,) from the chain plane's +x (radians)."""
-        return np.asarray(self.design.result.equilibrium.angles, dtype=float)
+        return np.asarray(self.equilibrium.angles, dtype=float)
 
     @property
     def target(self) -> np.ndarray:
@@ -348,9 +362,9 @@ class ChainResult:
         return self.placement.to_3d(self.points)
 
     @property
-    def distance(self) -> Any:
+    def distance(self) -> ShapeDistance:
         """Target vs simulated joints (:class:`optimize.distance.ShapeDistance`)."""
-        return self.design.result.distance
+        return shape_distance(self.target, self.points)
 
     def error(self) -> dict[str, float]:
         """Shape error {max_mm, mean_mm, sum_mm, max_rel_span} as in design.json."""
@@ -391,7 +405,7 @@ class ChandelierDesign:
         """Per-chain summary rows: name, rods, mass (g), error, stable, unique."""
         rows = []
         for c in self.chains:
-            eq = c.design.result.equilibrium
+            eq = c.equilibrium
             rows.append({"name": c.name, "n_rods": len(c.masses), "mass_g": float(c.masses.sum()),
                          **c.error(), "stable": bool(eq.stable), "unique": bool(c.design.unique),
                          "success": bool(c.design.result.success)})
@@ -428,27 +442,20 @@ def _target_curve(target: TargetLike, placement: ChainPlacement) -> np.ndarray:
     return curve
 
 
-def _design_one(task: tuple) -> Any:
-    """Plan and design one chain (top level so worker processes can run it)."""
-    from rodcad.design.masses import design_chain
-    from rodcad.design.plan import plan_chain
-
-    arrays, curve, plan_kw, method, seed, design_kw = task
-    plan = plan_chain(None, curve, arrays=arrays, **plan_kw)
-    return design_chain(plan, method, seed=seed, **design_kw)
-
-
-def design_chandelier(catalog: Any, placements: Sequence[ChainPlacement],
+def design_chandelier(catalog: Catalog, placements: Sequence[ChainPlacement],
                       targets: TargetLike | Sequence[TargetLike], *, method: str = "refine",
-                      seed: int = 0, jobs: int = 1, arrays: Any = None,
-                      plan_options: Mapping[str, Any] | Sequence[Mapping[str, Any]] | None = None,
-                      design_options: Mapping[str, Any] | None = None) -> ChandelierDesign:
-    """Design every chain of a chandelier independently, from one rod catalog.
+                      seed: int = 0, jobs: int = 1, arrays: CatalogArrays | None = None,
+                      constraints: Constraints | None = None,
+                      problem: Callable[[str, str], Problem] | None = None,
+                      intervals: IntervalsFn | None = None, n_starts: int = 12,
+                      g: float = 9.81, progress: Progress | None = None) -> ChandelierDesign:
+    """Design every chain of a chandelier, from one rod catalog, through the per-chain path
+    a single chain takes (:func:`rodcad.design.chains.design_chains`).
 
-    Each chain is planned on its target (in its own plane) and designed with the
-    same method and seed, so the result does not depend on ``jobs``. Chains whose
-    problems are identical (same plane anchors to 1e-9 mm, target and options; a
-    symmetric ring) are designed once and share the result.
+    Each chain is planned on its target (in its own plane) with the design's constraints
+    and designed with the same method and seed, so the result does not depend on
+    ``jobs``. Chains whose problems are identical (same plane anchors to 1e-9 mm and
+    target; a symmetric ring) are designed once and share the result.
 
     Args:
         catalog: a loaded :class:`rodcad.catalog.model.Catalog`.
@@ -459,21 +466,22 @@ def design_chandelier(catalog: Any, placements: Sequence[ChainPlacement],
         seed: random seed of every chain's design.
         jobs: worker processes (1 = in this process).
         arrays: precomputed :func:`rodcad.design.plan.catalog_arrays`.
-        plan_options: keyword arguments of :func:`rodcad.design.plan.plan_chain`
-            (allowed_types, lengths, preferred_length), shared or one per chain.
-        design_options: keyword arguments of :func:`rodcad.design.masses.design_chain`
-            (max_nfev, max_time, n_starts).
+        constraints: the design's constraints (types, lengths, preferred length, rod
+            count, fixed rods), applied to every chain (default: none).
+        problem: makes a problem pointing at a key of the design file (default: problems
+            name the chandelier, without a file position).
+        intervals: achievable mass intervals of rod types (fabrication with CAD), or None.
+        n_starts: multi-start count of each chain's uniqueness check.
+        g: gravitational acceleration (m/s^2).
+        progress: where to report the steps (default: silent).
 
     Returns:
         The designs, per-chain errors and the bill of materials.
 
     Raises:
-        ValueError: a target list of the wrong length, or a chain that cannot be laid.
+        ValueError: a target list of the wrong length or a bad target.
+        InputError: a chain whose constraints cannot be met.
     """
-    import time
-
-    from rodcad.design.plan import catalog_arrays
-
     t0 = time.perf_counter()
     placements = list(placements)
     if not placements:
@@ -485,40 +493,21 @@ def design_chandelier(catalog: Any, placements: Sequence[ChainPlacement],
         raise ValueError(f"{len(targets)} targets for {n} chains (give one, or one per chain)")
     else:
         per_chain = [targets] * n
-    if plan_options is None or isinstance(plan_options, Mapping):
-        plan_kw = [dict(plan_options or {})] * n
-    else:
-        plan_kw = [dict(o) for o in plan_options]
-        if len(plan_kw) != n:
-            raise ValueError(f"{len(plan_kw)} plan options for {n} chains")
     if arrays is None:
         arrays = catalog_arrays(catalog, jobs=jobs)
-    design_kw = dict(design_options or {})
-    curves = [_target_curve(t, p) for t, p in zip(per_chain, placements)]
-    # identical problems are designed once
-    keys, first_of, tasks = [], {}, []
-    for i, (p, c, kw) in enumerate(zip(placements, curves, plan_kw)):
-        key = (np.round(p.plane_anchors(), 9).tobytes(), np.round(c, 9).tobytes(),
-               repr(sorted(kw.items())))
-        keys.append(key)
-        if key not in first_of:
-            first_of[key] = i
-            tasks.append((arrays, c, kw, method, seed, design_kw))
-    order = list(first_of.values())
-    if jobs > 1 and len(tasks) > 1:
-        from rodcad.parallel import worker_pool
+    specs = [ChainSpec(p.name, np.array(p.plane_anchors(), dtype=float), _target_curve(t, p))
+             for t, p in zip(per_chain, placements)]
+    designed = design_chains(specs, arrays, constraints or Constraints(), problem or _problem,
+                             method=method, seed=seed, n_starts=n_starts, g=g, intervals=intervals, jobs=jobs,
+                             progress=progress)
+    chains = [ChainResult(p, d.design, None if d.shared_with is None else placements[d.shared_with].name)
+              for p, d in zip(placements, designed)]
+    n_distinct = sum(1 for d in designed if d.shared_with is None)
+    return ChandelierDesign(chains, _bill_of_materials(chains), method, seed, time.perf_counter() - t0, n_distinct)
 
-        with worker_pool(min(jobs, len(tasks))) as pool:
-            solved = list(pool.map(_design_one, tasks))
-    else:
-        solved = [_design_one(t) for t in tasks]
-    by_first = dict(zip(order, solved))
-    chains = []
-    for i, p in enumerate(placements):
-        j = first_of[keys[i]]
-        chains.append(ChainResult(p, by_first[j], None if j == i else placements[j].name))
-    bom = _bill_of_materials(chains)
-    return ChandelierDesign(chains, bom, method, seed, time.perf_counter() - t0, len(tasks))
+
+def _problem(key: str, message: str) -> Problem:
+    return Problem("<chandelier>", 0, 0, key, message)
 
 
 def _is_curve(obj: Any) -> bool:

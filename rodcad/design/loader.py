@@ -12,8 +12,8 @@ from rodcad.catalog.loader import load_catalog
 from rodcad.errors import InputError, Problem
 from rodcad.yamlio import suggest, load_yaml, load_yaml_text
 from rodcad.yamlspec import check_document
-from rodcad.design.model import ChainRod, Constraints, DESIGN_FORMAT, Design, FixedRod
-from rodcad.design.spec import PATTERNS, design_spec
+from rodcad.design.model import DESIGN_FORMAT, ChainRod, ChandelierSpec, Constraints, Design, FixedRod
+from rodcad.design.spec import FRAME_OF_PATTERN, PATTERNS, design_spec
 from rodcad.catalog.massrange import mass_info
 
 __all__ = ['load_design']
@@ -186,10 +186,21 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         cad=bool(fab.get("cad", True)),
         fabrication_seed=int(fab.get("seed", 0)),
         source=doc,
-        chandelier=data.get("chandelier"),
+        chandelier=_chandelier_spec(data.get("chandelier")),
         placements=placements,
         chain_targets=chain_targets,
     )
+
+
+def _chandelier_spec(c: dict[str, Any] | None) -> ChandelierSpec | None:
+    """The checked ``chandelier`` block as a typed spec."""
+    if c is None:
+        return None
+    frame = dict(c.get("frame") or {})
+    kind = frame.pop("kind", None) or FRAME_OF_PATTERN[c["pattern"]]
+    params = {k: v for k, v in c.items() if k not in ("pattern", "chains", "target", "frame")}
+    return ChandelierSpec(c["pattern"], params, kind, frame, c.get("vertices"),
+                          {k: v for k, v in c.items() if k != "chains"})
 
 
 def _chandelier(c: dict[str, Any], v: Any) -> tuple[list[Any] | None, list[dict[str, Any]] | None]:

@@ -7,20 +7,91 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 import numpy as np
-from optimize import InverseProblem, InverseResult, design, find_equilibria
+from optimize import EquilibriumResult, InverseProblem, InverseResult, design, find_equilibria, solve_equilibrium
 from rodcad.design.plan import ChainPlan
 
-__all__ = ['ChainDesign', 'design_chain', 'SNAP_STRATEGIES', 'design_buildable']
+__all__ = ['BuildableInfo', 'ChainCheck', 'ChainDesign', 'SNAP_STRATEGIES', 'check_chain', 'design_buildable', 'design_chain']
+
+
+@dataclass(frozen=True)
+class ChainCheck:
+    """The designed chain solved from scratch, and whether its shape is the only stable one.
+
+    Attributes:
+        equilibrium: the equilibrium of the designed masses, solved from a sag guess.
+        n_stable: distinct stable equilibria found by the multi-start.
+        unique: the multi-start found no other stable shape.
+        n_starts: starts of the multi-start.
+    """
+
+    equilibrium: EquilibriumResult
+    n_stable: int
+    unique: bool
+    n_starts: int
+
+
+@dataclass(frozen=True)
+class BuildableInfo:
+    """How :func:`design_buildable` moved the masses onto buildable ones.
+
+    Attributes:
+        snapped: rods fixed at an achievable mass.
+        rounds: re-designs after the continuous one.
+        strategy: which gap masses a round fixed (:data:`SNAP_STRATEGIES`).
+        scale: the common factor applied to every continuous mass first.
+        error_before, error_after: max joint error / span of the continuous design and of this one.
+        max_error_before_mm, max_error_after_mm: the same in mm.
+        moved: rod index -> (designed mass, built mass) (g).
+        continuous_masses: the continuous design's masses (g).
+    """
+
+    snapped: int
+    rounds: int
+    strategy: str
+    scale: float
+    error_before: float
+    error_after: float
+    max_error_before_mm: float
+    max_error_after_mm: float
+    moved: dict[int, tuple[float, float]]
+    continuous_masses: list[float]
 
 
 @dataclass
 class ChainDesign:
-    """A designed chain: the plan, the inverse-design result and its uniqueness check."""
+    """A designed chain: the plan, the inverse-design result and its check.
+
+    Attributes:
+        plan: the plan the masses were designed for.
+        result: the inverse-design result (masses, best-fit distance).
+        check: the chain solved from scratch and the multi-start uniqueness check.
+        buildable: how the masses were moved onto buildable ones, or None.
+    """
 
     plan: ChainPlan
     result: InverseResult
-    n_stable: int
-    unique: bool
+    check: ChainCheck
+    buildable: BuildableInfo | None = None
+
+    @property
+    def n_stable(self) -> int:
+        return self.check.n_stable
+
+    @property
+    def unique(self) -> bool:
+        return self.check.unique
+
+
+def check_chain(plan: ChainPlan, masses: np.ndarray, *, seed: int = 0, n_starts: int = 12,
+                g: float | None = None) -> ChainCheck:
+    """Solve the designed chain from scratch and look for other stable equilibria (multi-start)."""
+    p = plan.problem
+    a, b = p.anchors
+    g = p.g if g is None else g
+    limits = p.limits if p.n > 1 else None
+    eq = solve_equilibrium(p.lengths, masses, a, b, com=p.com, limits=limits, g=g)
+    multi = find_equilibria(p.lengths, masses, a, b, com=p.com, limits=limits, g=g, n_starts=n_starts, seed=seed)
+    return ChainCheck(eq, multi.n_distinct, multi.unique, n_starts)
 
 
 def design_chain(
@@ -31,14 +102,11 @@ def design_chain(
     max_nfev: int = 200,
     max_time: float | None = None,
     n_starts: int = 12,
+    g: float | None = None,
 ) -> ChainDesign:
-    """Masses for the plan, re-simulated, with a multi-start uniqueness check."""
+    """Masses for the plan, checked once (:func:`check_chain`; ``g`` defaults to the problem's)."""
     result = design(plan.problem, method, seed=seed, max_nfev=max_nfev, max_time=max_time)
-    p = plan.problem
-    a, b = p.anchors
-    multi = find_equilibria(p.lengths, result.masses, a, b, com=p.com, limits=p.limits,
-                            g=p.g, n_starts=n_starts, seed=seed)
-    return ChainDesign(plan, result, multi.n_distinct, multi.unique)
+    return ChainDesign(plan, result, check_chain(plan, result.masses, seed=seed, n_starts=n_starts, g=g))
 
 
 #: How :func:`design_buildable` picks the rods to fix in a round: 'all' fixes every mass
@@ -108,6 +176,7 @@ def design_buildable(
     max_time: float | None = None,
     strategy: str = "all",
     rescale: bool = True,
+    g: float | None = None,
 ) -> ChainDesign:
     """Masses for the plan that fabrication can really build, re-simulated and checked.
 
@@ -127,7 +196,7 @@ def design_buildable(
         intervals: per chain position, the achievable [(lo, hi), ...] in g (e.g.
             ``[achievable_intervals(catalog[name]) for name in plan.type_names]``), or
             a mapping type name -> intervals.
-        seed, n_starts, max_nfev, max_time: as for :func:`design_chain` (per round).
+        seed, n_starts, max_nfev, max_time, g: as for :func:`design_chain` (per round).
         max_rounds: re-designs after the first, continuous one.
         strategy: which gap masses a round fixes (:data:`SNAP_STRATEGIES`).
         rescale: first multiply every mass by the common factor that brings them
@@ -135,13 +204,10 @@ def design_buildable(
 
     Returns:
         A :class:`ChainDesign` whose ``result.masses`` all lie in their intervals and
-        whose equilibrium and distance belong to those masses; ``result.info['buildable']``
-        records: ``snapped`` (rods fixed at an interval edge), ``rounds``, ``error_before`` /
-        ``error_after`` (max joint error / span of the continuous design and of this one),
-        ``max_error_before_mm`` / ``max_error_after_mm``, ``moved`` (index -> (designed g,
-        built g)) and ``continuous_masses``. E.g.
-        ``d.result.info['buildable']['error_after'] >= d.result.info['buildable']['error_before']``
-        up to the optimiser's tolerance.
+        whose equilibrium and distance belong to those masses; ``buildable``
+        (:class:`BuildableInfo`) records how they were moved. E.g.
+        ``d.buildable.error_after >= d.buildable.error_before`` up to the optimiser's
+        tolerance.
     """
     import time
 
@@ -206,26 +272,15 @@ def design_buildable(
         for k in range(p.n):  # within 1e-9 already: put it exactly inside
             masses[k] = _nearest(ivs[k], float(masses[k]))[0]
     history = list(first.history)
-    info = dict(first.info)
     final = finish_result(p, method, masses, t0, nfev, history, statics_residual(p, masses),
                     f"buildable masses ({len(moved)} rod(s) fixed at an achievable mass, "
-                    f"{rounds} re-design(s) after the continuous one)", info)
-    final.info["buildable"] = {
-        "snapped": len(moved),
-        "rounds": rounds,
-        "strategy": strategy,
-        "scale": float(scale),
-        "error_before": float(first.distance.max_rel_span),
-        "error_after": float(final.distance.max_rel_span),
-        "max_error_before_mm": float(first.distance.max),
-        "max_error_after_mm": float(final.distance.max),
-        "moved": {int(k): v for k, v in sorted(moved.items())},
-        "continuous_masses": first.masses.tolist(),
-    }
-    a, b = p.anchors
-    multi = find_equilibria(p.lengths, final.masses, a, b, com=p.com, limits=p.limits,
-                            g=p.g, n_starts=n_starts, seed=seed)
-    return ChainDesign(plan, final, multi.n_distinct, multi.unique)
+                    f"{rounds} re-design(s) after the continuous one)", dict(first.info))
+    info = BuildableInfo(
+        snapped=len(moved), rounds=rounds, strategy=strategy, scale=float(scale),
+        error_before=float(first.distance.max_rel_span), error_after=float(final.distance.max_rel_span),
+        max_error_before_mm=float(first.distance.max), max_error_after_mm=float(final.distance.max),
+        moved={int(k): v for k, v in sorted(moved.items())}, continuous_masses=first.masses.tolist())
+    return ChainDesign(plan, final, check_chain(plan, final.masses, seed=seed, n_starts=n_starts, g=g), info)
 
 
 def _with_bounds(problem: InverseProblem, bounds: np.ndarray) -> InverseProblem:

@@ -42,7 +42,7 @@ from rodcad.catalog.model import Catalog
 from rodcad.errors import Problem
 from rodcad.yamlspec import Checked
 
-__all__ = ['DESIGN_FORMAT', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'Design']
+__all__ = ['DESIGN_FORMAT', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
 
 
 #: Design file format this rodcad reads.
@@ -95,6 +95,27 @@ class ChainRod:
     mass: float
 
 
+@dataclass(frozen=True)
+class ChandelierSpec:
+    """A design file's ``chandelier`` block, checked.
+
+    Attributes:
+        pattern: 'ring', 'two-rings', 'polygon' or 'explicit'.
+        params: the pattern's parameters as written (count, radius, vertices, ...).
+        frame_kind: the frame to build ('ring', 'two_rings' or 'bars').
+        frame: the frame's options (width, thickness, ...), without its kind.
+        vertices: the polygon's vertices (mm), or None.
+        written: the block as written, less its per-chain entries (for design.json).
+    """
+
+    pattern: str
+    params: dict[str, Any]
+    frame_kind: str
+    frame: dict[str, Any]
+    vertices: list[list[float]] | None
+    written: dict[str, Any]
+
+
 @dataclass
 class Design:
     """A validated design file.
@@ -138,7 +159,7 @@ class Design:
     cad: bool
     fabrication_seed: int
     source: Checked | None = field(default=None, repr=False)
-    chandelier: dict[str, Any] | None = None
+    chandelier: ChandelierSpec | None = None
     placements: list[Any] | None = None
     chain_targets: list[dict[str, Any]] | None = None
 

@@ -20,13 +20,18 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 import numpy as np
 from optimize import InverseProblem, design
 from optimize.assign import assign_types, joint_mismatch
 from optimize.discretize import Discretization, discretize
+from rodcad.catalog.limits import all_pair_limits
 from rodcad.catalog.massrange import mass_info
+from rodcad.catalog.model import Catalog, RodType
+from rodcad.design.model import Constraints, FixedRod
+from rodcad.errors import InputError, Problem
 
-__all__ = ['ChainPlan', 'catalog_arrays', 'plan_chain', 'STOP_REACH']
+__all__ = ['CatalogArrays', 'ChainPlan', 'catalog_arrays', 'plan_chain', 'plan_constrained', 'STOP_REACH']
 
 
 @dataclass
@@ -62,26 +67,56 @@ class ChainPlan:
     added_stops: list[int] = field(default_factory=list)
 
 
-def catalog_arrays(catalog, *, jobs: int | None = None, progress: Callable | None = None):
-    """Per-type arrays the numerics need.
+@dataclass(frozen=True)
+class CatalogArrays:
+    """Per-type numbers of a catalog, as the numerics need them (catalog order).
 
-    Returns:
-        (types, lengths (T,), com (T, 2), mass_bounds (T, 2), pair_limits (T, T, 2) rad).
-        Pairs that cannot be joined get limits (nan, nan).
+    Attributes:
+        types: the rod types.
+        lengths: (T,) pin-to-pin lengths (mm).
+        com: (T, 2) centres of mass (along, perp) in the rod frame (mm).
+        mass_bounds: (T, 2) achievable mass range [m_min, m_max] (g).
+        pair_limits: (T, T, 2) joint limits (rad) of type i followed by type j;
+            (nan, nan) where the pair cannot be joined, +-inf on a side nothing stops.
     """
-    from rodcad.catalog.limits import all_pair_limits
 
-    types = list(catalog)
+    types: tuple[RodType, ...]
+    lengths: np.ndarray
+    com: np.ndarray
+    mass_bounds: np.ndarray
+    pair_limits: np.ndarray
+
+    @property
+    def names(self) -> list[str]:
+        return [t.name for t in self.types]
+
+    @cached_property
+    def index(self) -> dict[str, int]:
+        """Type name -> position."""
+        return {t.name: i for i, t in enumerate(self.types)}
+
+    def limits_of(self, names: Sequence[str]) -> np.ndarray:
+        """(N-1, 2) joint limits (rad) of a sequence of types; (-inf, inf) for free sides and
+        (nan, nan) where two neighbours cannot be joined."""
+        k = [self.index[n] for n in names]
+        return self.pair_limits[k[:-1], k[1:]].reshape(-1, 2)
+
+
+def catalog_arrays(catalog: Catalog, *, jobs: int | None = None,
+                   progress: Callable | None = None) -> CatalogArrays:
+    """The catalog's per-type numbers: lengths, centres of mass, mass ranges, pair limits
+    (joint limits and mass ranges from the solids, disk-cached)."""
+    types = tuple(catalog)
     t = len(types)
-    lengths = np.array([ty.length for ty in types], dtype=float)
-    com = np.array([mass_info(ty).com for ty in types], dtype=float)
-    bounds = np.array([mass_info(ty).mass_range for ty in types], dtype=float)
     index = {ty.name: i for i, ty in enumerate(types)}
     lim = np.full((t, t, 2), np.nan)
     for (a, b), pl in all_pair_limits(catalog, jobs=jobs, progress=progress).items():
         if pl.assemblable:
             lim[index[a], index[b]] = pl.limits_rad
-    return types, lengths, com, bounds, lim
+    return CatalogArrays(types, np.array([ty.length for ty in types], dtype=float),
+                         np.array([mass_info(ty).com for ty in types], dtype=float).reshape(-1, 2),
+                         np.array([mass_info(ty).mass_range for ty in types], dtype=float).reshape(-1, 2),
+                         lim)
 
 
 def plan_chain(
@@ -119,7 +154,9 @@ def plan_chain(
     Raises:
         ValueError: the rods cannot be laid on the curve (explained).
     """
-    types, t_len, t_com, t_bounds, t_lim = arrays if arrays is not None else catalog_arrays(catalog)
+    arrays = arrays if arrays is not None else catalog_arrays(catalog)
+    types, t_len, t_com, t_bounds, t_lim = (arrays.types, arrays.lengths, arrays.com, arrays.mass_bounds,
+                                            arrays.pair_limits)
     names = [ty.name for ty in types]
     use = np.ones(len(types), dtype=bool)
     if allowed_types is not None:
@@ -291,3 +328,85 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
             f"angles; the chain hangs within {best_err:.3g} mm of the curve (without these stops "
             f"{free_err:.3g} mm)"))
     return best
+
+
+def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: CatalogArrays,
+                     problem: Callable[[str, str], Problem], *, label: str = "") -> ChainPlan:
+    """Lay rods on a target with every constraint of a design applied (the one place
+    they are): allowed types and lengths, the preferred length, the rod count (trying
+    each allowed length as the preferred one until the count is met) and fixed rods
+    (their types, then their masses).
+
+    Args:
+        curve: (M, 2) target polyline from A to B (mm).
+        constraints: the design's constraints.
+        arrays: the catalog's numbers (:func:`catalog_arrays`).
+        problem: makes a :class:`rodcad.errors.Problem` pointing at a key of the design
+            file (``Design.problem``).
+        label: the chain's name in messages (a chandelier's chains), or "".
+
+    Raises:
+        InputError: the constraints cannot be met on this target (pointing at the key).
+    """
+    c = constraints
+    who = f"{label}: " if label else ""
+    candidates: list[float | None] = [c.preferred_length]
+    if c.rods is not None and c.preferred_length is None:
+        allowed = {float(x) for x, t in zip(arrays.lengths, arrays.types) if c.types is None or t.name in c.types}
+        if c.lengths is not None:
+            allowed &= {float(x) for x in c.lengths}
+        candidates = [None, *sorted(allowed)]
+    counts: dict[int, ChainPlan] = {}
+    for pref in candidates:
+        try:
+            p = plan_chain(None, curve, allowed_types=c.types, lengths=c.lengths, preferred_length=pref,
+                           arrays=arrays)
+        except ValueError as err:
+            raise InputError([problem("target", f"{who}{err}")]) from None
+        counts.setdefault(len(p.type_names), p)
+        if c.rods is None or len(p.type_names) == c.rods:
+            break
+    if c.rods is not None and c.rods not in counts:
+        have = ", ".join(str(k) for k in sorted(counts))
+        raise InputError([problem(
+            "constraints.rods", f"{who}the allowed rod lengths lay {have} rods on this target, not {c.rods}; "
+            "change the rod count, the lengths allowed or preferred_length")])
+    p = counts[c.rods] if c.rods is not None else next(iter(counts.values()))
+    if c.fixed:
+        _apply_fixed(p, c.fixed, arrays, problem, who)
+    return p
+
+
+def _apply_fixed(p: ChainPlan, fixed: Sequence[FixedRod], arrays: CatalogArrays,
+                 problem: Callable[[str, str], Problem], who: str) -> None:
+    """Impose fixed rods on a plan (types, then masses)."""
+    n = len(p.type_names)
+    problems = []
+    for i, f in enumerate(fixed):
+        key = f"constraints.fixed[{i}]"
+        if f.index >= n:
+            problems.append(problem(f"{key}.index", f"{who}the chain has {n} rods (indices 0 to {n - 1})"))
+            continue
+        need = float(p.problem.lengths[f.index])
+        k = arrays.index[f.type]
+        if not np.isclose(arrays.lengths[k], need):
+            problems.append(problem(f"{key}.type", f"{who}rod {f.index} is {need:g} mm long on this target "
+                                    f"but {f.type!r} is {arrays.lengths[k]:g} mm"))
+            continue
+        p.type_names[f.index] = f.type
+        p.problem.com[f.index] = arrays.com[k]
+        lo, hi = arrays.mass_bounds[k]
+        if f.mass is not None:
+            lo, hi = f.mass * (1 - 1e-9), f.mass * (1 + 1e-9)
+        p.problem.mass_bounds[f.index] = (lo, hi)
+    if problems:
+        raise InputError(problems)
+    lim = arrays.limits_of(p.type_names)
+    bad = [j for j in range(n - 1) if not lim[j, 0] <= lim[j, 1]]
+    if bad:
+        j = bad[0]
+        raise InputError([problem("constraints.fixed", f"{who}rods {j} ({p.type_names[j]}) and {j + 1} "
+                                  f"({p.type_names[j + 1]}) cannot be joined")])
+    if n > 1:
+        p.problem.limits = lim
+    p.notes.append(f"{len(fixed)} rod(s) fixed by the design")

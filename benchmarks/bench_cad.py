@@ -28,9 +28,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
 
+    from rodcad.cad.rods import fabricate_chain, write_assembly, write_rod_files
     from rodcad.catalog.cache import DiskCache
     from rodcad.catalog.loader import load_catalog
-    from rodcad.cad.rods import fabricate_chain, write_assembly, write_rod_files
     from rodcad.catalog.massrange import mass_infos
 
     rows: list[tuple[str, float]] = []

@@ -21,12 +21,12 @@ import time
 from pathlib import Path
 
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
+from rodcad.catalog.loader import load_catalog
 from rodcad.design.chandelier import design_chandelier, ring
 from rodcad.design.frame import frame_outline, plan_frame
-from rodcad.outputs.preview3d import preview_3d
-from rodcad.catalog.loader import load_catalog
 from rodcad.design.model import Constraints
 from rodcad.design.plan import catalog_arrays
+from rodcad.outputs.preview3d import preview_3d
 from rodcad.parallel import default_jobs
 
 LENGTHS = (250, 260, 270, 280, 290, 300)

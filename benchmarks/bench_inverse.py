@@ -28,9 +28,9 @@ import numpy as np
 
 from optimize import design
 from optimize.discretize import curve_distance
-from rodcad.design.targets import make_target
 from rodcad.catalog.loader import load_catalog
 from rodcad.design.plan import catalog_arrays, plan_chain
+from rodcad.design.targets import make_target
 
 A, B = (0.0, 0.0), (200.0, 0.0)
 TARGETS = {

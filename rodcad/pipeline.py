@@ -26,11 +26,22 @@ from typing import Any
 
 import numpy as np
 
-from optimize import EquilibriumResult, find_equilibria, shape_distance, solve_equilibrium
+from optimize import (
+    EquilibriumResult,
+    find_equilibria,
+    shape_distance,
+    solve_equilibrium,
+)
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.export import export_assembly, export_step, export_stl
-from rodcad.cad.rods import ChainFabrication, FabricatedRod, fabricate_chain, write_assembly, write_rod_files
+from rodcad.cad.rods import (
+    ChainFabrication,
+    FabricatedRod,
+    fabricate_chain,
+    write_assembly,
+    write_rod_files,
+)
 from rodcad.design.chains import ChainSpec, design_chains
 from rodcad.design.chandelier import ChandelierDesign, design_chandelier
 from rodcad.design.frame import FramePlan, frame_outline, plan_frame
@@ -46,8 +57,18 @@ from rodcad.outputs.preview3d import preview_3d
 from rodcad.outputs.report import chandelier_markdown, report_markdown
 from rodcad.progress import Progress
 
-__all__ = ["AsBuilt", "BuildResult", "ChandelierBuild", "N_STARTS", "build", "build_chandelier", "simulate",
-           "write_chandelier_outputs", "write_outputs"]
+__all__ = [
+    "N_STARTS",
+    "as_built",
+    "AsBuilt",
+    "build",
+    "build_chandelier",
+    "BuildResult",
+    "ChandelierBuild",
+    "simulate",
+    "write_chandelier_outputs",
+    "write_outputs",
+]
 
 #: Multi-start count of the uniqueness check.
 N_STARTS = 12

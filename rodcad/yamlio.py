@@ -1,8 +1,9 @@
-"""YAML input with a line and column for every value, and a small schema framework.
+"""YAML input with a line and column for every value (the specs that check it are in
+:mod:`rodcad.yamlspec`).
 
 A file a person edits is read with :func:`load_yaml` (PyYAML's ``compose``, so
 every node keeps its position), then checked against a tree of *specs*
-(:class:`Obj`, :class:`Num`, :class:`Str`, ...). Checking collects **every**
+(:class:`rodcad.yamlspec.Obj`, ``Num``, ``Str``, ...). Checking collects **every**
 problem as a :class:`rodcad.errors.Problem` (``FILE:LINE:COL: key.path:
 message``) instead of stopping at the first one, and returns plain Python values
 together with a map from key path to position, so that cross-field checks done
@@ -12,6 +13,7 @@ The same spec tree generates a JSON Schema (:meth:`Spec.json_schema`) for editor
 completion, so the published schema and the validator cannot drift apart.
 
 Example:
+    >>> from rodcad.yamlspec import Field, Num, Obj, check_document
     >>> spec = Obj({"length": Field(Num(exclusive_minimum=0, unit="mm"), required=True)})
     >>> doc = check_document(load_yaml_text("length: -3\\n", "x.yaml"), spec)
     Traceback (most recent call last):
@@ -30,10 +32,29 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
 import yaml
+
 from rodcad.errors import InputError, Problem
 
-__all__ = ['Pos', 'child_path', 'format_number', 'load_yaml_text', 'load_yaml', 'Validator', 'MISSING',]
+__all__ = [
+    "MISSING",
+    "TAG_BOOL",
+    "TAG_FLOAT",
+    "TAG_INT",
+    "TAG_MERGE",
+    "TAG_NULL",
+    "TAG_STR",
+    "child_path",
+    "format_number",
+    "freeze_value",
+    "load_yaml",
+    "load_yaml_text",
+    "Pos",
+    "show_value",
+    "suggest",
+    "Validator",
+]
 
 
 TAG_STR = "tag:yaml.org,2002:str"

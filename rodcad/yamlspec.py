@@ -10,8 +10,25 @@ import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
+
 import yaml
-from rodcad.yamlio import MISSING, Pos, Validator, TAG_BOOL, TAG_FLOAT, TAG_INT, TAG_MERGE, TAG_NULL, TAG_STR, freeze_value, show_value, suggest, child_path, format_number
+
+from rodcad.yamlio import (
+    MISSING,
+    TAG_BOOL,
+    TAG_FLOAT,
+    TAG_INT,
+    TAG_MERGE,
+    TAG_NULL,
+    TAG_STR,
+    Pos,
+    Validator,
+    child_path,
+    format_number,
+    freeze_value,
+    show_value,
+    suggest,
+)
 
 __all__ = ['Spec', 'Any_', 'Str', 'Bool', 'Num', 'Nullable', 'ListOf', 'OneOrList', 'Field', 'CrossCheck', 'Obj', 'Checked', 'check_document']
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from rodcad.catalog.model import Catalog
 from rodcad.catalog.loader import load_catalog
+from rodcad.catalog.model import Catalog
 from rodcad.errors import InputError
 
 #: A minimal valid catalog: one family of square-ended rods, 12 x 8 mm.

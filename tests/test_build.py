@@ -11,9 +11,9 @@ import pytest
 
 from optimize import solve_equilibrium
 from rodcad import pipeline
+from rodcad.catalog.massrange import mass_info
 from rodcad.cli import main
 from rodcad.design.loader import load_design
-from rodcad.catalog.massrange import mass_info
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier"))

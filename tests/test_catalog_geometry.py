@@ -11,9 +11,13 @@ from catalog_testutil import BASE, load
 
 from rodcad.cad.collision import Clearance
 from rodcad.cad.export import export_step, import_step
-from rodcad.cad.solids import is_valid_solid, mass_properties, with_spherical_voids
+from rodcad.cad.solids import (
+    is_valid_solid,
+    mass_properties,
+    type_solid,
+    with_spherical_voids,
+)
 from rodcad.catalog.loader import load_catalog
-from rodcad.cad.solids import type_solid
 from rodcad.catalog.massrange import mass_info
 
 SHIPPED = load_catalog("pla-pinned")

@@ -13,8 +13,16 @@ from catalog_testutil import BASE, load
 
 from rodcad.cad.collision import PairScene
 from rodcad.catalog.cache import DiskCache
+from rodcad.catalog.limits import (
+    TOLERANCE_DEG,
+    NoFreeAngle,
+    all_pair_limits,
+    nominal_middle,
+    pair_limits,
+    pair_limits_detail,
+    search_limits,
+)
 from rodcad.catalog.loader import load_catalog
-from rodcad.catalog.limits import TOLERANCE_DEG, NoFreeAngle, all_pair_limits, nominal_middle, pair_limits, pair_limits_detail, search_limits
 
 
 @pytest.fixture(autouse=True)

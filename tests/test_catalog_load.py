@@ -12,8 +12,8 @@ import pytest
 import yaml
 from catalog_testutil import BASE, load, problems, write
 
-from rodcad.catalog.model import Catalog
 from rodcad.catalog.loader import catalog_from_text, load_catalog, resolve_catalog
+from rodcad.catalog.model import Catalog
 from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
 from rodcad.catalog.spec import catalog_schema
 from rodcad.commands.catalog import schema_text

@@ -11,10 +11,15 @@ from catalog_testutil import BASE, load
 from scipy.spatial.distance import pdist
 
 from rodcad.cad.collision import Clearance
-from rodcad.cad.solids import is_valid_solid, mass_properties, with_voids
-from rodcad.fabrication.layout import LATTICES, SYMMETRIES, lattice_sites, sphere_layout, symmetric_subset
+from rodcad.cad.solids import is_valid_solid, mass_properties, type_solid, with_voids
 from rodcad.catalog.massrange import compute_mass_info, layouts, mass_info, mass_infos
-from rodcad.cad.solids import type_solid
+from rodcad.fabrication.layout import (
+    LATTICES,
+    SYMMETRIES,
+    lattice_sites,
+    sphere_layout,
+    symmetric_subset,
+)
 
 BALLS = BASE + "    balls: {diameter: 5, density: 7.85, clearance: 0.2}\n"
 

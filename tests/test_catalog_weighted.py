@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodcad.design.targets import heart, make_target
+from rodcad.catalog.limits import all_pair_limits
 from rodcad.catalog.loader import load_catalog
 from rodcad.design.masses import design_chain
 from rodcad.design.plan import CatalogArrays, plan_chain
-from rodcad.catalog.limits import all_pair_limits
+from rodcad.design.targets import heart, make_target
 
 CHECK = Path(__file__).with_name("data") / "pla-weighted.check.json"
 A, B = (0.0, 0.0), (200.0, 0.0)

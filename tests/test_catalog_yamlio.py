@@ -6,9 +6,18 @@ import jsonschema
 import pytest
 
 from rodcad.errors import InputError
-from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, OneOrList, Str
 from rodcad.yamlio import Pos, format_number, load_yaml, load_yaml_text
-from rodcad.yamlspec import check_document
+from rodcad.yamlspec import (
+    Bool,
+    Field,
+    ListOf,
+    Nullable,
+    Num,
+    Obj,
+    OneOrList,
+    Str,
+    check_document,
+)
 
 SPEC = Obj(
     {

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodcad.design.targets import catenary, semicircle
 from rodcad.catalog.loader import load_catalog
-from rodcad.design.plan import catalog_arrays, plan_chain
 from rodcad.design.masses import design_chain
+from rodcad.design.plan import catalog_arrays, plan_chain
+from rodcad.design.targets import catenary, semicircle
 
 
 @pytest.fixture(scope="module")

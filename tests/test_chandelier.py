@@ -7,12 +7,20 @@ import math
 import numpy as np
 import pytest
 
-from rodcad.cad.chandelier import _rod_matrix, build_frame, chandelier_nodes
-from rodcad.design.chandelier import ChainPlacement, design_chandelier, explicit, polygon_frame, ring, two_rings
+from rodcad.cad.chandelier import build_frame, chandelier_nodes
+from rodcad.cad.export import rod_matrix
+from rodcad.cad.solids import type_solid
+from rodcad.catalog.loader import load_catalog
+from rodcad.design.chandelier import (
+    ChainPlacement,
+    design_chandelier,
+    explicit,
+    polygon_frame,
+    ring,
+    two_rings,
+)
 from rodcad.design.frame import FramePlan, frame_outline, plan_frame
 from rodcad.outputs.preview3d import preview_3d
-from rodcad.catalog.loader import load_catalog
-from rodcad.cad.solids import type_solid
 
 
 @pytest.fixture(scope="module")
@@ -174,7 +182,7 @@ def test_frame_problems_are_reported(catalog, small):
                                                           for r in plan.rest])
     lug = bad.lugs[0]
     rod = catalog[design.chains[0].type_names[0]]
-    d = DistanceTo(frame)(placed(type_solid(rod), lug.location @ _rod_matrix((0, 0), math.pi / 2)))
+    d = DistanceTo(frame)(placed(type_solid(rod), lug.location @ rod_matrix((0, 0), math.pi / 2)))
     assert d == 0.0
     # a ring too far out for the lugs to reach
     far = dict(plan.params, radius=plan.params["radius"] + 40)

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodcad.design.spec import design_schema
-from rodcad.design.loader import load_design
-from rodcad.errors import InputError
 from rodcad.catalog.massrange import mass_info
+from rodcad.design.loader import load_design
+from rodcad.design.spec import design_schema
+from rodcad.errors import InputError
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

@@ -13,13 +13,18 @@ import pytest
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
 from rodcad.cad.export import import_step, read_assembly
+from rodcad.cad.rods import (
+    fabricate_chain,
+    fabricate_rod,
+    write_assembly,
+    write_rod_files,
+)
 from rodcad.cad.solids import is_valid_solid, mass_properties, void_template
 from rodcad.catalog.cache import DiskCache
 from rodcad.catalog.loader import load_catalog
-from rodcad.fabrication.intervals import achievable_intervals
-from rodcad.cad.rods import fabricate_chain, fabricate_rod, write_assembly, write_rod_files
-from rodcad.fabrication.layout import void_volume
 from rodcad.catalog.massrange import mass_info
+from rodcad.fabrication.intervals import achievable_intervals
+from rodcad.fabrication.layout import void_volume
 
 
 @pytest.fixture(scope="module")

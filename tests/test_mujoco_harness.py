@@ -6,9 +6,8 @@ rodcad code, so a failure means the harness, not rodcad, is wrong.
 
 import numpy as np
 import pytest
-from scipy.optimize import least_squares
-
 from mujoco_chain import settle_chain
+from scipy.optimize import least_squares
 
 INF = np.inf
 

@@ -22,8 +22,8 @@ from rodcad.catalog import limits, massrange
 from rodcad.catalog.cache import DiskCache, register_seed
 from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
-from rodcad.fabrication import intervals as fabricate
 from rodcad.cli import main
+from rodcad.fabrication import intervals as fabricate
 
 KEY = "ab" * 32
 

@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodcad.design.targets import arc, catenary, heart, make_target, polygon, semicircle, svg_path
+from rodcad.design.targets import (
+    arc,
+    catenary,
+    heart,
+    make_target,
+    polygon,
+    semicircle,
+    svg_path,
+)
 
 A, B = np.array([0.0, 0.0]), np.array([200.0, 0.0])
 

@@ -7,28 +7,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from typing import Any
+
 import numpy as np
+
+from rodcad.cad.export import AssemblyGroup, AssemblyPart, rod_matrices, rod_matrix
+from rodcad.cad.rods import chain_parts
+from rodcad.cad.solids import type_solid
 from rodcad.design.chandelier import ChainResult
 from rodcad.design.frame import FrameCheck, FramePlan
-from rodcad.outputs.preview3d import mass_colors
-from rodcad.cad.solids import type_solid
 
 __all__ = ['rod_matrices', 'build_frame', 'chandelier_nodes']
 
 
-def _rod_matrix(origin2d: Sequence[float], theta: float) -> np.ndarray:
-    c, s = math.cos(theta), math.sin(theta)
-    m = np.eye(4)
-    m[:2, :2] = [[c, -s], [s, c]]
-    m[:2, 3] = origin2d
-    return m
 
 
-def rod_matrices(points2d: np.ndarray) -> list[np.ndarray]:
-    """Rod frame -> chain-plane frame (4x4) per rod: rod i at p_i, x along p_i -> p_{i+1}."""
-    p = np.asarray(points2d, dtype=float)
-    d = np.diff(p, axis=0)
-    return [_rod_matrix(p[i], math.atan2(d[i, 1], d[i, 0])) for i in range(len(d))]
 
 
 def build_frame(plan: FramePlan, catalog: Any, chains: Sequence[ChainResult] | None = None, *,
@@ -104,7 +96,7 @@ def build_frame(plan: FramePlan, catalog: Any, chains: Sequence[ChainResult] | N
             theta = -s * math.pi / 2 if end == 0 else s * math.pi / 2
             origin = (0.0, 0.0) if end == 0 else (-rod.length * math.cos(theta),
                                                    -rod.length * math.sin(theta))
-            d = near(placed(type_solid(rod), lug.location @ _rod_matrix(origin, theta)))
+            d = near(placed(type_solid(rod), lug.location @ rod_matrix(origin, theta)))
             clear.append((lug.name, "free", d))
             if d <= 1e-6:
                 problems.append(f"{lug.name}: the {type_name} rod touches the frame when hanging "
@@ -132,24 +124,16 @@ def chandelier_nodes(frame: Any, chains: Sequence[ChainResult], catalog: Any, *,
         frame_plan: the frame's plan, for the anchor pin lengths (default: the
             rod thickness plus the layer gaps and the prongs).
     """
-    from rodcad.cad.export import AssemblyGroup, AssemblyPart
-    from rodcad.cad.frame import pin_solid
-
-    part_cls = AssemblyPart
-    group_cls = AssemblyGroup
     all_m = np.concatenate([c.masses for c in chains])
-    lo, hi = float(all_m.min()), float(all_m.max())
+    scale = (float(all_m.min()), float(all_m.max()))
     nodes: list[Any] = []
     if frame is not None:
-        nodes.append(part_cls("frame", frame, np.eye(4), (0.6, 0.6, 0.62)))
+        nodes.append(AssemblyPart("frame", frame, np.eye(4), (0.6, 0.6, 0.62)))
     for ci, c in enumerate(chains):
-        colors = mass_colors(c.masses, lo, hi)
-        children = []
-        mats = rod_matrices(c.points)
-        for i, (name, m) in enumerate(zip(c.type_names, mats)):
-            solid = rod_solid(ci, i) if rod_solid is not None else type_solid(catalog[name])
-            children.append(part_cls(f"{i:02d}_{name}", solid, m, tuple(float(x) for x in colors[i][:3])))
         n = len(c.type_names)
+        solids = [rod_solid(ci, i) if rod_solid is not None else type_solid(catalog[name])
+                  for i, name in enumerate(c.type_names)]
+        pins = []
         for j in range(n + 1):
             g = catalog[c.type_names[min(j, n - 1)]].geometry
             length = g.thickness
@@ -158,10 +142,8 @@ def chandelier_nodes(frame: Any, chains: Sequence[ChainResult], catalog: Any, *,
                     length = frame_plan.lugs[2 * ci + (1 if j == n else 0)].width
                 else:
                     length = 2 * g.thickness - g.hinge.tongue_thickness
-            m = np.eye(4)
-            m[:2, 3] = c.points[j]
-            m[2, 3] = -length / 2
-            children.append(part_cls(f"pin_{j:02d}", pin_solid(g.hinge.pin_diameter, length),
-                                     m, (0.75, 0.75, 0.78)))
-        nodes.append(group_cls(c.name, children, c.placement.transform()))
+            pins.append((g.hinge.pin_diameter, length))
+        children = chain_parts([f"{i:02d}_{name}" for i, name in enumerate(c.type_names)], solids, c.points,
+                               c.masses, pins, mass_scale=scale)
+        nodes.append(AssemblyGroup(c.name, children, c.placement.transform()))
     return nodes

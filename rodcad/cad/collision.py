@@ -5,7 +5,9 @@ probes, and the clearance field the cavity and insert layouts are checked agains
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+
 import numpy as np
 from build123d import Solid
 from OCP.BRep import BRep_Builder
@@ -16,11 +18,20 @@ from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
 from OCP.TopAbs import TopAbs_IN, TopAbs_ON
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Compound
-from rodcad.catalog.model import RodGeometry
-from rodcad.cad.solids import CONTACT_TOL, GeometryError, collision_proxy, rod_solid
-from collections.abc import Sequence
 
-__all__ = ['Probe', 'PairScene', 'Clearance', 'solid_distance', 'DistanceTo', 'void_walls']
+from rodcad.cad.solids import CONTACT_TOL, GeometryError, collision_proxy, rod_solid
+from rodcad.catalog.model import RodGeometry
+
+__all__ = [
+    "Clearance",
+    "DistanceTo",
+    "faces_compound",
+    "first_vertex",
+    "PairScene",
+    "Probe",
+    "solid_distance",
+    "void_walls",
+]
 
 
 def faces_compound(solid: Solid) -> TopoDS_Compound:

@@ -4,15 +4,19 @@ print orientation and placement matrices.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+
 import numpy as np
-from build123d import Color, Compound, Location, Solid, export_step as _export_step
+from build123d import Color, Compound, Location, Solid
+from build123d import export_step as _export_step
 from build123d import import_step as _import_step
 from OCP.gp import gp_Trsf
 from OCP.TopLoc import TopLoc_Location
+
 from rodcad.cad.solids import GeometryError
 
 __all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'read_assembly', 'placed']
@@ -215,3 +219,21 @@ def placed(solid: Solid, matrix: np.ndarray) -> Solid:
     out = Solid(shape)
     out.label = solid.label
     return out
+
+
+def rod_matrix(origin: Sequence[float], theta: float) -> np.ndarray:
+    """Rod frame -> chain-plane frame (4x4): the rod's first joint at ``origin`` (x, y), its
+    chord at angle ``theta`` (rad) from +x, hinge axes along +z."""
+    c, s = math.cos(theta), math.sin(theta)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    m[:2, 3] = origin
+    return m
+
+
+def rod_matrices(points: np.ndarray) -> list[np.ndarray]:
+    """:func:`rod_matrix` of every rod of a chain with joints ``points`` (N+1, 2): rod i at
+    p_i, x along p_i -> p_{i+1}."""
+    p = np.asarray(points, dtype=float)
+    d = np.diff(p, axis=0)
+    return [rod_matrix(p[i], math.atan2(d[i, 1], d[i, 0])) for i in range(len(d))]

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+
 import numpy as np
 from build123d import Plane, Solid
+
 from rodcad.cad.export import placed
 from rodcad.cad.solids import GeometryError, cylinder_solid, one_solid, prism_solid
 

@@ -1,6 +1,8 @@
-"""Fabrication: cavities and ball sockets so every printed rod has its designed mass.
+"""Building every rod: cavities and ball sockets cut into the exact B-rep so every printed rod
+has its designed mass, and the rods' STEP/STL files and assembly.
 
-The data flow for one rod (type + target mass), one step per function:
+The data flow for one rod (type + target mass), one step per function (the numbers in
+:mod:`rodcad.fabrication`, the solids here):
 
     type     -> achievable_intervals(): once per type (disk-cached), every
                                symmetric ball subset of the type's socket layout
@@ -55,23 +57,42 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
 import numpy as np
+
 from rodcad.catalog.cache import DiskCache, make_key
 from rodcad.catalog.massrange import MASSRANGE_VERSION
 from rodcad.fabrication.layout import UP
 from rodcad.parallel import default_jobs, worker_pool
+
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
-from rodcad.fabrication.cavities import MASS_TOL, POOL_SIZE, RADIUS_FACTOR, SOLVE_TOL, CAPPED_K
-from rodcad.fabrication.intervals import compute_table, intervals_key, interval_table
+from rodcad.cad.export import AssemblyPart, export_assembly, print_matrix, rod_matrices
+from rodcad.cad.frame import pin_solid
+from rodcad.cad.solids import mass_properties, type_solid, with_voids
+from rodcad.colors import mass_colors
+from rodcad.fabrication.cavities import (
+    CAPPED_K,
+    FABRICATE_VERSION,
+    MASS_TOL,
+    POOL_SIZE,
+    RADIUS_FACTOR,
+    SOLVE_TOL,
+    FabricationError,
+)
+from rodcad.fabrication.intervals import compute_table, interval_table, intervals_key
 from rodcad.fabrication.plan import plan_rod
 
-from rodcad.cad.export import print_matrix
-from rodcad.cad.solids import mass_properties, with_voids
-from rodcad.cad.solids import type_solid
-from rodcad.fabrication.cavities import EDGE_TOL, FABRICATE_VERSION, SOLID_TOL, FabricationError
-
-__all__ = ['FABRICATE_VERSION', 'SOLID_TOL', 'EDGE_TOL', 'FabricationError', 'FabricatedRod', 'ChainFabrication', 'fabricate_rod', 'fabricate_chain', 'write_rod_files', 'mass_colors', 'rod_matrices', 'write_assembly']
+__all__ = [
+    "ChainFabrication",
+    "fabricate_chain",
+    "fabricate_rod",
+    "FabricatedRod",
+    "mass_colors",
+    "rod_matrices",
+    "write_assembly",
+    "write_rod_files",
+]
 
 
 
@@ -476,29 +497,8 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     return written
 
 
-def mass_colors(masses: Sequence[float]) -> list[tuple[float, float, float]]:
-    """(r, g, b) per mass from blue (lightest) to red (heaviest) (matplotlib 'coolwarm')."""
-    import matplotlib
-
-    m = np.asarray(masses, dtype=float)
-    lo, hi = float(m.min()), float(m.max())
-    t = (m - lo) / (hi - lo) if hi - lo > 1e-12 * max(hi, 1.0) else np.full(len(m), 0.5)
-    cmap = matplotlib.colormaps["coolwarm"]
-    return [tuple(float(c) for c in cmap(v)[:3]) for v in t]
 
 
-def rod_matrices(points: np.ndarray) -> list[np.ndarray]:
-    """4x4 placement of each rod frame: origin at points[i], x towards points[i+1], z = +z."""
-    pts = np.asarray(points, dtype=float)
-    out = []
-    for p, q in zip(pts[:-1], pts[1:]):
-        d = q - p
-        c, s = d / np.hypot(*d)
-        m = np.eye(4)
-        m[:2, :2] = [[c, -s], [s, c]]
-        m[:2, 3] = p
-        out.append(m)
-    return out
 
 
 def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain") -> Path:
@@ -516,27 +516,32 @@ def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, nam
         path: destination file.
         name: root assembly name.
     """
-    from rodcad.cad.export import AssemblyPart, export_assembly
-    from rodcad.cad.frame import pin_solid
-
     pts = np.asarray(points, dtype=float)
     if pts.shape != (len(fab.rods) + 1, 2):
         raise ValueError(f"points must have shape ({len(fab.rods) + 1}, 2), not {pts.shape}")
-    colors = mass_colors([r.mass for r in fab.rods])
-    nodes: list[Any] = []
-    for r, m, col in zip(fab.rods, rod_matrices(pts), colors):
-        nodes.append(AssemblyPart(r.file_stem, r.solid, m, col))
-    for j, p in enumerate(pts):
-        rod = fab.rods[min(j, len(fab.rods) - 1)]
-        hinge_t, pin_d = _pin_size(rod)
-        m = np.eye(4)
-        m[:2, 3] = p
-        m[2, 3] = -hinge_t / 2
-        nodes.append(AssemblyPart(f"pin_{j:02d}", pin_solid(pin_d, hinge_t), m,
-                                           (0.75, 0.75, 0.78)))
+    pins = [(fab.rods[min(j, len(fab.rods) - 1)].pin_diameter, fab.rods[min(j, len(fab.rods) - 1)].thickness)
+            for j in range(len(pts))]
+    nodes = chain_parts([r.file_stem for r in fab.rods], [r.solid for r in fab.rods], pts,
+                        [r.mass for r in fab.rods], pins)
     return export_assembly(path, nodes, name)
 
 
-def _pin_size(rod: FabricatedRod) -> tuple[float, float]:
-    """(length, diameter) of a pin through a rod (its thickness, the pin diameter)."""
-    return rod.thickness, rod.pin_diameter
+def chain_parts(names: Sequence[str], solids: Sequence[Any], points: np.ndarray, masses: Sequence[float],
+                pins: Sequence[tuple[float, float]], mass_scale: tuple[float, float] | None = None
+                ) -> list[AssemblyPart]:
+    """The parts of one chain in its pose: rod i named ``names[i]`` with its rod frame at
+    joint p_i and x along p_i -> p_{i+1}, coloured by mass (blue light, red heavy; on
+    ``mass_scale`` (lo, hi) when given, for one scale over several chains), and a pin
+    'pin_NN' through every joint, ``pins[j] = (diameter, length)`` (mm), centred on the
+    chain plane.
+    """
+    lo, hi = mass_scale if mass_scale is not None else (None, None)
+    colors = mass_colors(masses, lo, hi)
+    parts = [AssemblyPart(name, solid, m, tuple(float(c) for c in col[:3]))
+             for name, solid, m, col in zip(names, solids, rod_matrices(points), colors)]
+    for j, (p, (diameter, length)) in enumerate(zip(np.asarray(points, dtype=float), pins)):
+        m = np.eye(4)
+        m[:2, 3] = p
+        m[2, 3] = -length / 2
+        parts.append(AssemblyPart(f"pin_{j:02d}", pin_solid(diameter, length), m, (0.75, 0.75, 0.78)))
+    return parts

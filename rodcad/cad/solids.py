@@ -30,13 +30,32 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+
 import numpy as np
-from build123d import CenterOf, Location, Plane, Solid, Vector, Wire, Face
+from build123d import CenterOf, Face, Location, Plane, Solid, Vector, Wire
+
 from rodcad.catalog.model import RodGeometry, RodType
 from rodcad.errors import InputError
 
-
-__all__ = ['CONTACT_TOL', 'GeometryError', 'build_rod', 'rod_solid', 'hinge_zone', 'collision_proxy', 'MassProperties', 'mass_properties', 'with_spherical_voids', 'is_valid_solid', 'void_template', 'void_solids', 'with_voids',]
+__all__ = [
+    "CONTACT_TOL",
+    "build_rod",
+    "collision_proxy",
+    "cylinder_solid",
+    "GeometryError",
+    "hinge_zone",
+    "is_valid_solid",
+    "mass_properties",
+    "MassProperties",
+    "one_solid",
+    "prism_solid",
+    "rod_solid",
+    "type_solid",
+    "void_solids",
+    "void_template",
+    "with_spherical_voids",
+    "with_voids",
+]
 
 
 #: Distances at or below this count as contact (mm).

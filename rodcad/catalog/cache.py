@@ -24,6 +24,7 @@ import json
 import os
 from pathlib import Path
 from typing import Any
+
 from rodcad.outdir import write_atomic
 
 __all__ = ['default_cache_dir', 'make_key', 'register_seed', 'seeds_enabled', 'DiskCache']

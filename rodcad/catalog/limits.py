@@ -32,8 +32,10 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Protocol
+
 from rodcad.catalog.cache import DiskCache, make_key
-from rodcad.parallel import default_jobs, worker_pool
+from rodcad.parallel import cached_map
+
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import Catalog, RodGeometry, RodType
 
@@ -342,42 +344,10 @@ def all_pair_limits(
     """
     cache = cache if cache is not None else DiskCache()
     todo_pairs = list(pairs) if pairs is not None else catalog.pairs()
-    results: dict[tuple[str, str], PairLimits] = {}
-    missing: dict[str, tuple[RodGeometry, RodGeometry, float]] = {}
-    keys: dict[tuple[str, str], str] = {}
-    for a, b in todo_pairs:
-        wall = _wall(a, b)
-        key = _cache_key(a.geometry, b.geometry, wall)
-        keys[(a.name, b.name)] = key
-        hit = cache.get("limits", key)
-        if hit is not None:
-            results[(a.name, b.name)] = _from_result(a.name, b.name, hit, True)
-        elif key not in missing:
-            missing[key] = (a.geometry, b.geometry, wall)
-    computed: dict[str, dict[str, object]] = {}
-    if missing:
-        work = list(missing.items())
-        jobs = max(1, min(jobs or default_jobs(), len(work)))
-        if jobs == 1:
-            for i, (key, args) in enumerate(work):
-                computed[key] = _compute(*args)
-                cache.put("limits", key, computed[key])
-                if progress:
-                    progress(i + 1, len(work))
-        else:
-            with worker_pool(jobs) as pool:
-                for i, (key, res) in enumerate(
-                    zip((k for k, _ in work), pool.map(_compute_star, (a for _, a in work), chunksize=1))
-                ):
-                    computed[key] = res
-                    cache.put("limits", key, res)
-                    if progress:
-                        progress(i + 1, len(work))
-    ordered: dict[tuple[str, str], PairLimits] = {}
-    for a, b in todo_pairs:
-        name = (a.name, b.name)
-        if name in results:
-            ordered[name] = results[name]
-        else:
-            ordered[name] = _from_result(a.name, b.name, computed[keys[name]], False)
-    return ordered
+    args = [(a.geometry, b.geometry, _wall(a, b)) for a, b in todo_pairs]
+    keys = [_cache_key(*arg) for arg in args]
+    fresh: set[str] = set()
+    results = cached_map(_compute_star, args, keys, kind="limits", cache=cache, jobs=jobs, progress=progress,
+                         computed=fresh)
+    return {(a.name, b.name): _from_result(a.name, b.name, r, key not in fresh)
+            for (a, b), key, r in zip(todo_pairs, keys, results)}

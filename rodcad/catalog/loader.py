@@ -9,18 +9,40 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
 from rodcad.catalog.cache import register_seed
 from rodcad.errors import InputError, Problem
-from rodcad.yamlio import MISSING, Pos, Validator, suggest, child_path, format_number, load_yaml
-from rodcad.yamlspec import Checked, check_document
-from rodcad.yamlspec import Nullable, Obj
+from rodcad.yamlio import (
+    MISSING,
+    Pos,
+    Validator,
+    child_path,
+    format_number,
+    load_yaml,
+    suggest,
+)
+from rodcad.yamlspec import Checked, Nullable, Obj, check_document
+
 if TYPE_CHECKING:  # pragma: no cover
     pass
+from rodcad.catalog.model import (
+    CATALOG_FORMAT,
+    MAX_ARC_HALF_ANGLE_DEG,
+    Balls,
+    Catalog,
+    EndShape,
+    Family,
+    Hinge,
+    Material,
+    Origin,
+    Printer,
+    RodGeometry,
+    RodType,
+)
 from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
-from rodcad.catalog.model import Balls, CATALOG_FORMAT, Catalog, EndShape, Family, Hinge, MAX_ARC_HALF_ANGLE_DEG, Material, Origin, Printer, RodGeometry, RodType
-from rodcad.catalog.spec import family_spec, catalog_spec
+from rodcad.catalog.spec import catalog_spec, family_spec
 
-__all__ = ['default_catalog_dir', 'shipped_catalogs', 'resolve_catalog', 'load_catalog', 'catalog_from_text']
+__all__ = ["catalog_from_text", "load_catalog", "resolve_catalog"]
 
 
 def resolve_catalog(name_or_path: str | Path, base_dir: str | Path | None = None) -> Path:

@@ -32,15 +32,24 @@ with a tuned radius). Units: mm, mm^3, g; densities g/cm^3.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
+
 from rodcad.catalog.cache import DiskCache, make_key
-from rodcad.parallel import default_jobs, worker_pool
+from rodcad.parallel import cached_map
+
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
-from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, RADIUS_STEP, SphereLayout, ball_offset, max_ball_layout, max_cavity_layout
 from rodcad.cad.solids import type_solid
+from rodcad.fabrication.layout import (
+    MIN_CAVITY_RADIUS,
+    RADIUS_STEP,
+    SphereLayout,
+    ball_offset,
+    max_ball_layout,
+    max_cavity_layout,
+)
 
 __all__ = ['MASSRANGE_VERSION', 'MassInfo', 'layouts', 'compute_mass_info', 'is_cached', 'mass_info', 'mass_infos']
 
@@ -164,32 +173,15 @@ def mass_infos(rods: Sequence[RodType], *, jobs: int | None = None, cache: DiskC
     """:class:`MassInfo` of several rod types (name -> info), computing the
     uncached ones in ``jobs`` processes (default: the number of CPUs)."""
     cache = cache if cache is not None else DiskCache()
-    out: dict[str, MassInfo] = {}
-    todo: list[tuple[str, RodType]] = []
-    for rod in rods:
-        key = _key(rod)
-        hit = cache.get("mass", key)
-        if hit is not None:
-            try:
-                out[rod.name] = MassInfo.from_json(hit)
-                continue
-            except (TypeError, KeyError, ValueError):
-                pass
-        todo.append((key, rod))
-    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
-    if len(todo) <= 1 or jobs == 1:
-        results: Iterable[dict[str, object]] = (_compute_star(r) for _, r in todo)
-        pool = None
-    else:
-        pool = worker_pool(jobs)
-        results = pool.map(_compute_star, [r for _, r in todo], chunksize=1)
+    results = cached_map(_compute_star, list(rods), [_key(r) for r in rods], kind="mass", cache=cache, jobs=jobs,
+                         progress=progress, usable=_usable)
+    return {r.name: MassInfo.from_json(res) for r, res in zip(rods, results)}
+
+
+def _usable(hit: object) -> bool:
+    """A cached mass info in the current format."""
     try:
-        for i, ((key, rod), res) in enumerate(zip(todo, results)):
-            cache.put("mass", key, res)
-            out[rod.name] = MassInfo.from_json(res)
-            if progress:
-                progress(i + 1, len(todo))
-    finally:
-        if pool is not None:
-            pool.shutdown()
-    return {r.name: out[r.name] for r in rods}
+        MassInfo.from_json(hit)  # type: ignore[arg-type]
+    except (TypeError, KeyError, ValueError, AttributeError):
+        return False
+    return True

@@ -45,10 +45,27 @@ from dataclasses import asdict, dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Any
+
 from rodcad.errors import Problem
 from rodcad.yamlio import suggest
 
-__all__ = ['CATALOG_FORMAT', 'GEOMETRY_VERSION', 'MAX_ARC_HALF_ANGLE_DEG', 'EndShape', 'Hinge', 'RodGeometry', 'Material', 'Balls', 'Printer', 'Origin', 'RodType', 'Family', 'Catalog']
+__all__ = [
+    "CATALOG_FORMAT",
+    "GEOMETRY_VERSION",
+    "MAX_ARC_HALF_ANGLE_DEG",
+    "Balls",
+    "Catalog",
+    "EndShape",
+    "Family",
+    "Hinge",
+    "json_digest",
+    "Material",
+    "mm_pos",
+    "Origin",
+    "Printer",
+    "RodGeometry",
+    "RodType",
+]
 
 
 def json_digest(data: Any) -> str:

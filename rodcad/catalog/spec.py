@@ -4,13 +4,15 @@
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
+
 from rodcad.yamlio import MISSING
 from rodcad.yamlspec import Field, ListOf, Nullable, Num, Obj, OneOrList, Str
+
 if TYPE_CHECKING:  # pragma: no cover
     pass
 from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
 
-__all__ = ['catalog_spec', 'catalog_schema']
+__all__ = ["catalog_schema", "catalog_spec", "family_spec"]
 
 
 _NAME = r"[A-Za-z0-9][A-Za-z0-9_.+-]*"

@@ -15,8 +15,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from rodcad.design.model import METHOD_NAMES
 from rodcad.design.loader import load_design
+from rodcad.design.model import METHOD_NAMES
 from rodcad.progress import Progress
 
 __all__ = ["register", "run"]

@@ -26,15 +26,15 @@ import time
 from pathlib import Path
 from typing import Any
 
+from rodcad.cad.solids import type_solid
 from rodcad.catalog.cache import DiskCache
+from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.model import Catalog
 from rodcad.catalog.spec import catalog_schema
-from rodcad.catalog.loader import load_catalog
 from rodcad.errors import InputError, Problem
 from rodcad.outdir import write_atomic
-from rodcad.cad.solids import type_solid
 
-__all__ = ["check_report", "precompute", "register", "schema_text"]
+__all__ = ["SEED_KINDS", "check_report", "precompute", "register", "schema_text"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

@@ -11,7 +11,7 @@ import argparse
 import json
 from pathlib import Path
 
-__all__ = ["register", "schema_text"]
+__all__ = ["register", "run", "schema_text"]
 
 
 def schema_text(kind: str) -> str:

@@ -8,7 +8,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
+
 import numpy as np
+
 from rodcad.design.chandelier import ChainPlacement, ChainResult
 
 __all__ = ['LugSpec', 'FramePlan', 'plan_frame', 'FrameCheck', 'frame_outline']

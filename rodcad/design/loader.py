@@ -7,14 +7,23 @@ from __future__ import annotations
 import math
 from pathlib import Path
 from typing import Any
+
 import numpy as np
+
 from rodcad.catalog.loader import load_catalog
-from rodcad.errors import InputError, Problem
-from rodcad.yamlio import suggest, load_yaml, load_yaml_text
-from rodcad.yamlspec import check_document
-from rodcad.design.model import DESIGN_FORMAT, ChainRod, ChandelierSpec, Constraints, Design, FixedRod
-from rodcad.design.spec import FRAME_OF_PATTERN, PATTERNS, design_spec
 from rodcad.catalog.massrange import mass_info
+from rodcad.design.model import (
+    DESIGN_FORMAT,
+    ChainRod,
+    ChandelierSpec,
+    Constraints,
+    Design,
+    FixedRod,
+)
+from rodcad.design.spec import FRAME_OF_PATTERN, PATTERNS, design_spec
+from rodcad.errors import InputError, Problem
+from rodcad.yamlio import load_yaml, load_yaml_text, suggest
+from rodcad.yamlspec import check_document
 
 __all__ = ['load_design']
 

@@ -6,8 +6,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+
 import numpy as np
-from optimize import EquilibriumResult, InverseProblem, InverseResult, design, find_equilibria, solve_equilibrium
+
+from optimize import (
+    EquilibriumResult,
+    InverseProblem,
+    InverseResult,
+    design,
+    find_equilibria,
+    solve_equilibrium,
+)
 from rodcad.design.plan import ChainPlan
 
 __all__ = ['BuildableInfo', 'ChainCheck', 'ChainDesign', 'SNAP_STRATEGIES', 'check_chain', 'design_buildable', 'design_chain']

@@ -37,7 +37,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
 import numpy as np
+
 from rodcad.catalog.model import Catalog
 from rodcad.errors import Problem
 from rodcad.yamlspec import Checked

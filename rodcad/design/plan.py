@@ -1,19 +1,17 @@
-"""From a target curve and a rod catalog to a designed chain (rod types and masses).
+"""Rods laid on a target: a rod type per position whose joint limits supply what the target
+needs, stops added where the masses alone cannot hold it, and every design constraint
+applied (:func:`plan_constrained`).
 
-The data flow, one step per function:
+    curve + catalog  -> catalog_arrays():   the catalog's lengths, centres of mass, mass
+                                            ranges and pair limits (from the solids, cached)
+                     -> plan_chain():       joints on the curve (chord walk with the
+                                            catalog's lengths), a rod type per position,
+                                            stops where the masses cannot hold the target
+                     -> plan_constrained(): the same with the design's constraints (rod
+                                            count, fixed rods), errors pointing at the key
 
-    curve + catalog  -> plan_chain():   joints on the curve (chord walk with the
-                                        catalog's lengths), a rod type per position
-                                        (limits where the target needs moments),
-                                        centres of mass, limits and mass ranges
-                     -> design_chain(): masses by the chosen inverse method, the
-                                        design re-simulated and checked for other
-                                        stable equilibria (multi-start)
-                     -> design_buildable(): the same, with every mass moved into
-                                        the type's achievable intervals (gaps
-                                        between ball counts) and the rest re-designed
-
-Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
+The masses are designed next (:mod:`rodcad.design.masses`). Numbers cross into
+:mod:`optimize` as plain arrays (mm, g, radians).
 """
 
 from __future__ import annotations
@@ -21,7 +19,9 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+
 import numpy as np
+
 from optimize import InverseProblem, design
 from optimize.assign import assign_types, joint_mismatch
 from optimize.discretize import Discretization, discretize

@@ -4,8 +4,9 @@
 from __future__ import annotations
 
 from typing import Any
-from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, Str
+
 from rodcad.design.model import DESIGN_FORMAT, METHOD_NAMES
+from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, Str
 
 __all__ = ['target_spec', 'PATTERNS', 'FRAME_OF_PATTERN', 'chandelier_spec', 'design_spec', 'design_schema']
 

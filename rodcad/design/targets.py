@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ast
 import math
+
 import numpy as np
 
 __all__ = ['polyline', 'arc', 'semicircle', 'triangle', 'polygon', 'heart', 'catenary', 'function', 'svg_path', 'TARGET_FORMS', 'make_target']

@@ -5,18 +5,52 @@ dart throwing with a minimum wall, mirror-symmetric orbits, and the ball sockets
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
+
 import numpy as np
-from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, UP, symmetric_images, sphere_layout, void_volume
+
+from rodcad.cad.collision import Clearance
+from rodcad.cad.solids import mass_properties
+from rodcad.fabrication.layout import (
+    MIN_CAVITY_RADIUS,
+    UP,
+    SphereLayout,
+    ball_offset,
+    max_ball_layout,
+    sphere_layout,
+    symmetric_images,
+    void_volume,
+)
+
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
 from rodcad.cad.solids import type_solid
 from rodcad.catalog.massrange import mass_info
 
-__all__ = ['MASS_TOL', 'SOLVE_TOL', 'POOL_SIZE', 'RADIUS_FACTOR']
+__all__ = [
+    "CAPPED_K",
+    "EDGE_TOL",
+    "FABRICATE_VERSION",
+    "MASS_TOL",
+    "POOL_SIZE",
+    "RADIUS_FACTOR",
+    "SOLID_TOL",
+    "SOLVE_TOL",
+    "THROWS",
+    "cavity_pool",
+    "cavity_radii",
+    "CavityPool",
+    "dart_throw",
+    "FabricationError",
+    "lattice_layouts",
+    "orbits",
+    "place_cavities",
+    "silo_distance",
+    "socket_layout",
+]
 
 
 #: Relative mass error the issue allows (0.1 %); the root solve aims 100x tighter.
@@ -69,8 +103,6 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
     """The candidate pool: orbit representatives drawn uniformly in the
     fundamental domain of ``symmetry`` about the com, each also projected onto
     the group's mirror planes and axes (so orbits of 1, 2, 4 sites exist)."""
-    from rodcad.cad.collision import Clearance
-    from rodcad.cad.solids import mass_properties
 
     solid = type_solid(rod)
     com = np.array(mass_properties(solid).center)
@@ -173,8 +205,6 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
     prefix of its orbits (in dart order) with n sites removes ``volume`` with
     radius r = (volume / (n k))^(1/3) <= r_d. The largest such r wins.
     """
-    from rodcad.cad.collision import Clearance
-    from rodcad.cad.solids import mass_properties
 
     wall = rod.material.min_wall
     best: _CavityLayout | None = None
@@ -195,6 +225,20 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
     if best is not None:
         return best
     # Fallback: the deterministic lattice (it reaches the catalog's m_min).
+    for rd, lay in lattice_layouts(rod, sockets, socket_r):
+        if lay.count == 0:
+            continue
+        r = (volume / (lay.count * CAPPED_K)) ** (1 / 3)
+        if r <= rd * (1 + 1e-9) and r >= MIN_CAVITY_RADIUS and (best is None or r > best.radius):
+            best = _CavityLayout(lay.centers, min(r, rd), rd, f"lattice/{lay.symmetry}")
+    return best
+
+
+def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
+                    skip: Callable[[float], bool] = lambda radius: False) -> Iterator[tuple[float, SphereLayout]]:
+    """The symmetric lattice cavity layouts beside these ball sockets, largest radius first
+    (the fallback of :func:`place_cavities`: it reaches the catalog's m_min); radii for
+    which ``skip(radius)`` is true are passed over."""
     solid = type_solid(rod)
     com = mass_properties(solid).center
     clr = Clearance(solid)
@@ -205,22 +249,14 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
     info = mass_info(rod)
     radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
     for rd in radii:
-        lay = sphere_layout(clearance, clr.bounds, com, rd, wall, void="capped")
-        if lay.count == 0:
-            continue
-        r = (volume / (lay.count * CAPPED_K)) ** (1 / 3)
-        if r <= rd * (1 + 1e-9) and r >= MIN_CAVITY_RADIUS and (best is None or r > best.radius):
-            best = _CavityLayout(lay.centers, min(r, rd), rd, f"lattice/{lay.symmetry}")
-    return best
+        if not skip(rd):
+            yield rd, sphere_layout(clearance, clr.bounds, com, rd, rod.material.min_wall, void="capped")
 
 
 @lru_cache(maxsize=64)
 def socket_layout(rod: RodType) -> Any:
     """The type's largest symmetric socket layout (the one behind m_max; the
     ball half of :func:`rodcad.catalog.massrange.layouts`)."""
-    from rodcad.cad.collision import Clearance
-    from rodcad.cad.solids import mass_properties
-    from rodcad.fabrication.layout import SphereLayout, ball_offset, max_ball_layout
 
     if rod.balls is None:
         return SphereLayout.empty()

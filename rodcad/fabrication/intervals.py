@@ -7,19 +7,42 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
+
 import numpy as np
+
 from rodcad.catalog.cache import DiskCache, make_key
 from rodcad.catalog.massrange import MASSRANGE_VERSION
-from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, UP, sphere_layout, void_volume
-from rodcad.parallel import default_jobs, worker_pool
+from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, UP, void_volume
+from rodcad.parallel import cached_map
+
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
-from rodcad.fabrication.cavities import EDGE_TOL, FABRICATE_VERSION, SOLID_TOL
-from rodcad.fabrication.cavities import POOL_SIZE, RADIUS_FACTOR, CAPPED_K, dart_throw, orbits, cavity_pool, cavity_radii, silo_distance, socket_layout
-from rodcad.cad.solids import type_solid
 from rodcad.catalog.massrange import mass_info
+from rodcad.fabrication.cavities import (
+    CAPPED_K,
+    EDGE_TOL,
+    FABRICATE_VERSION,
+    POOL_SIZE,
+    RADIUS_FACTOR,
+    SOLID_TOL,
+    cavity_pool,
+    cavity_radii,
+    dart_throw,
+    lattice_layouts,
+    orbits,
+    socket_layout,
+)
 
-__all__ = ['INTERVALS_VERSION', 'GAP_MERGE', 'achievable_intervals', 'chain_intervals']
+__all__ = [
+    "GAP_MERGE",
+    "INTERVALS_VERSION",
+    "achievable_intervals",
+    "chain_intervals",
+    "compute_table",
+    "fmt_mass",
+    "interval_table",
+    "intervals_key",
+]
 
 
 #: Bump when the tables of reachable masses change (:func:`achievable_intervals`).
@@ -96,29 +119,15 @@ def _removable(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int,
                     pieces.append((lo, hi))
                 n_prev = n
     top = max((b for _, b in pieces), default=0.0)
-    if True:
-        from rodcad.cad.collision import Clearance
-        from rodcad.cad.solids import mass_properties
+    def known(rd: float) -> bool:  # the lattice without sockets could not remove more
+        return (lattice_counts is not None and len(sockets) > 0 and rd in lattice_counts
+                and lattice_counts[rd] * CAPPED_K * rd**3 <= top)
 
-        solid = type_solid(rod)
-        com = mass_properties(solid).center
-        clr = Clearance(solid)
-
-        def clearance(p: np.ndarray) -> np.ndarray:
-            return np.minimum(clr(p), silo_distance(p, sockets, socket_r))
-
-        info = mass_info(rod)
-        radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()),
-                       reverse=True)
-        for rd in radii:
-            if lattice_counts is not None and len(sockets) and rd in lattice_counts \
-                    and lattice_counts[rd] * CAPPED_K * rd**3 <= top:
-                continue
-            lay = sphere_layout(clearance, clr.bounds, com, rd, wall, void="capped")
-            if lattice_counts is not None and not len(sockets):
-                lattice_counts[rd] = lay.count
-            if lay.count:
-                pieces.append((lay.count * k_min, lay.count * CAPPED_K * rd**3))
+    for rd, lay in lattice_layouts(rod, sockets, socket_r, skip=known):
+        if lattice_counts is not None and not len(sockets):
+            lattice_counts[rd] = lay.count
+        if lay.count:
+            pieces.append((lay.count * k_min, lay.count * CAPPED_K * rd**3))
     # a hair inside every edge, so that the edges themselves solve
     return [(a * (1 + 1e-9), b * (1 - 1e-9)) for a, b in _merge(pieces) if b * (1 - 1e-9) > a * (1 + 1e-9)]
 
@@ -202,15 +211,8 @@ def chain_intervals(types: Sequence[RodType], *, seed: int = 0, jobs: int | None
     the uncached ones computed in ``jobs`` worker processes (default: the CPUs)."""
     cache = cache if cache is not None else DiskCache()
     uniq = list({rod.name: rod for rod in types}.values())
-    todo = [rod for rod in uniq if not isinstance(cache.get("fabint", intervals_key(rod, seed)), dict)]
-    jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
-    if jobs > 1:
-        pool = worker_pool(jobs)
-        try:
-            for rod, table in zip(todo, pool.map(_table_star, [(rod, seed) for rod in todo], chunksize=1)):
-                cache.put("fabint", intervals_key(rod, seed), table)
-        finally:
-            pool.shutdown()
+    cached_map(_table_star, [(rod, seed) for rod in uniq], [intervals_key(rod, seed) for rod in uniq], kind="fabint",
+               cache=cache, jobs=jobs, usable=lambda hit: isinstance(hit, dict))
     return {rod.name: achievable_intervals(rod, seed=seed, cache=cache) for rod in uniq}
 
 

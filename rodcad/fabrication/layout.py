@@ -8,11 +8,32 @@ import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
+
 import numpy as np
+
 if TYPE_CHECKING:  # pragma: no cover
     pass
 
-__all__ = ['MIN_CAVITY_RADIUS', 'RADIUS_STEP', 'SYMMETRIES', 'Clearance', 'UP', 'VOIDS', 'void_volume', 'void_centroid', 'ball_offset', 'silo_rim_points', 'SphereLayout', 'LATTICES', 'lattice_sites', 'symmetric_subset', 'sphere_layout', 'max_cavity_layout', 'max_ball_layout']
+__all__ = [
+    "LATTICES",
+    "MIN_CAVITY_RADIUS",
+    "RADIUS_STEP",
+    "SYMMETRIES",
+    "UP",
+    "VOIDS",
+    "ball_offset",
+    "Clearance",
+    "lattice_sites",
+    "max_ball_layout",
+    "max_cavity_layout",
+    "silo_rim_points",
+    "sphere_layout",
+    "SphereLayout",
+    "symmetric_images",
+    "symmetric_subset",
+    "void_centroid",
+    "void_volume",
+]
 
 
 #: Smallest cavity radius considered (mm): 1 mm cavities still print as voids.

@@ -5,16 +5,23 @@ from __future__ import annotations
 
 import math
 from typing import TYPE_CHECKING, Any
+
 import numpy as np
+
 from rodcad.fabrication.layout import void_volume
+
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
-from rodcad.fabrication.cavities import EDGE_TOL, FabricationError, SOLID_TOL
-from rodcad.fabrication.cavities import place_cavities
-from rodcad.fabrication.intervals import compute_table, fmt_mass
 from rodcad.catalog.massrange import mass_info
+from rodcad.fabrication.cavities import (
+    EDGE_TOL,
+    SOLID_TOL,
+    FabricationError,
+    place_cavities,
+)
+from rodcad.fabrication.intervals import compute_table, fmt_mass
 
-__all__ = []
+__all__ = ["plan_rod"]
 
 
 def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> dict[str, Any]:

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from optimize.validate import as_joints
+
 __all__ = ["ShapeDistance", "shape_distance"]
 
 
@@ -64,22 +66,6 @@ class ShapeDistance:
         }
 
 
-def _as_joints(name: str, value) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an (N+1, 2) array of joint positions ({exc})") from None
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"{name} must have shape (N+1, 2), got {arr.shape}")
-    if arr.shape[0] < 2:
-        raise ValueError(f"{name} must have at least 2 joints (the two anchors), got {arr.shape[0]}")
-    bad = np.argwhere(~np.isfinite(arr))
-    if bad.size:
-        i, j = bad[0]
-        raise ValueError(f"{name}[{i}, {j}] is not finite ({arr[i, j]})")
-    return arr
-
-
 def shape_distance(target, simulated) -> ShapeDistance:
     """The paper's shape distance D~ (Eq. 4), deviation vector D (Eq. 5) and summaries.
 
@@ -100,8 +86,8 @@ def shape_distance(target, simulated) -> ShapeDistance:
         >>> d.sum, d.deviation.tolist(), d.max_rel_span
         (1.0, [0.0, 1.0], 0.5)
     """
-    t = _as_joints("target", target)
-    s = _as_joints("simulated", simulated)
+    t = as_joints("target", target)
+    s = as_joints("simulated", simulated)
     if s.shape != t.shape:
         raise ValueError(
             f"simulated has shape {s.shape} but target has shape {t.shape}; "

@@ -50,10 +50,28 @@ def as_com(com, lengths: np.ndarray) -> np.ndarray:
         raise ValueError(f"com must be an (N, 2) array of numbers ({exc})") from None
     if arr.shape != (n, 2):
         raise ValueError(f"com must have shape ({n}, 2), got {arr.shape}")
+    return all_finite("com", arr)
+
+
+def as_joints(name: str, value) -> np.ndarray:
+    """An (N+1, 2) array of joint positions, anchors first and last, every one finite."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an (N+1, 2) array of joint positions ({exc})") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (N+1, 2), got {arr.shape}")
+    if arr.shape[0] < 2:
+        raise ValueError(f"{name} must have at least 2 joints (the two anchors), got {arr.shape[0]}")
+    return all_finite(name, arr)
+
+
+def all_finite(name: str, arr: np.ndarray) -> np.ndarray:
+    """``arr`` if every entry is finite; else a ValueError naming the first that is not."""
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         i, j = bad[0]
-        raise ValueError(f"com[{i}, {j}] is not finite ({arr[i, j]})")
+        raise ValueError(f"{name}[{i}, {j}] is not finite ({arr[i, j]})")
     return arr
 
 

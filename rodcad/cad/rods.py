@@ -81,7 +81,7 @@ from rodcad.fabrication.cavities import (
     FabricationError,
 )
 from rodcad.fabrication.intervals import compute_table, interval_table, intervals_key
-from rodcad.fabrication.plan import plan_rod
+from rodcad.fabrication.plan import Measurement, RodPlan, plan_rod
 
 __all__ = [
     "ChainFabrication",
@@ -190,7 +190,7 @@ class ChainFabrication:
 
 
 
-def _build(rod: RodType, plan: dict[str, Any]) -> tuple[Any, float, dict[str, Any]]:
+def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
     """The B-rep for a plan, with the cavity radius root-solved on its volume.
 
     Returns:
@@ -201,12 +201,10 @@ def _build(rod: RodType, plan: dict[str, Any]) -> tuple[Any, float, dict[str, An
 
     rho = rod.material.density / 1000.0
     plain = type_solid(rod)
-    socks = np.array(plan["sockets"], dtype=float).reshape(-1, 3)
-    cavs = np.array(plan["cavities"], dtype=float).reshape(-1, 3)
-    rs = float(plan["socket_radius"])
+    socks, cavs, rs = plan.sockets, plan.cavities, plan.socket_radius
     n_balls = len(socks)
     metal = n_balls * rod.balls.mass if n_balls and rod.balls is not None else 0.0
-    target = float(plan.get("build_mass", plan["mass"]))
+    target = plan.build_mass
 
     def make(r: float) -> Any:
         groups = [("silo", socks, rs)] if n_balls else []
@@ -214,12 +212,12 @@ def _build(rod: RodType, plan: dict[str, Any]) -> tuple[Any, float, dict[str, An
             groups.append(("capped", cavs, r))
         return with_voids(plain, groups, rod.name)
 
-    r = float(plan["cavity_radius"])
+    r = plan.cavity_radius
     solid = make(r)
     volume = mass_properties(solid).volume
     booleans = 1
     if len(cavs):
-        bound = float(plan["cavity_bound"])
+        bound = plan.cavity_bound
         for _ in range(4):  # Newton on the B-rep volume, analytic derivative
             err = (volume * rho + metal - target) / target
             if abs(err) <= SOLVE_TOL:
@@ -241,8 +239,8 @@ def _build(rod: RodType, plan: dict[str, Any]) -> tuple[Any, float, dict[str, An
         c = c + rod.balls.mass * socks.sum(axis=0)  # type: ignore[union-attr]
     mass = props.volume * rho + metal
     com = c / mass
-    return solid, r, {"volume": props.volume, "mass": mass, "com": [float(com[0]), float(com[1])],
-                      "min_wall": wall, "booleans": booleans}
+    return solid, r, Measurement(float(props.volume), float(mass), (float(com[0]), float(com[1])), float(wall),
+                                 booleans)
 
 
 def _key(rod: RodType, target: float, seed: int) -> str:
@@ -257,10 +255,8 @@ def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None]) -> 
     """Worker: plan, build, root-solve and measure one rod; returns numbers only."""
     rod, target, seed, table = args
     plan = plan_rod(rod, target, seed, table)
-    _, r, meas = _build(rod, plan)
-    plan["cavity_radius"] = r
-    plan["measured"] = meas
-    return plan
+    _, plan.cavity_radius, plan.measured = _build(rod, plan)
+    return plan.to_json()
 
 
 def _type_star(args: tuple[RodType, list[float], int, dict[str, Any] | None]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -286,23 +282,23 @@ def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
     return _assemble_result(rod, target, index, plan)
 
 
-def _assemble_result(rod: RodType, target: float, index: int, plan: dict[str, Any]) -> FabricatedRod:
+def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, Any]) -> FabricatedRod:
     """Rebuild the solid from a solved plan (one boolean) and collect the numbers."""
+    plan = RodPlan.from_json(data)
     rho = rod.material.density / 1000.0
-    socks = np.array(plan["sockets"], dtype=float).reshape(-1, 3)
-    cavs = np.array(plan["cavities"], dtype=float).reshape(-1, 3)
-    rs = float(plan["socket_radius"])
-    r = float(plan["cavity_radius"])
+    socks, cavs, rs, r = plan.sockets, plan.cavities, plan.socket_radius, plan.cavity_radius
     groups = ([("silo", socks, rs)] if len(socks) else []) + ([("capped", cavs, r)] if len(cavs) else [])
     solid = with_voids(type_solid(rod), groups, rod.name)
-    meas = plan["measured"]
+    meas = plan.measured
+    if meas is None:
+        raise FabricationError(f"rod {index} ({rod.name}): its plan was never built")
     volume = mass_properties(solid).volume
-    if abs(volume - meas["volume"]) > 1e-6 * meas["volume"]:
+    if abs(volume - meas.volume) > 1e-6 * meas.volume:
         raise FabricationError(f"rod {index} ({rod.name}): rebuilt volume {volume} differs from the solved "
-                               f"{meas['volume']} mm^3")
+                               f"{meas.volume} mm^3")
     wall = rod.material.min_wall
-    if meas["min_wall"] < wall - 1e-6:
-        raise FabricationError(f"rod {index} ({rod.name}): a wall of {meas['min_wall']:.3f} mm around a void is "
+    if meas.min_wall < wall - 1e-6:
+        raise FabricationError(f"rod {index} ({rod.name}): a wall of {meas.min_wall:.3f} mm around a void is "
                                f"thinner than the minimum {wall} mm")
     pm = print_matrix(solid)
     roofs: list[float] = []
@@ -310,8 +306,8 @@ def _assemble_result(rod: RodType, target: float, index: int, plan: dict[str, An
         if not roofs or z - roofs[-1] > 1e-6:
             roofs.append(float(z))
     pause = roofs[0] if roofs else None
-    goal = float(plan["mass"])
-    mass = float(meas["mass"])
+    goal = plan.mass
+    mass = meas.mass
     if abs(mass - goal) > MASS_TOL * goal:
         raise FabricationError(f"rod {index} ({rod.name}): built {mass:.4f} g for {goal:.4f} g")
     note = ""
@@ -323,12 +319,11 @@ def _assemble_result(rod: RodType, target: float, index: int, plan: dict[str, An
                 f"to {abs(g.half_angle_deg):.0f} deg from the bed; add support under the ends)")
     return FabricatedRod(
         index=index, type_name=rod.name, target_mass=float(target), mass=mass,
-        com=(float(meas["com"][0]), float(meas["com"][1])), plastic_volume=float(meas["volume"]),
-        filament_mass=float(meas["volume"]) * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
+        com=meas.com, plastic_volume=meas.volume, filament_mass=meas.volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
         ball_count=len(socks), ball_diameter=rod.balls.diameter if len(socks) and rod.balls else None,
-        pause_z=pause, mass_error=(mass - goal) / goal, in_range=not plan["message"], message=plan["message"],
+        pause_z=pause, mass_error=(mass - goal) / goal, in_range=not plan.message, message=plan.message,
         solid=solid, cavity_centers=cavs, socket_centers=socks, socket_radius=rs if len(socks) else 0.0,
-        min_wall=float(meas["min_wall"]), layout=plan["layout"], print_matrix=pm,
+        min_wall=meas.min_wall, layout=plan.layout, print_matrix=pm,
         file_stem=f"{index:02d}_{rod.name}", print_note=note, thickness=rod.geometry.thickness,
         pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs))
 

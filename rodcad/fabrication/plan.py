@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -21,10 +22,85 @@ from rodcad.fabrication.cavities import (
 )
 from rodcad.fabrication.intervals import compute_table, fmt_mass
 
-__all__ = ["plan_rod"]
+__all__ = ["Measurement", "RodPlan", "plan_rod"]
 
 
-def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> dict[str, Any]:
+@dataclass(frozen=True)
+class Measurement:
+    """What the B-rep of a planned rod measured.
+
+    Attributes:
+        volume: plastic volume (mm^3).
+        mass: plastic plus metal (g).
+        com: centre of mass (along, perp) in the rod frame (mm).
+        min_wall: thinnest wall around a void (mm; inf without voids).
+        booleans: B-rep booleans the cavity-radius solve took.
+    """
+
+    volume: float
+    mass: float
+    com: tuple[float, float]
+    min_wall: float
+    booleans: int
+
+
+@dataclass
+class RodPlan:
+    """How one rod gets its mass: ball sockets and cavities (numbers only; the disk cache
+    keeps :meth:`to_json`).
+
+    Attributes:
+        mass: the mass to build (g): the target, clipped to the type's range and moved
+            out of a gap between ball counts.
+        build_mass: the reachable mass the layout was chosen for (g).
+        sockets: (K, 3) ball socket centres in the rod frame (mm).
+        socket_radius: socket radius (mm; 0 without balls).
+        cavities: (C, 3) cavity centres (mm).
+        cavity_radius: cavity radius (mm), root-solved on the B-rep volume once built.
+        cavity_bound: largest radius the layout allows (mm).
+        layout: how the cavities were laid out ('poisson/mirror-xyz', 'lattice/...', '').
+        message: why the built mass differs from the target, or ''.
+        measured: the B-rep's measurements, once built.
+    """
+
+    mass: float
+    build_mass: float
+    sockets: np.ndarray
+    socket_radius: float
+    cavities: np.ndarray
+    cavity_radius: float
+    cavity_bound: float
+    layout: str
+    message: str
+    measured: Measurement | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "mass": self.mass, "build_mass": self.build_mass, "sockets": self.sockets.tolist(),
+            "socket_radius": self.socket_radius, "cavities": self.cavities.tolist(),
+            "cavity_radius": self.cavity_radius, "cavity_bound": self.cavity_bound, "layout": self.layout,
+            "message": self.message,
+        }
+        if self.measured is not None:
+            out["measured"] = {**asdict(self.measured), "com": list(self.measured.com)}
+        return out
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RodPlan:
+        meas = data.get("measured")
+        return cls(
+            mass=float(data["mass"]), build_mass=float(data.get("build_mass", data["mass"])),
+            sockets=np.array(data["sockets"], dtype=float).reshape(-1, 3),
+            socket_radius=float(data["socket_radius"]),
+            cavities=np.array(data["cavities"], dtype=float).reshape(-1, 3),
+            cavity_radius=float(data["cavity_radius"]), cavity_bound=float(data["cavity_bound"]),
+            layout=str(data["layout"]), message=str(data["message"]),
+            measured=None if meas is None else Measurement(
+                float(meas["volume"]), float(meas["mass"]), (float(meas["com"][0]), float(meas["com"][1])),
+                float(meas["min_wall"]), int(meas["booleans"])))
+
+
+def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> RodPlan:
     """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
 
     The ball subset and the cavity volume come from the type's table of
@@ -94,14 +170,8 @@ def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | Non
     if remove > 0 and cav is None:  # pragma: no cover - the table says it fits
         raise FabricationError(f"{rod.name}: no cavity layout removes {remove:.3f} mm^3 beside "
                                f"{len(socks)} balls, although the table of reachable masses says one does")
-    return {
-        "mass": m,
-        "build_mass": build,
-        "sockets": socks.tolist(),
-        "socket_radius": rs if len(socks) else 0.0,
-        "cavities": [] if cav is None else cav.centers.tolist(),
-        "cavity_radius": 0.0 if cav is None else cav.radius,
-        "cavity_bound": 0.0 if cav is None else cav.bound,
-        "layout": "" if cav is None else cav.layout,
-        "message": message,
-    }
+    return RodPlan(
+        mass=m, build_mass=build, sockets=socks, socket_radius=rs if len(socks) else 0.0,
+        cavities=np.zeros((0, 3)) if cav is None else np.asarray(cav.centers, dtype=float).reshape(-1, 3),
+        cavity_radius=0.0 if cav is None else cav.radius, cavity_bound=0.0 if cav is None else cav.bound,
+        layout="" if cav is None else cav.layout, message=message)

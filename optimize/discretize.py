@@ -151,6 +151,58 @@ def _spread(counts, allowed, preferred) -> list[float]:
     return [l for _, _, l in items]
 
 
+#: A segment of a given polyline is tiled by rods when their lengths add up to its length
+#: within this relative tolerance.
+TILE_TOL = 1e-9
+
+#: Largest number of length combinations tried per segment when tiling a polyline.
+MAX_TILINGS = 200_000
+
+
+def _tile_counts(length: float, allowed: list[float], preferred: float) -> tuple[int, ...] | None:
+    """How many rods of each allowed length add up to ``length`` (fewest kinds, then the
+    most of the preferred length, then the fewest rods), or None."""
+    nmax = int(length / min(allowed) + 1)
+    if (nmax + 1) ** len(allowed) > MAX_TILINGS:
+        return None
+    best, best_key = None, None
+    for counts in itertools.product(range(nmax + 1), repeat=len(allowed)):
+        total = sum(c * l for c, l in zip(counts, allowed))
+        if total == 0 or abs(total - length) > TILE_TOL * length:
+            continue
+        pref = counts[allowed.index(preferred)] if preferred in allowed else 0
+        key = (sum(1 for c in counts if c), -pref, sum(counts), counts)
+        if best_key is None or key < best_key:
+            best, best_key = counts, key
+    return best
+
+
+def _tile_polyline(curve: np.ndarray, allowed: list[float], preferred: float | None) -> Discretization | None:
+    """The exact discretisation of a polyline whose every segment is a sum of allowed
+    lengths: vertices become joints, segments are split into rods along their line."""
+    seg = np.hypot(*np.diff(curve, axis=0).T)
+    keep = np.concatenate([[True], seg > 0])
+    pts = curve[keep]
+    seg = seg[seg > 0]
+    if seg.size == 0 or seg.min() < min(allowed) * (1 - TILE_TOL):
+        return None
+    if preferred is None:
+        fits = [l for l in allowed if seg.sum() / l >= 8]
+        preferred = max(fits) if fits else min(allowed)
+    points, lengths, corners = [pts[0]], [], []
+    for a, b, length in zip(pts[:-1], pts[1:], seg):
+        counts = _tile_counts(float(length), allowed, preferred)
+        if counts is None:
+            return None
+        run = _spread(counts, allowed, preferred)
+        scale = length / sum(run)  # exact to TILE_TOL: put the last joint on the vertex
+        at = np.cumsum(run) * scale
+        points += [a + (b - a) * (t / length) for t in at[:-1]] + [b]
+        lengths += run
+        corners.append(len(lengths))
+    return Discretization(np.array(points), np.array(lengths, dtype=float), 0.0, 0.0, corners[:-1])
+
+
 def discretize(
     curve,
     allowed_lengths,
@@ -169,7 +221,10 @@ def discretize(
             that should carry a joint.
 
     Returns:
-        Discretization with points[0] = A and points[-1] = B exactly.
+        Discretization with points[0] = A and points[-1] = B exactly. A polyline whose
+        every segment is a sum of allowed lengths (to :data:`TILE_TOL`) is tiled exactly:
+        its vertices are joints and its segments are rods (a chain of the catalog's rods
+        given as its own polyline comes back exactly).
 
     Raises:
         ValueError: the curve is degenerate or the anchors are farther apart than
@@ -181,6 +236,9 @@ def discretize(
     allowed = sorted(set(float(x) for x in np.atleast_1d(allowed_lengths)))
     if not allowed or min(allowed) <= 0:
         raise ValueError("allowed_lengths must be positive")
+    exact = _tile_polyline(curve, allowed, preferred)
+    if exact is not None:
+        return exact
     corners_in = find_corners(curve, corner_angle_deg)
     # a corner closer than half the shortest rod to the ends or to the previous corner
     # cannot carry a joint of its own: keep the first of such a cluster

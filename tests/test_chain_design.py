@@ -51,3 +51,28 @@ def test_bad_constraints_explained(catalog_and_arrays):
     cat, arrays = catalog_and_arrays
     with pytest.raises(ValueError, match="no rod type of the catalog is allowed"):
         plan_chain(cat, semicircle((0, 0), (200, 0)), arrays=arrays, allowed_types=["nope"])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_chain_of_catalog_rods_given_as_its_polyline_comes_back_exactly(catalog_and_arrays, seed):
+    """Hang a random chain of free-30 and free-40 rods (masses inside their ranges), give
+    its joints as a polyline target: the plan finds its own rod lengths and the design
+    hangs on it to 1e-6 of the span, every mass in range."""
+    from optimize import solve_equilibrium
+
+    cat, arrays = catalog_and_arrays
+    names = ["free-30", "free-40"]
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(5, 12))
+    k = [arrays.index[names[i]] for i in rng.integers(0, 2, n)]
+    lengths, com = arrays.lengths[k], arrays.com[k]
+    lo, hi = arrays.mass_bounds[k].T
+    span = rng.uniform(0.6, 0.9) * lengths.sum()
+    b = (span * np.cos(rng.uniform(-0.3, 0.3)), span * np.sin(rng.uniform(-0.3, 0.3)))
+    eq = solve_equilibrium(lengths, rng.uniform(lo, hi), (0, 0), b, com=com)
+    plan = plan_chain(cat, eq.points, arrays=arrays, allowed_types=names)
+    np.testing.assert_array_equal(plan.problem.lengths, lengths)
+    d = design_chain(plan, "refine", n_starts=4)
+    assert d.result.distance.max_rel_span < 1e-6 and d.unique
+    lo, hi = plan.problem.mass_bounds.T
+    assert np.all((d.result.masses >= lo) & (d.result.masses <= hi))

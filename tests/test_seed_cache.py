@@ -118,7 +118,7 @@ def test_seed_values_match_the_solids(monkeypatch: pytest.MonkeyPatch) -> None:
     left, right = catalog["free-30"], catalog["curve20-30"]
     wall = limits._wall(left, right)
     stored = entries["limits"][limits._cache_key(left.geometry, right.geometry, wall)]
-    fresh = limits._compute(left.geometry, right.geometry, wall)
+    fresh = limits.compute_pair_limits(left.geometry, right.geometry, wall)
     assert stored["assemblable"] == fresh["assemblable"]
     assert [stored["lo"], stored["hi"]] == pytest.approx([fresh["lo"], fresh["hi"]], rel=1e-6, abs=1e-9)
     rod = catalog["free-30"]

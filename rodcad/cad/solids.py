@@ -138,11 +138,11 @@ def _body(g: RodGeometry) -> Solid:
 def _end_cuts(g: RodGeometry) -> list[Solid]:
     """Prisms removing everything beyond the end faces (top and bottom, both ends)."""
     h, t = g.height, g.thickness
-    stub = _stub_length(g) + 1.0
     out = []
     for joint, end in ((0, g.first), (1, g.second)):
         p, u, v = _frame(g, joint)
         a = p - end.setback * u
+        stub = _stub_length(g) + 1.0 + end.setback  # past the raw stub's end, whatever the setback
         for side, chamfer in ((1, end.top_chamfer), (-1, end.bottom_chamfer)):
             n = side * v
             tan_b = math.tan(math.radians(chamfer))

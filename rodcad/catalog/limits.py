@@ -238,7 +238,7 @@ def _cache_key(left: RodGeometry, right: RodGeometry, wall: float) -> str:
                     asdict(left), asdict(right), wall)
 
 
-def _compute(left: RodGeometry, right: RodGeometry, wall: float) -> dict[str, object]:
+def compute_pair_limits(left: RodGeometry, right: RodGeometry, wall: float) -> dict[str, object]:
     """Run the search on the exact solids (in this process)."""
     from rodcad.cad.collision import PairScene
 
@@ -256,7 +256,7 @@ def _compute(left: RodGeometry, right: RodGeometry, wall: float) -> dict[str, ob
 
 
 def _compute_star(args: tuple[RodGeometry, RodGeometry, float]) -> dict[str, object]:
-    return _compute(*args)
+    return compute_pair_limits(*args)
 
 
 def _wall(left: RodType, right: RodType) -> float:

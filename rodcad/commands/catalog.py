@@ -28,6 +28,8 @@ from typing import Any
 
 from rodcad.cad.solids import type_solid
 from rodcad.catalog.cache import DiskCache
+from rodcad.catalog.jointlimits import joint_limits
+from rodcad.catalog.limits import TOLERANCE_DEG
 from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.model import Catalog
 from rodcad.catalog.spec import catalog_schema
@@ -174,6 +176,7 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
         else:
             problems.append(f"rod types {left!r} and {right!r} interfere at every angle: they cannot be joined")
     computed = sum(1 for r in limits.values() if not r.cached)
+    lookup = _lookup_deviation(catalog, limits)
     return {
         "catalog": catalog.name,
         "file": str(catalog.path) if catalog.path else None,
@@ -183,7 +186,30 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
         "problems": problems,
         "stats": {"pairs_computed": computed, "pairs_cached": len(limits) - computed,
                   "seconds": round(time.perf_counter() - t0, 3)},
+        "limit_lookup": lookup,
     }
+
+
+def _lookup_deviation(catalog: Catalog, limits: dict[tuple[str, str], Any]) -> dict[str, Any]:
+    """How far the fast joint-limit function (:func:`rodcad.catalog.jointlimits.joint_limits`)
+    is from the B-rep search on this catalog's pairs: the worst deviation (deg) and
+    whether it ever allows more bend than the solids (beyond the search's tolerance)."""
+    worst, worst_pair, looser = 0.0, None, []
+    for (left, right), r in limits.items():
+        if not r.assemblable:
+            continue
+        fast = joint_limits(catalog[left].geometry, catalog[right].geometry)
+        for side, (a, b) in enumerate(zip(fast, r.limits_deg)):
+            if a is None or b is None:
+                if (a is None) != (b is None):
+                    looser.append(f"{left} -> {right}")
+                continue
+            if abs(a - b) > worst:
+                worst, worst_pair = abs(a - b), f"{left} -> {right}"
+            if (b - a if side == 0 else a - b) > TOLERANCE_DEG:
+                looser.append(f"{left} -> {right}")
+    return {"worst_deviation_deg": round(worst, 4), "worst_pair": worst_pair,
+            "allows_more_bend_than_the_solids": sorted(set(looser))}
 
 
 def _limits_json(r: Any) -> list[float | None]:
@@ -266,6 +292,11 @@ def _format_report(report: dict[str, Any]) -> str:
     lines.append("")
     lines.append(f"({stats['pairs_computed']} pairs computed, {stats['pairs_cached']} from cache, "
                  f"{stats['seconds']:.1f} s)")
+    lk = report["limit_lookup"]
+    lines.append(f"fast joint-limit function against the B-rep search: worst deviation "
+                 f"{lk['worst_deviation_deg']:.4f} deg ({lk['worst_pair']})"
+                 + (f"; allows more bend than the solids at {', '.join(lk['allows_more_bend_than_the_solids'])}"
+                    if lk["allows_more_bend_than_the_solids"] else "; never more bend than the solids"))
     return "\n".join(lines)
 
 

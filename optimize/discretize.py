@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
-__all__ = ["Discretization", "curve_distance", "discretize", "refit", "resample", "find_corners"]
+__all__ = ["Discretization", "centerline", "curve_distance", "discretize", "refit", "resample", "find_corners"]
 
 
 @dataclass
@@ -399,6 +399,37 @@ def _point_polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarra
         t = np.clip(np.einsum("ij,ij->i", p - a, ab) / denom, 0.0, 1.0)
         out[i] = np.min(np.hypot(*(a + t[:, None] * ab - p).T))
     return out
+
+
+def centerline(points, curvature=None, per_rod: int = 24) -> np.ndarray:
+    """The rods' centrelines as one polyline: straight chords, or for a rod of signed
+    curvature k (1/mm; > 0 bulges to the right of p_i -> p_{i+1}, the rod frame's -y) the
+    arc of radius 1/|k| through both of its joints.
+
+    Args:
+        points: (N+1, 2) joints.
+        curvature: (N,) per rod, or None for straight rods.
+        per_rod: points per curved rod.
+    """
+    pts = np.asarray(points, dtype=float)
+    if curvature is None or not np.any(np.asarray(curvature, float)):
+        return pts
+    out = [pts[:1]]
+    for p, q, k in zip(pts[:-1], pts[1:], np.asarray(curvature, float)):
+        if k == 0:
+            out.append(q[None])
+            continue
+        d = q - p
+        c = float(np.hypot(*d))
+        rho = 1 / abs(k)
+        x = np.linspace(0.0, c, per_rod + 1)[1:]
+        y = np.sign(k) * (rho * np.sqrt(max(1 - (c * k / 2) ** 2, 0.0)) - np.sqrt(np.maximum(rho**2 - (x - c / 2) ** 2, 0.0)))
+        u = d / c
+        v = np.array([-u[1], u[0]])
+        arc = p + np.outer(x, u) + np.outer(y, v)
+        arc[-1] = q
+        out.append(arc)
+    return np.concatenate(out)
 
 
 def curve_distance(curve, chain) -> float:

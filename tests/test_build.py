@@ -21,15 +21,18 @@ EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in
 
 def check_contract(data: dict, n_rods: int | None = None) -> None:
     """design.json has contract.md's keys and shapes, and its numbers agree with each other."""
-    for key in ("name", "units", "method", "seed", "time_s", "anchors", "target", "rods", "simulated", "error"):
+    for key in ("name", "units", "method", "seed", "time_s", "anchors", "target", "rods", "simulated", "error",
+                "anchor_limits_deg", "curve", "print", "bill_of_materials"):
         assert key in data, key
+    assert data["print"]["infill"] == 1.0 and data["print"]["density"] > 0
     assert data["units"]["length"] == "mm" and data["units"]["mass"] == "g"
     n = len(data["rods"])
     if n_rods is not None:
         assert n == n_rods
     assert len(data["target"]["points"]) == n + 1 and len(data["simulated"]["points"]) == n + 1
     for i, rod in enumerate(data["rods"]):
-        assert rod["index"] == i and set(rod) >= {"type", "length", "mass", "com", "limits_deg"}
+        assert rod["index"] == i and set(rod) >= {"type", "length", "mass", "com", "limits_deg", "curvature", "params"}
+        assert rod["params"]["length"] == rod["length"] and rod["params"]["curvature"] == rod["curvature"]
         assert (rod["limits_deg"] is None) == (i == n - 1)
     sim = data["simulated"]
     assert len(sim["angles_deg"]) == n and len(sim["reaction"]) == 2
@@ -44,6 +47,10 @@ def check_contract(data: dict, n_rods: int | None = None) -> None:
     assert data["error"]["mean_mm"] == pytest.approx(err.mean(), rel=1e-9, abs=1e-12)
     span = math.dist(*data["anchors"])
     assert data["error"]["max_rel_span"] == pytest.approx(err.max() / span, rel=1e-9, abs=1e-15)
+    curve = data["curve"]
+    assert curve["rel_span"] == pytest.approx(curve["max_mm"] / span, rel=1e-9)
+    if not any(r["curvature"] for r in data["rods"]):  # straight rods: the centreline is the chain
+        assert curve["max_mm"] == pytest.approx(data["discretisation"]["hanging_curve_error_mm"], rel=1e-9)
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)

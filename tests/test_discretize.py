@@ -43,3 +43,19 @@ def test_vertices_at_rod_multiples_are_joints_under_round_off(legs, seed):
     theta = np.degrees(np.arctan2(*np.diff(d.points, axis=0).T[::-1]))
     wanted = np.repeat([a for a, _ in legs], [int(round(l / 30)) for _, l in legs])
     np.testing.assert_allclose(theta, wanted, atol=1e-7)
+
+
+def test_centerline_of_curved_rods_is_their_arc():
+    """A rod of curvature k bulges to the right of p_i -> p_{i+1} by the sagitta of its arc."""
+    from optimize.discretize import centerline, curve_distance
+
+    pts = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, -30.0]])
+    cl = centerline(pts, [0.02, -0.01])
+    rho = 50.0
+    assert cl[0].tolist() == [0.0, 0.0] and np.allclose(cl[-1], pts[-1])
+    assert np.min(cl[:25, 1]) == pytest.approx(-(rho - math.sqrt(rho**2 - 20**2)), rel=1e-6)  # below the chord
+    second = cl[25:]
+    assert np.min(second[:, 0]) == pytest.approx(40.0, abs=1e-9)  # k < 0 bulges to the rod frame's +y:
+    assert np.max(second[:, 0]) == pytest.approx(40.0 + (100 - math.sqrt(100**2 - 15**2)), rel=1e-3)  # +x here
+    np.testing.assert_array_equal(centerline(pts, [0.0, 0.0]), pts)
+    assert curve_distance(cl, pts) == pytest.approx(rho - math.sqrt(rho**2 - 20**2), rel=1e-3)

@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 from collections.abc import Sequence
 
 from rodcad import __version__
 from rodcad.errors import InputError
+from rodcad.outdir import OutputFolderError
 
 #: Modules that register subcommands, in the order ``--help`` lists them.
 COMMAND_MODULES = (
@@ -44,15 +46,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "handler", None):
         parser.print_help()
         return 2
+    signal.signal(signal.SIGTERM, _terminate)  # clean up staging folders on `kill` too
     try:
         return int(args.handler(args))
     except InputError as err:
         for problem in err.problems:
             print(problem, file=sys.stderr)
         return 2
+    except OutputFolderError as err:
+        print(f"rodcad: {err}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("rodcad: interrupted; outputs left as they were", file=sys.stderr)
         return 1
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -14,6 +14,7 @@ from rodcad import pipeline
 from rodcad.catalog.massrange import mass_info
 from rodcad.cli import main
 from rodcad.design.loader import load_design
+from rodcad.outdir import MARKER
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier"))
@@ -57,7 +58,7 @@ def check_contract(data: dict, n_rods: int | None = None) -> None:
 def test_every_example_builds_without_cad(example, tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["build", str(example), "-o", str(out), "--no-cad", "-q"]) == 0
-    assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg"}
+    assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg", MARKER}
     data = json.loads((out / "design.json").read_text())
     check_contract(data)
     # the simulated shape is the equilibrium of the rods listed, re-solved independently
@@ -106,8 +107,9 @@ def test_same_seed_same_design_json(tmp_path):
 def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
     ex = ROOT / "examples" / "semicircle.yaml"
     out = tmp_path / "out"
-    out.mkdir()
+    assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0  # an earlier output
     (out / "mine.txt").write_text("keep me")
+    before = sorted(p.name for p in out.iterdir())
 
     def boom(*a, **k):
         raise RuntimeError("disk full")
@@ -115,10 +117,10 @@ def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
     monkeypatch.setattr("rodcad.pipeline.plot_chain", boom)
     with pytest.raises(RuntimeError):
         main(["build", str(ex), "-o", str(out), "--no-cad", "-q"])
-    assert [p.name for p in out.iterdir()] == ["mine.txt"]
+    assert sorted(p.name for p in out.iterdir()) == before
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary folder left behind
     monkeypatch.undo()
-    assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0
+    assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0  # an earlier output: replaced
     assert not (out / "mine.txt").exists() and (out / "design.json").exists()
 
 

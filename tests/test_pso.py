@@ -57,7 +57,6 @@ def linear_chain_toy(n: int, seed: int, n_joints: int = 11):
     """
     rng = np.random.default_rng(seed)
     t = np.linspace(0.0, 1.0, n_joints)
-    target = np.column_stack([100.0 * t, -40.0 * np.sin(np.pi * t)])
     A = 10.0 * rng.normal(size=(2 * n_joints, n))
     A[:2] = 0.0
     A[-2:] = 0.0

@@ -17,6 +17,8 @@ from pathlib import Path
 
 from rodcad.design.loader import load_design
 from rodcad.design.model import METHOD_NAMES
+from rodcad.errors import InputError, Problem
+from rodcad.outdir import OutputFolderError, check_output_folder
 from rodcad.progress import Progress
 
 __all__ = ["register", "run"]
@@ -47,6 +49,15 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet)
     design = load_design(args.design)
     outdir = Path(args.outdir) if args.outdir else Path("outputs") / design.name
+    folders = [outdir] + ([outdir.with_name(outdir.name + ".best-fit")] if design.tolerance is not None else [])
+    problems = []
+    for folder in folders:  # before any work: never replace what rodcad did not write
+        try:
+            check_output_folder(folder)
+        except OutputFolderError as err:
+            problems.append(Problem(str(folder), 0, 0, "-o" if args.outdir else "name", str(err)))
+    if problems:
+        raise InputError(problems)
     if args.seed is not None and args.seed < 0:
         print("rodcad: --seed must be 0 or more", file=sys.stderr)
         return 2

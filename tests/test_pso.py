@@ -56,7 +56,6 @@ def linear_chain_toy(n: int, seed: int, n_joints: int = 11):
     the minimum, cost 0, is at x* inside the unit box.
     """
     rng = np.random.default_rng(seed)
-    t = np.linspace(0.0, 1.0, n_joints)
     A = 10.0 * rng.normal(size=(2 * n_joints, n))
     A[:2] = 0.0
     A[-2:] = 0.0

@@ -11,6 +11,7 @@ far the chain polyline is from the curve) is reported apart from the physics err
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -151,6 +152,10 @@ def _spread(counts, allowed, preferred) -> list[float]:
     return [l for _, _, l in items]
 
 
+#: Longest chain laid on a target (rods): planning, the inverse design and the multi-start
+#: grow with the rod count, and no printed chain gets near this.
+MAX_RODS = 300
+
 #: A segment of a given polyline is tiled by rods when their lengths add up to its length
 #: within this relative tolerance.
 TILE_TOL = 1e-9
@@ -236,9 +241,15 @@ def discretize(
     allowed = sorted(set(float(x) for x in np.atleast_1d(allowed_lengths)))
     if not allowed or min(allowed) <= 0:
         raise ValueError("allowed_lengths must be positive")
+    total_length = float(np.sum(np.hypot(*np.diff(curve, axis=0).T)))
+    if total_length / max(allowed) > MAX_RODS:
+        raise ValueError(
+            f"the target is {total_length:.4g} long: it takes at least {math.ceil(total_length / max(allowed))} "
+            f"rods of the allowed lengths (up to {max(allowed):g}); rodcad lays chains of up to {MAX_RODS} rods "
+            "(allow longer rods, or make the target smaller)")
     exact = _tile_polyline(curve, allowed, preferred)
     if exact is not None:
-        return exact
+        return _slack(exact)
     corners_in = find_corners(curve, corner_angle_deg)
     # a corner closer than half the shortest rod to the ends or to the previous corner
     # cannot carry a joint of its own: keep the first of such a cluster
@@ -291,7 +302,22 @@ def discretize(
         points = _close(joints, lengths, a, b, dense)
     joint_err = float(_point_polyline_distance(points, curve).max())
     curve_err = _polyline_distance(dense, points)
-    return Discretization(points, lengths, joint_err, curve_err, corner_joints)
+    return _slack(Discretization(points, lengths, joint_err, curve_err, corner_joints))
+
+
+#: A chain at most this much (relative) longer than the span between its anchors hangs
+#: (nearly) straight: it would pull (nearly) infinitely hard on them.
+TAUT_SLACK = 1e-6
+
+
+def _slack(disc: Discretization) -> Discretization:
+    span = float(np.hypot(*(disc.points[-1] - disc.points[0])))
+    if disc.lengths.sum() <= span * (1 + TAUT_SLACK):
+        raise ValueError(
+            f"the target is (nearly) the straight line between the anchors: a chain of {disc.lengths.sum():.6g} "
+            f"over a span of {span:.6g} would hang taut and pull infinitely hard on its anchors; give it some "
+            "sag (a longer target)")
+    return disc
 
 
 def _close(joints, lengths, a, b, dense) -> np.ndarray:

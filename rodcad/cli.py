@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 from collections.abc import Sequence
@@ -58,6 +59,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         print("rodcad: interrupted; outputs left as they were", file=sys.stderr)
+        return 1
+    except (RecursionError, MemoryError) as err:
+        print(f"rodcad: the input is too large or too deeply nested to handle ({type(err).__name__}); "
+              "outputs left as they were", file=sys.stderr)
+        return 2
+    except Exception as err:  # a bug: say so in one line, keep the traceback for RODCAD_DEBUG=1
+        if os.environ.get("RODCAD_DEBUG"):
+            raise
+        print(f"rodcad: internal error ({type(err).__name__}: {err}); outputs left as they were. Please report it "
+              "with the design file; RODCAD_DEBUG=1 shows the traceback", file=sys.stderr)
         return 1
 
 

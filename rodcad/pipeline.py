@@ -32,6 +32,7 @@ from optimize import (
     shape_distance,
     solve_equilibrium,
 )
+from optimize.discretize import MAX_RODS
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.export import export_assembly, export_step, export_stl
@@ -288,6 +289,9 @@ def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult
     t0 = time.perf_counter()
     if design.chain is None:
         raise InputError([design.problem("", "this design has no explicit 'chain' to simulate")])
+    if len(design.chain) > MAX_RODS:
+        raise InputError([design.problem("chain", f"{len(design.chain)} rods; rodcad simulates chains of up to "
+                                         f"{MAX_RODS} rods")])
     arrays = _arrays(design, None, progress)
     names = [r.type for r in design.chain]
     lim = arrays.limits_of(names)

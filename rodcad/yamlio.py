@@ -131,12 +131,44 @@ def load_yaml_text(text: str, filename: str) -> yaml.Node | None:
         raise InputError([Problem(filename, line, col, "", f"YAML syntax error: {what}")]) from None
     except yaml.YAMLError as err:  # pragma: no cover - non-marked errors are rare
         raise InputError([Problem(filename, 0, 0, "", f"YAML error: {err}")]) from None
+    except RecursionError:
+        raise InputError([Problem(filename, 0, 0, "", f"YAML nests more than {MAX_DEPTH} levels deep")]) from None
     if len(nodes) > 1:
         pos = Pos.of(nodes[1])
         raise InputError(
             [Problem(filename, pos.line, pos.column, "", "expected one YAML document, found several")]
         )
+    if nodes:
+        _check_shape(nodes[0], filename)
     return nodes[0] if nodes else None
+
+
+#: Deepest nesting of mappings and lists read from a file a person edits.
+MAX_DEPTH = 64
+
+
+def _check_shape(root: yaml.Node, filename: str) -> None:
+    """Refuse node graphs that refer to themselves (an alias inside its own anchor) or nest
+    deeper than :data:`MAX_DEPTH` (walked without recursion)."""
+    stack: list[tuple[yaml.Node, int, frozenset[int]]] = [(root, 1, frozenset())]
+    while stack:
+        node, depth, above = stack.pop()
+        if id(node) in above:
+            pos = Pos.of(node)
+            raise InputError([Problem(filename, pos.line, pos.column, "",
+                                      "this value refers to itself (an alias inside its own anchor)")])
+        if depth > MAX_DEPTH:
+            pos = Pos.of(node)
+            raise InputError([Problem(filename, pos.line, pos.column, "", f"YAML nests more than {MAX_DEPTH} "
+                                      "levels deep")])
+        if isinstance(node, yaml.MappingNode):
+            children = [n for pair in node.value for n in pair]
+        elif isinstance(node, yaml.SequenceNode):
+            children = list(node.value)
+        else:
+            continue
+        inner = above | {id(node)}
+        stack.extend((c, depth + 1, inner) for c in children)
 
 
 def load_yaml(path: str | Path, display_name: str | None = None) -> yaml.Node | None:

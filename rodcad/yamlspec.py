@@ -30,7 +30,7 @@ from rodcad.yamlio import (
     suggest,
 )
 
-__all__ = ['Spec', 'Any_', 'Str', 'Bool', 'Num', 'Nullable', 'ListOf', 'OneOrList', 'Field', 'CrossCheck', 'Obj', 'Checked', 'check_document']
+__all__ = ['MAX_MAGNITUDE', 'Spec', 'Any_', 'Str', 'Bool', 'Num', 'Nullable', 'ListOf', 'OneOrList', 'Field', 'CrossCheck', 'Obj', 'Checked', 'check_document']
 
 
 def _kind(node: yaml.Node) -> str:
@@ -113,6 +113,9 @@ class Str(Spec):
         if not isinstance(node, yaml.ScalarNode) or node.tag in (TAG_NULL,):
             v.report(node, path, f"expected a string, got {_kind(node)}")
             return MISSING
+        if node.tag in (TAG_INT, TAG_FLOAT, TAG_BOOL):
+            v.report(node, path, f"expected a string, got {_kind(node)}; quote it if you meant text")
+            return MISSING
         text = node.value
         if self.choices is not None and text not in self.choices:
             v.report(node, path, f"unknown value {text!r}{suggest(text, self.choices)}")
@@ -146,6 +149,11 @@ class Bool(Spec):
 
     def json_schema(self) -> dict[str, Any]:
         return self._describe({"type": "boolean"})
+
+
+#: No number a person writes in a design or catalog means anything beyond this (mm, g,
+#: degrees, counts, seeds): larger ones are rejected before they overflow a computation.
+MAX_MAGNITUDE = 1e12
 
 
 class Num(Spec):
@@ -189,8 +197,16 @@ class Num(Spec):
             want = "a whole number" if self.integer else "a number"
             v.report(node, path, f"expected {want}, got {_kind(node)}")
             return MISSING
-        if not math.isfinite(value):
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an integer too large for a float
+            finite = True
+        if not finite:
             v.report(node, path, f"expected a finite number, got {node.value}")
+            return MISSING
+        if abs(value) > MAX_MAGNITUDE:
+            shown = node.value if len(str(node.value)) <= 24 else str(node.value)[:20] + "..."
+            v.report(node, path, f"expected a number between {-MAX_MAGNITUDE:g} and {MAX_MAGNITUDE:g}, got {shown}")
             return MISSING
         if self.integer and not float(value).is_integer():
             v.report(node, path, f"expected a whole number, got {node.value}")

@@ -120,3 +120,21 @@ def test_json_schema_from_the_same_specs() -> None:
 @pytest.mark.parametrize("x, text", [(3, "3"), (3.0, "3"), (0.25, "0.25"), (1 / 3, "0.333333"), (-0.01, "-0.01")])
 def test_format_number(x: float, text: str) -> None:
     assert format_number(x) == text
+
+
+def test_numbers_beyond_any_meaning_and_text_that_is_a_number() -> None:
+    assert errors("name: a\nsize: 1e308\n") == ["t.yaml:2:7: size: expected a number between -1e+12 and 1e+12, got 1e308"]
+    huge = "1" + "0" * 400
+    assert errors(f"name: a\nsize: {huge}\n") == [
+        "t.yaml:2:7: size: expected a number between -1e+12 and 1e+12, got 10000000000000000000..."]
+    assert errors("name: 5\nsize: 1\n") == ["t.yaml:1:7: name: expected a string, got a number (5); quote it if you "
+                                           "meant text"]
+
+
+def test_self_referring_and_deeply_nested_yaml_is_refused() -> None:
+    with pytest.raises(InputError) as info:
+        load_yaml_text("a: &t {b: 1, <<: *t}\n", "r.yaml")
+    assert "refers to itself" in str(info.value) and str(info.value).startswith("r.yaml:1:")
+    with pytest.raises(InputError) as info:
+        load_yaml_text("a: " + "[" * 200 + "]" * 200 + "\n", "d.yaml")
+    assert "nests more than 64 levels" in str(info.value)

@@ -59,3 +59,10 @@ def test_centerline_of_curved_rods_is_their_arc():
     assert np.max(second[:, 0]) == pytest.approx(40.0 + (100 - math.sqrt(100**2 - 15**2)), rel=1e-3)  # +x here
     np.testing.assert_array_equal(centerline(pts, [0.0, 0.0]), pts)
     assert curve_distance(cl, pts) == pytest.approx(rho - math.sqrt(rho**2 - 20**2), rel=1e-3)
+
+
+def test_a_taut_target_and_a_runaway_length_are_explained():
+    with pytest.raises(ValueError, match="straight line between the anchors"):
+        discretize(np.array([[0.0, 0.0], [100.0, 0.0], [200.0, 0.0]]), [20.0])
+    with pytest.raises(ValueError, match="chains of up to 300 rods"):
+        discretize(np.array([[0.0, 0.0], [5e4, -1e5], [1e5, 0.0]]), [20.0, 40.0])

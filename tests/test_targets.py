@@ -92,3 +92,20 @@ def test_heart_is_a_hangable_lower_outline():
     assert turn.max() == pytest.approx(90.0, abs=1e-6)  # the tip of a square heart
     assert c[np.argmin(c[:, 1])] == pytest.approx([100.0, -200 * 1.5 / (np.sqrt(2) + 1)], abs=1e-9)
     assert np.degrees(np.arctan2(d[0, 1], d[0, 0])) < -85  # vertical at the widest point
+
+
+@pytest.mark.parametrize("expr, words", [
+    ("9**9**9", "cannot evaluate"),            # no unbounded integer arithmetic: floats overflow at once
+    ("'%s' % x", "only numbers"),              # strings are refused
+    ("x" + "+x" * 1000, "characters long"),
+    ("sin(" * 80 + "x" + ")" * 80, "nests more than"),
+])
+def test_function_targets_refuse_expressions_that_run_away(expr, words):
+    import time
+
+    from rodcad.design.targets import make_target
+
+    t0 = time.perf_counter()
+    with pytest.raises(ValueError, match=words):
+        make_target("function", (0, 0), (200, 0), y=expr)
+    assert time.perf_counter() - t0 < 1.0

@@ -167,8 +167,23 @@ _SAFE_FUNCS = {
 _SAFE_CONSTS = {"pi": math.pi, "e": math.e}
 
 
+#: Longest y(x) expression (characters) and deepest nesting read.
+MAX_EXPRESSION = 2000
+MAX_EXPRESSION_DEPTH = 60
+
+
 def _safe_eval(expr: str, x: np.ndarray) -> np.ndarray:
-    tree = ast.parse(expr, mode="eval")
+    """Evaluate a y(x) expression on numbers only: every constant becomes a float, so
+    powers overflow to inf instead of building huge integers, and strings are refused."""
+    if len(expr) > MAX_EXPRESSION:
+        raise ValueError(f"the y(x) expression is {len(expr)} characters long; keep it under {MAX_EXPRESSION}")
+    try:
+        tree = ast.parse(expr, mode="eval")
+    except (SyntaxError, RecursionError, MemoryError) as err:
+        raise ValueError(f"cannot read the y(x) expression: {getattr(err, 'msg', None) or 'it nests too deep'}") \
+            from None
+    if _depth(tree) > MAX_EXPRESSION_DEPTH:
+        raise ValueError(f"the y(x) expression nests more than {MAX_EXPRESSION_DEPTH} levels deep")
     allowed = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Call, ast.Name, ast.Load,
                ast.Constant, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd,
                ast.Mod)
@@ -179,10 +194,27 @@ def _safe_eval(expr: str, x: np.ndarray) -> np.ndarray:
             raise ValueError(f"unknown name {node.id!r} in y(x) expression (use x, pi, sin, ...)")
         if isinstance(node, ast.Call) and not isinstance(node.func, ast.Name):
             raise ValueError("only plain function calls such as cos(x) are allowed")
+        if isinstance(node, ast.Constant):
+            if not isinstance(node.value, (int, float)) or isinstance(node.value, bool):
+                raise ValueError(f"only numbers may stand in a y(x) expression, not {node.value!r}")
+            node.value = float(node.value)  # no unbounded integer arithmetic (9**9**9)
     env = {"x": x, **_SAFE_FUNCS, **_SAFE_CONSTS}
     with np.errstate(all="ignore"):
-        y = eval(compile(tree, "<y(x)>", "eval"), {"__builtins__": {}}, env)  # noqa: S307
+        try:
+            y = eval(compile(tree, "<y(x)>", "eval"), {"__builtins__": {}}, env)  # noqa: S307
+        except (OverflowError, ZeroDivisionError, TypeError) as err:
+            raise ValueError(f"cannot evaluate the y(x) expression: {err}") from None
     return np.broadcast_to(np.asarray(y, dtype=float), x.shape).copy()
+
+
+def _depth(node: ast.AST) -> int:
+    """Nesting depth of an expression tree (iteratively: no recursion limit to hit)."""
+    deepest, stack = 0, [(node, 1)]
+    while stack:
+        n, d = stack.pop()
+        deepest = max(deepest, d)
+        stack.extend((c, d + 1) for c in ast.iter_child_nodes(n))
+    return deepest
 
 
 def function(a, b, y: str, samples: int = 400) -> np.ndarray:

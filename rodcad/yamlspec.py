@@ -362,6 +362,9 @@ class OneOrList(ListOf):
 
     def check(self, node: yaml.Node, path: str, v: Validator) -> Any:
         if isinstance(node, yaml.SequenceNode):
+            if not node.value:  # an empty list would silently mean nothing
+                v.report(node, path, "expected a value or a list of at least 1 item, got an empty list")
+                return MISSING
             return self._check_items(node, path, v)
         value = self.item.check(node, path, v)
         return MISSING if value is MISSING else [value]

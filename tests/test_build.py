@@ -104,7 +104,7 @@ def test_same_seed_same_design_json(tmp_path):
     assert outs[0]["method"] == "pso" and outs[0]["seed"] == 3
 
 
-def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
+def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch, capsys):
     ex = ROOT / "examples" / "semicircle.yaml"
     out = tmp_path / "out"
     assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0  # an earlier output
@@ -115,8 +115,8 @@ def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch):
         raise RuntimeError("disk full")
 
     monkeypatch.setattr("rodcad.pipeline.plot_chain", boom)
-    with pytest.raises(RuntimeError):
-        main(["build", str(ex), "-o", str(out), "--no-cad", "-q"])
+    assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 1  # one line, no traceback
+    assert "internal error (RuntimeError: disk full)" in capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == before
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary folder left behind
     monkeypatch.undo()

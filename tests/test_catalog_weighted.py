@@ -118,11 +118,14 @@ def test_mass_ranges_are_wider_than_pla_pinned(check):
         assert t["balls"]["diameter"] == 6.0 and t["balls"]["count"] >= 1
 
 
-def test_check_table_matches_the_solids(cat, check):
-    """A sample of the stored limits, recomputed from the B-rep."""
+def test_check_table_matches_the_solids(cat, check, tmp_path, monkeypatch):
+    """A sample of the stored limits, recomputed from the B-rep (no cache, no seeds)."""
+    monkeypatch.setenv("RODCAD_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("RODCAD_SEED_CACHE", "0")
     sample = [("straight-30", "straight-free-30"), ("straight-free-30", "free-straight-30"),
               ("free-straight-30", "concave20-30"), ("curve10-30", "curve20-30")]
     fresh = all_pair_limits(cat, pairs=[(cat[a], cat[b]) for a, b in sample], jobs=2)
+    assert all(not r.cached for r in fresh.values())
     stored = {(p["left"], p["right"]): p["limits_deg"] for p in check["pairs"]}
     for key, r in fresh.items():
         assert r.limits_deg == pytest.approx(tuple(stored[key]), abs=1e-3), key

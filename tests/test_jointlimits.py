@@ -51,7 +51,7 @@ def test_every_pair_of_pla_weighted_agrees_with_the_solids():
 def test_every_pair_of_pla_pinned_agrees_with_the_solids():
     """pla-pinned has curved (arc) rods and concave stops on both ends."""
     cat = load_catalog("pla-pinned")
-    brep = all_pair_limits(cat, jobs=2)  # the session cache: computed once per test run
+    brep = all_pair_limits(cat, jobs=2)  # from the B-rep search (the shipped seeds, checked by test_seed_cache)
     assert any(t.curvature != 0 for t in cat)
     for (left, right), r in brep.items():
         assert r.assemblable

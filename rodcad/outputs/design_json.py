@@ -1,0 +1,240 @@
+"""design.json: the machine-readable result of a build (contract.md), for a chain and a chandelier.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from optimize.discretize import centerline, curve_distance
+from rodcad import __version__
+from rodcad.catalog.massrange import mass_info
+from rodcad.catalog.model import Catalog, EndShape, RodType
+
+__all__ = ['design_json', 'bill_of_materials', 'write_json', 'chandelier_json']
+
+
+def _f(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _pts(p: np.ndarray) -> list[list[float]]:
+    return [[float(x), float(y)] for x, y in np.asarray(p, float)]
+
+
+def _limits_deg(lim: np.ndarray) -> list[float | None]:
+    return [_f(math.degrees(v)) for v in lim]
+
+
+def _rod_json(i: int, rod: RodType, length: float, mass: float, com, limits, n: int) -> dict[str, Any]:
+    """One rod of design.json's ``rods`` (limits: the joint after it, None for the last rod)."""
+    return {"index": i, "type": rod.name, "length": float(length), "mass": float(mass),
+            "com": [float(v) for v in com], "limits_deg": _limits_deg(limits[i]) if i < n - 1 else None,
+            "curvature": float(rod.curvature), "params": rod_params(rod)}
+
+
+def rod_params(rod: RodType) -> dict[str, Any]:
+    """The family parameters a rod is printed with (mm, deg, 1/mm)."""
+    g = rod.geometry
+
+    def end(e: EndShape) -> dict[str, float]:
+        return {"setback": e.setback, "top_chamfer": e.top_chamfer, "bottom_chamfer": e.bottom_chamfer}
+
+    return {"family": rod.family, "length": rod.length, "scale": rod.scale, "curvature": rod.curvature,
+            "section": {"height": g.height, "thickness": g.thickness},
+            "ends": {"first": end(g.first), "second": end(g.second)},
+            "pin_diameter": g.hinge.pin_diameter, "material": rod.material.name}
+
+
+def print_profile(catalog: Catalog) -> dict[str, Any]:
+    """The print settings the masses assume (contract.md's ``print``)."""
+    m = next(iter(catalog)).material
+    return {"material": m.name, "density": m.density, "infill": 1.0,
+            "note": "every mass assumes solid rods: print them with 100 % infill"}
+
+
+def curve_error(curve: np.ndarray, points: np.ndarray, curvature: np.ndarray, span: float) -> dict[str, Any]:
+    """How far the rods' centrelines (arcs for curved rods) are from the target curve
+    (symmetric Hausdorff distance), in mm and as a fraction of the span."""
+    d = curve_distance(curve, centerline(points, curvature))
+    return {"max_mm": _f(d), "rel_span": _f(d / span) if span > 0 else None}
+
+
+def _simulated_json(eq, unique: bool) -> dict[str, Any]:
+    """design.json's ``simulated``: points, angles, reactions (g * m/s^2 = mN -> N), KKT, stability."""
+    return {"points": _pts(eq.points), "angles_deg": [float(math.degrees(v)) for v in eq.angles],
+            "reaction": [_f(v * 1e-3) for v in eq.reaction],
+            "reaction_a": [_f(v * 1e-3) for v in eq.reaction_a],
+            "kkt_residual": _f(eq.kkt_residual), "stable": bool(eq.stable), "success": bool(eq.success),
+            "unique": bool(unique)}
+
+
+def _as_built_json(ab) -> dict[str, Any]:
+    return {"masses": [float(v) for v in ab.masses], "com": _pts(ab.com), "points": _pts(ab.equilibrium.points),
+            "error": ab.distance.as_dict(), "stable": bool(ab.equilibrium.stable)}
+
+
+def _filament_and_balls(rods) -> dict[str, Any]:
+    """Filament (g) and metal balls by diameter over fabricated rods."""
+    balls: Counter[float] = Counter()
+    for f in rods:
+        if f.ball_count:
+            balls[float(f.ball_diameter)] += int(f.ball_count)
+    return {"filament_g": float(sum(f.filament_mass for f in rods)),
+            "metal_balls": [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]}
+
+
+def _header(d, method: str | None, seed: int, time_s: float) -> dict[str, Any]:
+    return {"name": d.name, "units": {"length": "mm", "mass": "g", "angle": "deg", "force": "N"},
+            "rodcad": __version__, "design_file": str(d.path), "catalog": d.catalog.name,
+            "method": method, "seed": int(seed), "time_s": float(time_s)}
+
+
+def design_json(r) -> dict[str, Any]:
+    """The machine-readable result of a run (contract.md's design.json, plus extras).
+
+    Args:
+        r: a :class:`rodcad.pipeline.BuildResult`.
+    """
+    d = r.design
+    eq = r.equilibrium
+    rods = []
+    for i, name in enumerate(r.type_names):
+        rod = _rod_json(i, d.catalog[name], r.lengths[i], r.masses[i], r.com[i], r.limits, r.n)
+        rod["mass_range"] = [float(v) for v in mass_info(d.catalog[name]).mass_range]
+        if r.fabrication is not None:
+            f = r.fabrication.rods[i]
+            rod["fabrication"] = {
+                "mass": float(f.mass), "com": [float(v) for v in f.com],
+                "filament_g": float(f.filament_mass), "cavities": int(f.cavity_count),
+                "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
+                "ball_diameter_mm": None if f.ball_diameter is None else float(f.ball_diameter),
+                "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
+                "in_range": bool(f.in_range), "message": f.message,
+            }
+        rods.append(rod)
+    out: dict[str, Any] = {
+        **_header(d, r.method or None, r.seed, r.time_s),
+        "anchors": _pts(d.anchors),
+        "target": {"form": d.target_form, "params": d.target_params,
+                   "points": _pts(r.target_points) if r.target_points is not None else None},
+        "rods": rods,
+        "simulated": {**_simulated_json(eq, r.unique), "stable_equilibria_found": int(r.n_stable)},
+        "error": r.distance.as_dict() if r.distance is not None else None,
+        "anchor_limits_deg": [None, None],
+        "tolerance": d.tolerance,
+        "meets_tolerance": r.meets_tolerance,
+        "notes": list(r.notes),
+    }
+    curvature = np.array([d.catalog[n].curvature for n in r.type_names])
+    if r.plan is not None:
+        out["curve"] = curve_error(r.plan.curve, eq.points, curvature, d.span)
+        out["discretisation"] = {"curve_error_mm": _f(r.plan.discretization.curve_error),
+                                 "hanging_curve_error_mm": _f(curve_distance(r.plan.curve, eq.points)),
+                                 "joint_error_mm": _f(r.plan.discretization.joint_error),
+                                 "stop_mismatch_deg": _f(math.degrees(r.plan.assign_cost)),
+                                 "added_stops": [{"joint": int(j),
+                                                  "deg": _f(math.degrees(r.plan.problem.limits[j, 1]) + 0.0)}
+                                                 for j in r.plan.added_stops]}
+    if r.chain_design is not None:
+        res = r.chain_design.result
+        out["inverse"] = {"exact": bool(res.exact), "statics_residual": _f(res.statics_residual),
+                          "at_bounds": [int(v) for v in res.at_bounds], "nfev": int(res.nfev),
+                          "time_s": float(res.time_s), "message": res.message}
+    if r.as_built is not None:
+        out["as_built"] = _as_built_json(r.as_built)
+        if r.plan is not None:
+            out["as_built"]["curve"] = curve_error(r.plan.curve, r.as_built.equilibrium.points, curvature, d.span)
+    out["print"] = print_profile(d.catalog)
+    out["bill_of_materials"] = bill_of_materials(r)
+    return out
+
+
+def bill_of_materials(r) -> dict[str, Any]:
+    """Rods by type, filament, metal balls by size and pins."""
+    d = r.design
+    by_type = Counter(r.type_names)
+    thick = max(d.catalog[n].geometry.thickness for n in r.type_names)
+    pin_d = d.catalog[r.type_names[0]].geometry.hinge.pin_diameter
+    bom: dict[str, Any] = {
+        "rods": dict(sorted(by_type.items())),
+        "pins": {"count": r.n + 1, "diameter_mm": pin_d, "length_mm": round(thick + 1.0, 2),
+                 "note": "one per joint plus one at each anchor"},
+    }
+    if r.fabrication is not None:
+        bom.update(_filament_and_balls(r.fabrication.rods))
+        bom["total_mass_g"] = float(sum(f.mass for f in r.fabrication.rods))
+    else:
+        bom["total_mass_g"] = float(np.sum(r.masses))
+    return bom
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+
+
+def _pts3(p: np.ndarray) -> list[list[float]]:
+    return [[float(v) for v in row] for row in np.asarray(p, float)]
+
+
+def chandelier_json(b) -> dict[str, Any]:
+    """design.json of a chandelier: per chain what design.json holds for one chain, plus
+    its 3D anchors and points, the frame and the bill of materials over all chains.
+
+    Args:
+        b: a :class:`rodcad.pipeline.ChandelierBuild`.
+    """
+    d = b.design
+    res = b.result
+    chains = []
+    for k, ch in enumerate(res.chains):
+        pr = ch.design.plan.problem
+        eq = ch.equilibrium
+        lim = pr.limits if pr.limits is not None else np.zeros((0, 2))
+        n = len(ch.type_names)
+        rods = [_rod_json(i, d.catalog[name], pr.lengths[i], ch.masses[i], pr.com[i], lim, n)
+                for i, name in enumerate(ch.type_names)]
+        curvature = np.array([d.catalog[name].curvature for name in ch.type_names])
+        span = float(np.hypot(*np.subtract(*ch.placement.plane_anchors())))
+        entry: dict[str, Any] = {
+            "name": ch.name,
+            "anchors_3d": _pts3([ch.placement.a3, ch.placement.b3]),
+            "anchors": _pts(np.array(ch.placement.plane_anchors())),
+            "target": {"points": _pts(pr.target)},
+            "rods": rods,
+            "simulated": {**_simulated_json(eq, ch.design.unique), "points_3d": _pts3(ch.points3d)},
+            "error": ch.distance.as_dict(),
+            "curve": curve_error(ch.design.plan.curve, ch.points, curvature, span),
+            "anchor_limits_deg": [None, None],
+            "shared_with": ch.shared_with,
+        }
+        if b.as_built is not None:
+            entry["as_built"] = _as_built_json(b.as_built[k])
+        chains.append(entry)
+    bom = res.bom.as_dict()
+    if b.fabrications is not None:
+        bom.update(_filament_and_balls([f for fab in b.fabrications for f in fab.rods]))
+    out: dict[str, Any] = {
+        **_header(d, res.method, res.seed, b.time_s),
+        "chandelier": dict(d.chandelier.written),
+        "chains": chains,
+        "error": {"max_mm": _f(res.max_error),
+                  "max_rel_span": _f(max(c.distance.max_rel_span for c in res.chains))},
+        "print": print_profile(d.catalog),
+        "bill_of_materials": bom,
+        "notes": list(b.notes),
+        "meets_tolerance": b.meets_tolerance,
+    }
+    if b.frame is not None:
+        chk = b.frame[1]
+        out["frame"] = {"kind": b.frame_plan.kind if hasattr(b.frame_plan, "kind") else None,
+                        "valid": bool(chk.valid), "size_mm": [float(v) for v in chk.size],
+                        "fits_printer": chk.fits_printer, "problems": list(chk.problems),
+                        "closest_rod_mm": _f(min((c[-1] for c in chk.clearances), default=float("nan")))}
+    return out

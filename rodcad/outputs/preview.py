@@ -1,0 +1,63 @@
+"""Pictures of a designed chain: target dashed, rods coloured by mass, anchors, error."""
+
+from __future__ import annotations
+
+from pathlib import Path
+import numpy as np
+
+__all__ = ['plot_chain']
+
+
+def plot_chain(r, *paths: Path) -> None:
+    """Draw a :class:`rodcad.pipeline.BuildResult` and save it to every path (PNG, SVG, ...).
+
+    The target curve is dashed, its joints are small open circles; each rod is a
+    thick segment coloured from light (blue) to heavy (red) by mass, with a
+    colour bar in grams; anchors are black squares; the as-built chain, when
+    present, is a thin dotted line. The title gives the shape error.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    d = r.design
+    eq = r.equilibrium
+    pts = eq.points
+    fig, ax = plt.subplots(figsize=(8, 6))
+    if d.target_curve is not None:
+        ax.plot(*d.target_curve.T, "--", color="0.45", lw=1.2, label="target")
+    if r.target_points is not None:
+        ax.plot(*r.target_points.T, "o", mfc="none", mec="0.35", ms=6, label="target joints")
+    segs = np.stack([pts[:-1], pts[1:]], axis=1)
+    lc = LineCollection(segs, cmap="coolwarm", linewidths=6, capstyle="round", zorder=3)
+    lc.set_array(np.asarray(r.masses, float))
+    if np.ptp(r.masses) == 0:
+        lc.set_clim(r.masses[0] * 0.95, r.masses[0] * 1.05)
+    ax.add_collection(lc)
+    ax.plot(*pts.T, "o", color="k", ms=2.5, zorder=4)
+    if r.as_built is not None:
+        ax.plot(*r.as_built.equilibrium.points.T, ":", color="k", lw=1, zorder=5, label="as built")
+    ax.plot(*d.anchors.T, "ks", ms=9, zorder=6, label="anchors")
+    fig.colorbar(lc, ax=ax, label="rod mass (g)", shrink=0.8)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    title = f"{d.name}: {r.n} rods"
+    if r.method:
+        title += f", {r.method}"
+    if r.distance is not None:
+        title += f"\nmax error {r.distance.max:.3g} mm = {100 * r.distance.max_rel_span:.3g} % of span"
+        if r.as_built is not None:
+            title += f" (as built {100 * r.as_built.distance.max_rel_span:.3g} %)"
+    if not eq.stable:
+        title += "  [NOT STABLE]"
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(True, lw=0.3, alpha=0.5)
+    fig.tight_layout()
+    for path in paths:
+        fig.savefig(path, dpi=130)
+    plt.close(fig)

@@ -1,0 +1,260 @@
+"""What a run reports to people: report.md and the terminal summary (design.json is
+:mod:`rodcad.outputs.design_json`)."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from pathlib import Path
+from typing import Any
+import numpy as np
+from optimize.discretize import curve_distance
+from rodcad import __version__
+from rodcad.outputs.design_json import bill_of_materials
+
+__all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
+
+
+def _fmt_err(e: dict[str, Any] | None) -> str:
+    if not e:
+        return "n/a"
+    rel = e["max_rel_span"]
+    return (f"max {e['max_mm']:.3g} mm ({100 * rel:.3g} % of the span), mean {e['mean_mm']:.3g} mm, "
+            f"sum {e['sum_mm']:.3g} mm")
+
+
+def report_markdown(r, data: dict[str, Any]) -> str:
+    """report.md: inputs, method, error, stability, per-rod table, bill of materials, assembly."""
+    d = r.design
+    L: list[str] = []
+    add = L.append
+    add(f"# {d.name}: hanging chain report")
+    add("")
+    if d.description:
+        add(d.description.strip())
+        add("")
+    add(f"Made by rodcad {__version__} from `{d.path}` in {r.time_s:.1f} s.")
+    add("")
+    add("## Inputs")
+    add("")
+    a, b = d.anchors
+    add(f"- Catalog: `{d.catalog.name}` ({len(d.catalog)} rod types)")
+    add(f"- Anchors: A = ({a[0]:g}, {a[1]:g}) mm, B = ({b[0]:g}, {b[1]:g}) mm, span {d.span:.4g} mm")
+    if d.target_form:
+        params = ", ".join(f"{k} = {v}" for k, v in d.target_params.items() if k != "points")
+        add(f"- Target: {d.target_form}" + (f" ({params})" if params else ""))
+    else:
+        add("- Explicit chain (no target)")
+    c = d.constraints
+    cons = []
+    if c.types:
+        cons.append("types " + ", ".join(c.types))
+    if c.lengths:
+        cons.append("lengths " + ", ".join(f"{x:g}" for x in c.lengths) + " mm")
+    if c.rods:
+        cons.append(f"{c.rods} rods")
+    if c.fixed:
+        cons.append(f"{len(c.fixed)} fixed rod(s)")
+    if cons:
+        add("- Constraints: " + "; ".join(cons))
+    add(f"- Method: {r.method or 'simulate (explicit chain)'}, seed {r.seed}")
+    add("")
+    add("## Result")
+    add("")
+    add(f"- Shape error (simulated vs target joints): {_fmt_err(data['error'])}")
+    if "discretisation" in data:
+        disc = data["discretisation"]
+        add(f"- Discretisation (rods laid on the curve): curve error {disc['curve_error_mm']:.3g} mm, "
+            f"stop mismatch {disc['stop_mismatch_deg']:.3g} deg (reported apart from the physics error)")
+        add(f"- The simulated chain hangs within {disc['hanging_curve_error_mm']:.3g} mm of the target curve "
+            "(both errors together, everywhere along the rods)")
+    if "as_built" in data:
+        add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
+    if "inverse" in data:
+        inv = data["inverse"]
+        add(f"- Inverse design: {'exact' if inv['exact'] else 'best fit within the mass bounds'}; "
+            f"{inv['nfev']} simulations in {inv['time_s']:.2f} s ({inv['message']})")
+    sim = data["simulated"]
+    add(f"- Equilibrium: KKT residual {sim['kkt_residual']:.1e}, "
+        f"{'stable' if sim['stable'] else 'NOT stable'}; "
+        f"{sim['stable_equilibria_found']} distinct stable equilibri{'um' if sim['stable_equilibria_found'] == 1 else 'a'} "
+        f"found from 12 starts ({'unique' if sim['unique'] else 'not unique'})")
+    add(f"- Reactions: A ({sim['reaction_a'][0]:.4g}, {sim['reaction_a'][1]:.4g}) N, "
+        f"B ({sim['reaction'][0]:.4g}, {sim['reaction'][1]:.4g}) N")
+    if d.tolerance is not None:
+        add(f"- Tolerance {d.tolerance:g} of the span: {'met' if r.meets_tolerance else 'MISSED'}")
+    for note in r.notes:
+        add(f"- Note: {note}")
+    add("")
+    add("![preview](preview.png)")
+    add("")
+    add("## Rods")
+    add("")
+    fab = r.fabrication
+    head = "| # | type | length mm | mass g | range g | joint after (deg) | x, y of first pin (mm) |"
+    rule = "|---|---|---|---|---|---|---|"
+    if fab is not None:
+        head += " as built g | filament g | cavities | balls | pause at Z mm | file |"
+        rule += "---|---|---|---|---|---|"
+    add(head)
+    add(rule)
+    pts = r.equilibrium.points
+    for i, rod in enumerate(data["rods"]):
+        lim = rod["limits_deg"]
+        lim_s = "-" if lim is None else f"{_deg(lim[0])} .. {_deg(lim[1])}"
+        lo, hi = rod["mass_range"]
+        row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['mass']:.3f} | {lo:.2f}-{hi:.2f} | {lim_s} "
+               f"| {pts[i][0]:.1f}, {pts[i][1]:.1f} |")
+        if fab is not None:
+            f = fab.rods[i]
+            cav = f"{f.cavity_count} x r {f.cavity_radius:.2f}" if f.cavity_count else "-"
+            balls = f"{f.ball_count} x {f.ball_diameter:g} mm" if f.ball_count else "-"
+            pause = f"{f.pause_z:.2f}" if f.pause_z is not None else "-"
+            row += (f" {f.mass:.3f} | {f.filament_mass:.2f} | {cav} | {balls} | {pause} "
+                    f"| {_rod_file(f)} |")
+        add(row)
+    add("")
+    add("## Bill of materials")
+    add("")
+    bom = data["bill_of_materials"]
+    for name, count in bom["rods"].items():
+        add(f"- {count} x rod `{name}`")
+    pins = bom["pins"]
+    add(f"- {pins['count']} pins, {pins['diameter_mm']:g} mm diameter, cut to {pins['length_mm']:g} mm "
+        f"({pins['note']})")
+    if "filament_g" in bom:
+        add(f"- Filament: {bom['filament_g']:.1f} g in all ({d.catalog[r.type_names[0]].material.name})")
+        for ball in bom["metal_balls"]:
+            add(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
+    else:
+        add("- Filament and metal balls: run with CAD (without --no-cad) for exact figures")
+    add(f"- Total chain mass: {bom['total_mass_g']:.1f} g")
+    add("")
+    add("## Printing and assembly")
+    add("")
+    if fab is not None:
+        add("1. Print each file of `rods/` as it lies (it is already in print orientation on the bed, "
+            "no support needed).")
+        add("2. Rods with balls: pause the print at the Z height in the table (e.g. PrusaSlicer: "
+            "right-click the layer in the preview slider, 'Add pause print'), drop the balls in, resume.")
+    else:
+        add("1. Build the solids first: run `rodcad build` without `--no-cad`.")
+    add(f"3. Lay the rods out in order 0 to {r.n - 1} (the number leads each file name). Rod k's "
+        "second joint takes rod k+1's first joint; push a pin through both.")
+    add(f"4. Pin rod 0's first joint to anchor A and rod {r.n - 1}'s second joint to anchor B, "
+        f"{d.span:.1f} mm apart (B at ({b[0] - a[0]:+.1f}, {b[1] - a[1]:+.1f}) mm from A).")
+    add("5. Let go gently: the chain settles into the shape of preview.png" +
+        ("." if r.unique else "; several stable shapes exist, so guide it into the designed one."))
+    add("")
+    return "\n".join(L)
+
+
+def _deg(x: float | None) -> str:
+    return "free" if x is None else f"{x:.1f}"
+
+
+def _rod_file(f) -> str:
+    name = getattr(f, "file_stem", None)
+    return f"`rods/{name}.step`" if name else "-"
+
+
+def summary_text(r, outdir: Path | None) -> str:
+    """The one-screen summary printed at the end of ``rodcad build`` (from the result itself)."""
+    L = [f"rodcad: {r.design.name}: {r.n} rods from catalog {r.design.catalog.name}, "
+         f"method {r.method or 'simulate'}, {r.time_s:.1f} s"]
+    if r.distance is not None:
+        L.append(f"  shape error   {_fmt_err(r.distance.as_dict())}")
+    if r.plan is not None:
+        hang = curve_distance(r.plan.curve, r.equilibrium.points)
+        L.append(f"  vs the curve  hangs within {hang:.3g} mm of the target curve "
+                 f"(rods laid on it within {r.plan.discretization.curve_error:.3g} mm)")
+    if r.as_built is not None:
+        L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
+    eq = r.equilibrium
+    L.append(f"  equilibrium   {'stable' if eq.stable else 'NOT STABLE'}, "
+             f"{'unique' if r.unique else str(r.n_stable) + ' stable shapes found'}, "
+             f"KKT {eq.kkt_residual:.1e}")
+    bom = bill_of_materials(r)
+    rods = ", ".join(f"{v} x {k}" for k, v in bom["rods"].items())
+    L.append(f"  rods          {rods}")
+    if "filament_g" in bom:
+        balls = ", ".join(f"{b['count']} x {b['diameter_mm']:g} mm" for b in bom["metal_balls"]) or "none"
+        L.append(f"  filament      {bom['filament_g']:.1f} g; metal balls: {balls}; "
+                 f"pins: {bom['pins']['count']} x {bom['pins']['diameter_mm']:g} mm")
+    for note in r.notes:
+        L.append(f"  note: {note}")
+    if outdir is not None:
+        files = "design.json, report.md, preview.png"
+        if r.fabrication is not None:
+            files += ", assembly.step, rods/*.step|stl"
+        L.append(f"  files         {outdir}/ ({files})")
+    return "\n".join(L)
+
+
+def chandelier_summary(b, outdir: Path) -> str:
+    """The summary printed at the end of ``rodcad build`` for a chandelier."""
+    res = b.result
+    L = [f"rodcad: {b.design.name}: chandelier of {len(res.chains)} chains, {res.bom.n_rods} rods, "
+         f"method {res.method}, {b.time_s:.1f} s"]
+    for k, ch in enumerate(res.chains):
+        ab = (f", as built {100 * b.as_built[k].distance.max_rel_span:.3g} %"
+              if b.as_built is not None else "")
+        L.append(f"  {ch.name:<10} {len(ch.type_names):>3} rods  max error {ch.distance.max:.3g} mm "
+                 f"({100 * ch.distance.max_rel_span:.3g} % of span{ab})")
+    L.append("  rods      " + ", ".join(f"{v} x {k}" for k, v in res.bom.rods_by_type.items()))
+    if b.fabrications is not None:
+        filament = sum(f.filament_mass for fab in b.fabrications for f in fab.rods)
+        L.append(f"  filament  {filament:.1f} g for the rods; frame in frame.stl")
+    for note in b.notes:
+        L.append(f"  note: {note}")
+    L.append(f"  files     {outdir}/")
+    return "\n".join(L)
+
+
+def chandelier_markdown(b, data: dict[str, Any]) -> str:
+    """report.md of a chandelier: inputs, per-chain errors, frame, bill of materials, assembly."""
+    d = b.design
+    L = [f"# {d.name}: chandelier report", ""]
+    if d.description:
+        L += [d.description.strip(), ""]
+    c = d.chandelier
+    L += [f"Made by rodcad {__version__} from `{d.path}` in {b.time_s:.1f} s.", "", "## Inputs", "",
+          f"- Catalog: `{d.catalog.name}`",
+          f"- Pattern: {c.pattern} with {len(data['chains'])} chains "
+          + ", ".join(f"{k} = {v}" for k, v in c.params.items()),
+          f"- Method: {data['method']}, seed {data['seed']}", "", "## Chains", "",
+          "| chain | rods | mass g | max error mm | % of span | as built % | stable | unique |",
+          "|---|---|---|---|---|---|---|---|"]
+    for ch in data["chains"]:
+        ab = f"{100 * ch['as_built']['error']['max_rel_span']:.3g}" if "as_built" in ch else "-"
+        mass = sum(r["mass"] for r in ch["rods"])
+        L.append(f"| {ch['name']} | {len(ch['rods'])} | {mass:.1f} | {ch['error']['max_mm']:.3g} "
+                 f"| {100 * ch['error']['max_rel_span']:.3g} | {ab} | {'yes' if ch['simulated']['stable'] else 'NO'} "
+                 f"| {'yes' if ch['simulated']['unique'] else 'no'} |")
+    L += ["", "![preview](preview.png)", ""]
+    for note in b.notes:
+        L.append(f"- Note: {note}")
+    if "frame" in data:
+        f = data["frame"]
+        L += ["", "## Frame", "",
+              f"- `frame.step` / `frame.stl`: {f['size_mm'][0]:.0f} x {f['size_mm'][1]:.0f} x "
+              f"{f['size_mm'][2]:.1f} mm, valid {f['valid']}, fits the printer: {f['fits_printer']}",
+              f"- Closest rod at rest: {f['closest_rod_mm']:.2f} mm from the frame"]
+    bom = data["bill_of_materials"]
+    L += ["", "## Bill of materials", ""]
+    for name, count in bom["rods_by_type"].items():
+        L.append(f"- {count} x rod `{name}`")
+    L.append(f"- {bom['pins']} pins between rods and {bom['anchor_pins']} pins through the frame's lugs")
+    if "filament_g" in bom:
+        L.append(f"- Filament for the rods: {bom['filament_g']:.1f} g")
+        for ball in bom["metal_balls"]:
+            L.append(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
+    L.append(f"- Total rod mass: {bom['total_mass_g']:.1f} g")
+    L += ["", "## Assembly", "",
+          "1. Print the frame and every chain's rods (`<chain>/rods/`, already in print orientation); "
+          "pause rods with balls at the Z height their chain's design lists.",
+          "2. Assemble each chain in index order (rod k's second joint takes rod k+1's first, one pin each).",
+          "3. Pin each chain's first rod to its A lug and its last rod to its B lug, chain by chain in the "
+          "order of `assembly.step`.", ""]
+    return "\n".join(L)

@@ -93,6 +93,7 @@ class Str(Spec):
         choices: allowed values (did-you-mean suggestions come from these).
         pattern: regular expression the whole string must match.
         pattern_hint: words describing the pattern for messages.
+        max_length: longest string accepted (characters), or None.
         description: JSON Schema description.
     """
 
@@ -102,11 +103,13 @@ class Str(Spec):
         choices: Sequence[str] | None = None,
         pattern: str | None = None,
         pattern_hint: str = "",
+        max_length: int | None = None,
         description: str = "",
     ) -> None:
         self.choices = tuple(choices) if choices else None
         self.pattern = pattern
         self.pattern_hint = pattern_hint
+        self.max_length = max_length
         self.description = description
 
     def check(self, node: yaml.Node, path: str, v: Validator) -> Any:
@@ -117,6 +120,9 @@ class Str(Spec):
             v.report(node, path, f"expected a string, got {_kind(node)}; quote it if you meant text")
             return MISSING
         text = node.value
+        if self.max_length is not None and len(text) > self.max_length:
+            v.report(node, path, f"{len(text)} characters long; keep it under {self.max_length + 1}")
+            return MISSING
         if self.choices is not None and text not in self.choices:
             v.report(node, path, f"unknown value {text!r}{suggest(text, self.choices)}")
             return MISSING
@@ -132,6 +138,8 @@ class Str(Spec):
             schema["enum"] = list(self.choices)
         if self.pattern is not None:
             schema["pattern"] = f"^(?:{self.pattern})$"
+        if self.max_length is not None:
+            schema["maxLength"] = self.max_length
         return self._describe(schema)
 
 

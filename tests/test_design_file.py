@@ -148,3 +148,18 @@ def test_cli_bad_input_exits_2_with_no_traceback(tmp_path):
     assert "Traceback" not in proc.stderr
     assert f"{bad}:5:" in proc.stderr and "target.colour" in proc.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_keys_a_chandelier_does_not_use_are_refused():
+    ring = ("design: 1\nname: r\ncatalog: pla-pinned\nanchors: [[0, 0], [200, 0]]\n"
+            "chandelier: {pattern: ring, count: 2, radius: 100, target: {form: catenary, length: 240},\n"
+            "             chains: [{anchors: [[0, 0, 0], [1, 0, 0]]}, {}]}\n")
+    got = problems(ring)
+    assert any(p.startswith("d.yaml:4:10: anchors: a chandelier takes no top-level 'anchors'") for p in got), got
+    assert any("chandelier.chains[0].anchors: a ring chandelier places its chains itself" in p for p in got), got
+
+
+def test_a_name_too_long_for_a_folder_is_refused():
+    got = problems(f"design: 1\nname: {'a' * 5000}\ncatalog: pla-pinned\nanchors: [[0, 0], [200, 0]]\n"
+                   "target: {form: catenary, length: 300}\n")
+    assert got == ["d.yaml:2:7: name: 5000 characters long; keep it under 101"]

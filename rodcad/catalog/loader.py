@@ -59,10 +59,13 @@ def resolve_catalog(name_or_path: str | Path, base_dir: str | Path | None = None
     Raises:
         InputError: nothing found, with the names of the shipped catalogs.
     """
+    folder = Path(base_dir) if base_dir is not None else default_catalog_dir()
+    if not str(name_or_path).strip():
+        raise InputError([Problem("<catalog>", 0, 0, "", "no catalog named: give a catalog file or one of "
+                                  + ", ".join(shipped_catalogs(folder)))])
     path = Path(name_or_path)
     if path.is_file():
         return path
-    folder = Path(base_dir) if base_dir is not None else default_catalog_dir()
     text = str(name_or_path)
     if "/" not in text and "\\" not in text:
         stem = text[:-5] if text.endswith(".yaml") else text[:-4] if text.endswith(".yml") else text

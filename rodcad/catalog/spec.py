@@ -12,6 +12,9 @@ if TYPE_CHECKING:  # pragma: no cover
     pass
 from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
 
+#: Longest design, catalog or family name (it names folders and files).
+MAX_NAME = 100
+
 __all__ = ["catalog_schema", "catalog_spec", "family_spec"]
 
 
@@ -67,7 +70,7 @@ def family_spec() -> Obj:
     num_list = lambda spec, **kw: OneOrList(spec, unique=True, **kw)  # noqa: E731
     return Obj(
         {
-            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT), required=True,
+            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT, max_length=MAX_NAME), required=True,
                           description="Family name; types are named '<family>-<length>'."),
             "description": Field(Str(), description="Free text."),
             "length": Field(
@@ -202,7 +205,7 @@ def catalog_spec() -> Obj:
         {
             "catalog": Field(Num(integer=True, minimum=1), required=True,
                              description=f"Catalog format version; this rodcad reads {CATALOG_FORMAT}."),
-            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT), required=True,
+            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT, max_length=MAX_NAME), required=True,
                           description="Catalog name."),
             "description": Field(Str(), description="Free text."),
             "printer": Field(

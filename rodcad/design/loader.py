@@ -90,6 +90,11 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
 
     if "anchors" not in data and "chandelier" not in data and v.ok("", schema_ok):
         v.report_at("", "missing required key 'anchors' (or describe a 'chandelier')")
+    if "chandelier" in data:  # a chandelier's chains take their anchors and targets from the block
+        for key, where in (("anchors", "its pattern"), ("target", "chandelier.target or each chain's target"),
+                           ("chain", "its chains")):
+            if key in data:
+                v.report_at(key, f"a chandelier takes no top-level {key!r}: it comes from {where}")
     placements = chain_targets = None
     if "chandelier" in data and v.ok("chandelier", schema_ok):
         placements, chain_targets = _chandelier(data["chandelier"], v)
@@ -257,6 +262,14 @@ def _chandelier(c: dict[str, Any], v: Any) -> tuple[list[Any] | None, list[dict[
         return None, None
     n = len(placements)
     per = c.get("chains")
+    if per is not None and pattern != "explicit":
+        for i, ch in enumerate(per):
+            if "anchors" in ch:
+                v.report_at(f"chandelier.chains[{i}].anchors", f"a {pattern} chandelier places its chains itself; "
+                            "anchors per chain are for the explicit pattern")
+                bad = True
+        if bad:
+            return None, None
     if per is not None and len(per) != n:
         v.report_at("chandelier.chains", f"{len(per)} entries for {n} chains (give one per chain)")
         return None, None

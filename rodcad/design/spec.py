@@ -8,6 +8,9 @@ from typing import Any
 from rodcad.design.model import DESIGN_FORMAT, METHOD_NAMES
 from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, Str
 
+#: Longest design, catalog or family name (it names folders and files).
+MAX_NAME = 100
+
 __all__ = ['target_spec', 'PATTERNS', 'FRAME_OF_PATTERN', 'chandelier_spec', 'design_spec', 'design_schema']
 
 
@@ -144,7 +147,7 @@ def design_spec() -> Obj:
         {
             "design": Field(Num(integer=True, minimum=1), required=True,
                             description=f"Design format version; this rodcad reads {DESIGN_FORMAT}."),
-            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT), required=True,
+            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT, max_length=MAX_NAME), required=True,
                           description="Design name; the default output folder is outputs/<name>."),
             "description": Field(Str(), description="Free text."),
             "catalog": Field(Str(), required=True,

@@ -3,17 +3,12 @@
 
 from __future__ import annotations
 
-import math
-from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
-import numpy as np
-from rodcad.design.chandelier import ChainResult
-from rodcad.design.frame import frame_outline
 
-from rodcad.colors import mass_colors
+import numpy as np
+
+from rodcad.design.chandelier import ChainResult
 
 __all__ = ['preview_3d']
 

@@ -3,12 +3,9 @@
 
 from __future__ import annotations
 
-import json
-import math
-from collections import Counter
 from pathlib import Path
 from typing import Any
-import numpy as np
+
 from optimize.discretize import curve_distance
 from rodcad import __version__
 from rodcad.outputs.design_json import bill_of_materials

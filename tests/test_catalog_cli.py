@@ -143,3 +143,34 @@ def test_schema_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
 def test_catalog_without_subcommand_prints_usage(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["catalog"]) == 2
     assert "SUBCOMMAND" in capsys.readouterr().err
+
+
+JAMMED = """\
+catalog: 1
+name: jammed
+defaults:
+  length: [30]
+  section: {height: 10, thickness: 8}
+  joint: {layout: tongue-fork, pin_diameter: 1.75, pin_clearance: 0.25, knuckle_radius: 3.0,
+          tongue_thickness: 2.8, layer_gap: 0.3, radial_gap: 0.4}
+  material: {name: PLA, density: 1.24, min_wall: 1.2}
+families:
+  - name: jam
+    ends: {setback: 0, top_chamfer: -30, bottom_chamfer: -30}
+"""
+
+
+def test_rods_that_interfere_at_every_angle_are_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Both faces of each end reach past the hinge plane: the rods jam whatever the bend.
+    catalog check and build say so at the catalog's line instead of dropping the family."""
+    cat = tmp_path / "jammed.yaml"
+    cat.write_text(JAMMED)
+    assert main(["catalog", "check", str(cat)]) == 2
+    err = capsys.readouterr().err
+    assert f"{cat}:4:11: defaults.length: rod types 'jam-30' and 'jam-30' interfere at every angle" in err
+    design = tmp_path / "d.yaml"
+    design.write_text("design: 1\nname: j\ncatalog: jammed.yaml\nanchors: [[0, 0], [100, 0]]\n"
+                      "target: {form: catenary, length: 150}\n")
+    assert main(["build", str(design), "-o", str(tmp_path / "out"), "--no-cad", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "interfere at every angle" in err and "Traceback" not in err and not (tmp_path / "out").exists()

@@ -174,7 +174,9 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
         if r.assemblable:
             pairs.append({"left": left, "right": right, "limits_deg": _limits_json(r)})
         else:
-            problems.append(f"rod types {left!r} and {right!r} interfere at every angle: they cannot be joined")
+            problems.append(str(catalog[right].origin.problem(
+                f"rod types {left!r} and {right!r} interfere at every angle: they cannot be joined (their ends "
+                "overlap whatever the bend; shorten the chamfers or add setback)")))
     computed = sum(1 for r in limits.values() if not r.cached)
     lookup = _lookup_deviation(catalog, limits)
     return {
@@ -233,8 +235,8 @@ def _check(args: argparse.Namespace) -> int:
     else:
         print(_format_report(report))
     for problem in report["problems"]:
-        print(f"rodcad: {problem}", file=sys.stderr)
-    return 1 if report["problems"] else 0
+        print(problem, file=sys.stderr)
+    return 2 if report["problems"] else 0  # a family whose rods cannot be joined: the catalog is wrong
 
 
 def _fmt_limit(x: float | None) -> str:

@@ -105,14 +105,25 @@ class CatalogArrays:
 def catalog_arrays(catalog: Catalog, *, jobs: int | None = None,
                    progress: Callable | None = None) -> CatalogArrays:
     """The catalog's per-type numbers: lengths, centres of mass, mass ranges, pair limits
-    (joint limits and mass ranges from the solids, disk-cached)."""
+    (joint limits and mass ranges from the solids, disk-cached).
+
+    Raises:
+        InputError: two types that mate interfere at every angle (pointing at the family).
+    """
     types = tuple(catalog)
     t = len(types)
     index = {ty.name: i for i, ty in enumerate(types)}
     lim = np.full((t, t, 2), np.nan)
+    problems = []
     for (a, b), pl in all_pair_limits(catalog, jobs=jobs, progress=progress).items():
         if pl.assemblable:
             lim[index[a], index[b]] = pl.limits_rad
+        else:
+            problems.append(catalog[b].origin.problem(
+                f"rod types {a!r} and {b!r} interfere at every angle: they cannot be joined (their ends overlap "
+                "whatever the bend; shorten the chamfers or add setback)"))
+    if problems:
+        raise InputError(problems)
     return CatalogArrays(types, np.array([ty.length for ty in types], dtype=float),
                          np.array([mass_info(ty).com for ty in types], dtype=float).reshape(-1, 2),
                          np.array([mass_info(ty).mass_range for ty in types], dtype=float).reshape(-1, 2),

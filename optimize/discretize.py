@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import brentq, least_squares
 from scipy.spatial import cKDTree
 
 __all__ = ["Discretization", "centerline", "curve_distance", "discretize", "refit", "resample", "find_corners"]
@@ -142,6 +142,26 @@ def _piece_sequence(curve, s, s0, s1, allowed, preferred, max_candidates=400):
     return None if best is None else best[1]
 
 
+def _equal_chords(curve, s, s0, s1, lo, hi, preferred) -> list[float] | None:
+    """n equal chords of one length c in [lo, hi] whose walk from arc length s0 lands exactly
+    on arc length s1 (the next corner or B): every joint on the curve; the n whose c is
+    nearest the preferred length (ties to fewer rods)."""
+    def landing(c: float, n: int) -> float:
+        return _walk(curve, s, s0, [c] * n)[1] - s1
+
+    arc = s1 - s0
+    best = None
+    for n in range(max(1, math.floor(arc / hi)), min(math.ceil(arc / lo) + 2, MAX_RODS + 1)):
+        a, b = landing(lo, n), landing(hi, n)
+        if a > 0 or b < 0:
+            continue
+        c = lo if a == 0 else hi if b == 0 else brentq(lambda x: landing(x, n), lo, hi, xtol=1e-13, rtol=1e-15)
+        key = (abs(c - preferred), n)
+        if best is None or key < best[0]:
+            best = (key, [c] * n)
+    return None if best is None else best[1]
+
+
 def _spread(counts, allowed, preferred) -> list[float]:
     """A sequence with the given counts, each length spread evenly along the piece."""
     items = []
@@ -214,6 +234,7 @@ def discretize(
     *,
     preferred: float | None = None,
     corner_angle_deg: float = 25.0,
+    length_range: tuple[float, float] | None = None,
 ) -> Discretization:
     """Joints on the curve for a chain of rods with lengths from `allowed_lengths`.
 
@@ -224,6 +245,9 @@ def discretize(
             eight rods, else the shortest).
         corner_angle_deg: a vertex of the given polyline turning more than this is a corner
             that should carry a joint.
+        length_range: rods printed to order: any length in (lo, hi) instead of the allowed
+            list; each piece between corners gets equal chords that land exactly on its end,
+            so every joint lies on the curve and every corner is a joint.
 
     Returns:
         Discretization with points[0] = A and points[-1] = B exactly. A polyline whose
@@ -239,6 +263,11 @@ def discretize(
     if curve.ndim != 2 or curve.shape[1] != 2 or curve.shape[0] < 2 or not np.all(np.isfinite(curve)):
         raise ValueError("curve must be a finite (M, 2) polyline with at least two points")
     allowed = sorted(set(float(x) for x in np.atleast_1d(allowed_lengths)))
+    if length_range is not None:
+        lo, hi = (float(x) for x in length_range)
+        if not 0 < lo < hi:
+            raise ValueError(f"length_range must be 0 < lo < hi, got {length_range}")
+        allowed = [lo, hi]
     if not allowed or min(allowed) <= 0:
         raise ValueError("allowed_lengths must be positive")
     total_length = float(np.sum(np.hypot(*np.diff(curve, axis=0).T)))
@@ -247,7 +276,7 @@ def discretize(
             f"the target is {total_length:.4g} long: it takes at least {math.ceil(total_length / max(allowed))} "
             f"rods of the allowed lengths (up to {max(allowed):g}); rodcad lays chains of up to {MAX_RODS} rods "
             "(allow longer rods, or make the target smaller)")
-    exact = _tile_polyline(curve, allowed, preferred)
+    exact = _tile_polyline(curve, allowed, preferred) if length_range is None else None
     if exact is not None:
         return _slack(exact)
     corners_in = find_corners(curve, corner_angle_deg)
@@ -279,7 +308,10 @@ def discretize(
     seq: list[float] = []
     corner_joints: list[int] = []
     for s0, s1 in zip(breaks, breaks[1:]):
-        piece = _piece_sequence(dense, s, s0, s1, allowed, preferred)
+        if length_range is not None:
+            piece = _equal_chords(dense, s, s0, s1, float(length_range[0]), float(length_range[1]), preferred)
+        else:
+            piece = _piece_sequence(dense, s, s0, s1, allowed, preferred)
         if piece is None:
             raise ValueError(
                 f"no combination of rod lengths {allowed} fits the piece of the target between "

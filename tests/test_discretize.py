@@ -66,3 +66,26 @@ def test_a_taut_target_and_a_runaway_length_are_explained():
         discretize(np.array([[0.0, 0.0], [100.0, 0.0], [200.0, 0.0]]), [20.0])
     with pytest.raises(ValueError, match="chains of up to 300 rods"):
         discretize(np.array([[0.0, 0.0], [5e4, -1e5], [1e5, 0.0]]), [20.0, 40.0])
+
+
+@pytest.mark.parametrize("form, params", [("semicircle", {}), ("triangle", {"depth": 137.3}),
+                                          ("polygon", {"sides": 6}), ("function", {"y": "-0.004*x*(200-x)"})])
+def test_rods_printed_to_order_put_every_joint_on_the_curve(form, params):
+    """With any length in a range (rods printed to order), each piece between corners gets
+    equal chords landing exactly on its end: every joint on the curve, every corner a joint,
+    every length in range."""
+    from rodcad.design.targets import make_target
+
+    curve = make_target(form, (0, 0), (200, 0), **params)
+    d = discretize(curve, [30.0], length_range=(25.0, 45.0))
+    assert d.joint_error < 1e-9
+    assert np.all((d.lengths >= 25.0) & (d.lengths <= 45.0))
+    np.testing.assert_allclose(np.hypot(*np.diff(d.points, axis=0).T), d.lengths, rtol=1e-9)
+    corners = [int(i) for i in np.flatnonzero(np.abs(np.diff(np.unwrap(np.arctan2(*np.diff(curve, axis=0).T[::-1]))))
+                                              > np.radians(25)) + 1]
+    for c in corners:  # every corner of the target is a joint
+        assert np.min(np.hypot(*(d.points - curve[c]).T)) < 1e-9
+    pieces = np.split(d.lengths, d.corners)
+    assert all(np.ptp(p) < 1e-9 for p in pieces)  # equal chords per piece
+    with pytest.raises(ValueError, match="length_range"):
+        discretize(curve, [30.0], length_range=(45.0, 25.0))

@@ -18,7 +18,8 @@ import numpy as np
 from scipy.optimize import brentq, least_squares
 from scipy.spatial import cKDTree
 
-__all__ = ["Discretization", "centerline", "curve_distance", "discretize", "refit", "resample", "find_corners"]
+__all__ = ["Discretization", "centerline", "curve_distance", "discretize", "find_corners", "fit_curvatures", "refit",
+           "resample"]
 
 
 @dataclass
@@ -481,13 +482,56 @@ def centerline(points, curvature=None, per_rod: int = 24) -> np.ndarray:
         c = float(np.hypot(*d))
         rho = 1 / abs(k)
         x = np.linspace(0.0, c, per_rod + 1)[1:]
-        y = np.sign(k) * (rho * np.sqrt(max(1 - (c * k / 2) ** 2, 0.0)) - np.sqrt(np.maximum(rho**2 - (x - c / 2) ** 2, 0.0)))
+        t2 = (x - c / 2) ** 2
+        # rho cos(psi) - sqrt(rho^2 - t^2), written without cancellation for large radii
+        y = np.sign(k) * (t2 - (c / 2) ** 2) / (np.sqrt(max(rho**2 - (c / 2) ** 2, 0.0))
+                                               + np.sqrt(np.maximum(rho**2 - t2, 0.0)))
         u = d / c
         v = np.array([-u[1], u[0]])
         arc = p + np.outer(x, u) + np.outer(y, v)
         arc[-1] = q
         out.append(arc)
     return np.concatenate(out)
+
+
+def fit_curvatures(curve, points, *, max_curvature: float = np.inf) -> np.ndarray:
+    """Per rod, the signed curvature (1/mm; > 0 bulges to the right of p_i -> p_{i+1}) of
+    the arc through both of its joints and through the target curve above the chord's
+    middle (the curve's sagitta there): the body of a rod printed to order follows the curve
+    instead of cutting across it. Clipped to +-``max_curvature``; 0 where the curve runs
+    along the chord.
+
+    Args:
+        curve: (M, 2) target polyline.
+        points: (N+1, 2) joints on (or near) the curve.
+        max_curvature: largest |curvature| a rod can be printed with.
+    """
+    dense = resample(np.asarray(curve, dtype=float), max(4000, 20 * len(curve)))
+    pts = np.asarray(points, dtype=float)
+    # each joint's place along the curve, in order (a joint on a corner belongs to both legs)
+    idx = [0]
+    for p in pts[1:]:
+        rest = dense[idx[-1]:]
+        idx.append(idx[-1] + int(np.argmin(np.hypot(*(rest - p).T))))
+    out = np.zeros(len(pts) - 1)
+    for i, (p, q) in enumerate(zip(pts[:-1], pts[1:])):
+        c = float(np.hypot(*(q - p)))
+        u = (q - p) / c
+        seg = dense[idx[i]:idx[i + 1] + 1]
+        if len(seg) < 3:
+            continue
+        rel = seg - p
+        along, off = rel @ u, rel @ np.array([-u[1], u[0]])
+        order = np.argsort(along)
+        if along[order[0]] > c / 2 or along[order[-1]] < c / 2:
+            continue
+        h = -float(np.interp(c / 2, along[order], off[order]))  # the curve's offset mid-chord; > 0: right
+        if abs(h) < 1e-6 * c:  # the curve runs along the chord: a straight rod
+            continue
+        # the circle through (0, 0), (c, 0) and (c / 2, -h) in the rod frame
+        k = 8 * h / (c * c + 4 * h * h)
+        out[i] = float(np.clip(k, -max_curvature, max_curvature))
+    return out
 
 
 def curve_distance(curve, chain) -> float:

@@ -89,3 +89,24 @@ def test_rods_printed_to_order_put_every_joint_on_the_curve(form, params):
     assert all(np.ptp(p) < 1e-9 for p in pieces)  # equal chords per piece
     with pytest.raises(ValueError, match="length_range"):
         discretize(curve, [30.0], length_range=(45.0, 25.0))
+
+
+@pytest.mark.parametrize("form, params, before, after", [
+    ("semicircle", {}, 0.5, 0.03), ("function", {"y": "-0.004*x*(200-x)"}, 0.5, 0.03),
+    ("arc", {"sag": 60}, 0.5, 0.03), ("triangle", {"depth": 137.3}, 0.0, 0.1)])
+def test_curved_rods_follow_the_curve(form, params, before, after):
+    """Rods printed to order with the curvature of the curve between their joints: the
+    centrelines follow smooth curves (the sagitta of straight chords is gone) and stay
+    straight along straight sides."""
+    from optimize.discretize import centerline, curve_distance, fit_curvatures
+    from rodcad.design.targets import make_target
+
+    curve = make_target(form, (0, 0), (200, 0), **params)
+    d = discretize(curve, [30.0], length_range=(25.0, 45.0))
+    k = fit_curvatures(curve, d.points, max_curvature=0.05)
+    assert curve_distance(curve, d.points) >= before
+    assert curve_distance(curve, centerline(d.points, k)) < after
+    if form == "semicircle":
+        np.testing.assert_allclose(k, 0.01, rtol=2e-3)  # the circle's own curvature, 1 / 100 mm
+    if form == "triangle":
+        assert not np.any(k)

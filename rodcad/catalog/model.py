@@ -1,10 +1,11 @@
-"""Rod catalogs: parameterized rod families expanded into named rod types.
+"""The catalog data model: parameterized rod families expanded into named rod types.
 
 A catalog (``catalogs/*.yaml``) is the single source for the simulator (joint
-limits, mass ranges, centres of mass) and the CAD (exact rod solids). This
-module reads and validates it; the CAD and the numbers derived from the CAD
-live in :mod:`rodcad.cad`, :mod:`rodcad.catalog.limits` and
-:mod:`rodcad.catalog.massrange`.
+limits, mass ranges, centres of mass) and the CAD (exact rod solids). This module
+holds its data, numbers only: no CAD call. It is read and validated by
+:mod:`rodcad.catalog.loader`; the solids are :func:`rodcad.cad.solids.type_solid`, and
+the numbers derived from them :mod:`rodcad.catalog.limits` (joint limits) and
+:func:`rodcad.catalog.massrange.mass_info` (mass range, centre of mass).
 
 The format, in short (``catalogs/pla-pinned.yaml`` is a commented example, and
 ``catalogs/catalog.schema.json`` the generated JSON Schema)::

@@ -75,7 +75,8 @@ def test_every_example_builds_without_cad(example, tmp_path, capsys):
         lo, hi = mass_info(d.catalog[r["type"]]).mass_range
         assert lo * (1 - 1e-9) <= r["mass"] <= hi * (1 + 1e-9)
     report = (out / "report.md").read_text()
-    for heading in ("## Inputs", "## Result", "## Rods", "## Bill of materials", "## Printing and assembly"):
+    for heading in ("## Inputs", "## Result", "## Rods", "## Bill of materials", "## Print settings",
+                    "## Printing and assembly"):
         assert heading in report
     assert (out / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "<svg" in (out / "preview.svg").read_text()[:500]

@@ -89,8 +89,9 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     add("## Rods")
     add("")
     fab = r.fabrication
-    head = "| # | type | length mm | mass g | range g | joint after (deg) | x, y of first pin (mm) |"
-    rule = "|---|---|---|---|---|---|---|"
+    head = ("| # | type | length mm | curvature 1/mm | ends (stop chamfer deg, F free) | mass g | range g | joint after (deg) "
+            "| x, y of first pin (mm) |")
+    rule = "|---|---|---|---|---|---|---|---|---|"
     if fab is not None:
         head += " as built g | filament g | cavities | balls | pause at Z mm | file |"
         rule += "---|---|---|---|---|---|"
@@ -101,8 +102,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         lim = rod["limits_deg"]
         lim_s = "-" if lim is None else f"{_deg(lim[0])} .. {_deg(lim[1])}"
         lo, hi = rod["mass_range"]
-        row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['mass']:.3f} | {lo:.2f}-{hi:.2f} | {lim_s} "
-               f"| {pts[i][0]:.1f}, {pts[i][1]:.1f} |")
+        ends = rod["params"]["ends"]  # a flush (stop) end by its top chamfer, a free end as F
+        stops = "/".join("F" if e["setback"] else f"{e['top_chamfer']:g}" for e in (ends["first"], ends["second"]))
+        row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['curvature']:g} | {stops} | {rod['mass']:.3f} "
+               f"| {lo:.2f}-{hi:.2f} | {lim_s} | {pts[i][0]:.1f}, {pts[i][1]:.1f} |")
         if fab is not None:
             f = fab.rods[i]
             cav = f"{f.cavity_count} x r {f.cavity_radius:.2f}" if f.cavity_count else "-"
@@ -127,6 +130,19 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     else:
         add("- Filament and metal balls: run with CAD (without --no-cad) for exact figures")
     add(f"- Total chain mass: {bom['total_mass_g']:.1f} g")
+    add("")
+    add("## Print settings")
+    add("")
+    prof = data["print"]
+    add(f"Every mass above assumes solid rods: print them in {prof['material']} ({prof['density']:g} g/cm^3) "
+        "with **100 % infill** (a slicer's default of 15-20 % infill prints every rod far lighter than "
+        "designed, and the chain will not hang as designed). As only mass ratios shape the chain, a "
+        "filament whose density is off by the same amount for every rod does no harm; an infill that differs "
+        "between rods does.")
+    if fab is not None:
+        add("")
+        add("Expected printed mass per rod (plastic at that density plus its metal balls): "
+            + ", ".join(f"{f.file_stem} {f.mass:.2f} g" for f in fab.rods) + ".")
     add("")
     add("## Printing and assembly")
     add("")

@@ -48,6 +48,7 @@ from optimize.chain import (
     multipliers,
     sag_guess,
 )
+from optimize.endlimits import as_end_limits, solve_with_end_limits
 from optimize.penalty import solve_penalty
 
 __all__ = ["Chain", "EquilibriumResult", "solve_equilibrium", "kkt_residual", "MESSAGES"]
@@ -527,6 +528,7 @@ def solve_equilibrium(
     *,
     com=None,
     limits=None,
+    end_limits=None,
     g: float = 9.81,
     model: str = "exact",
     active0=None,
@@ -544,6 +546,12 @@ def solve_equilibrium(
         com: (N, 2) centres of mass (along, perp) in each rod's frame; None = (l/2, 0).
         limits: (N-1, 2) bend limits [lo, hi] in radians for phi_j; a row of
             (-inf, inf) is a free joint, lo == hi a rigid one. None = all free.
+        end_limits: (2, 2) bounds [lo, hi] in radians on the absolute angles of the first
+            rod (theta_0) and of the last (theta_{N-1}), set by anchor fixtures; a row of
+            (-inf, inf) is a free anchor pin. None = both free. Exact model only; the
+            moment each fixture carries is in ``info['end_moments']`` (positive pushes the
+            angle up) and which bound holds in ``info['end_active']``
+            (:mod:`optimize.endlimits`).
         g: gravitational acceleration (> 0), along -y.
         model: "exact" (default; closure and limits as hard constraints) or
             "penalty" (the paper's Eq. 1-3, for comparison).
@@ -566,6 +574,17 @@ def solve_equilibrium(
     chain = Chain.from_args(lengths, masses, anchor_a, anchor_b, com, limits, g)
     if model not in ("exact", "penalty"):
         raise ValueError(f"model must be 'exact' or 'penalty', got {model!r}")
+    ends = as_end_limits(end_limits)
+    if ends is not None:
+        if model != "exact":
+            raise ValueError("end_limits are handled by the exact model only")
+
+        def solve(ls, ms, a, b, c, lim):
+            return solve_equilibrium(ls, ms, a, b, com=c, limits=lim if len(ls) > 1 else None, g=chain.g,
+                                     max_iter=max_iter)
+
+        return solve_with_end_limits(solve, chain.lengths, chain.masses, chain.anchor_a, chain.anchor_b, chain.com,
+                                     chain.limits, ends, chain.g)
     _check_reach(chain)
     if chain.span >= chain.total_length * (1 - 1e-12):
         return _taut(chain)

@@ -73,7 +73,7 @@ def _f(x: float) -> str:
 
 def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep, integrator,
                iterations, solver_tolerance, impedance, dampratio, limit_dampratio, inertias,
-               tendons=None) -> str:
+               tendons=None, end_limits=None) -> str:
     """Return the MJCF string of the chain.
 
     ``tendons`` is a list of (damping, coef_vector) for fixed tendons over all
@@ -101,8 +101,13 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
         pos = f"{_f(anchor_a[0])} {_f(anchor_a[1])} 0" if i == 0 else f"{_f(lengths[i - 1])} 0 0"
         out.append(f'{indent}<body name="rod{i}" pos="{pos}">')
         lim = 'limited="false"'
+        row = None
         if i > 0 and limits is not None:
-            lo, hi = limits[i - 1]
+            row = limits[i - 1]
+        elif i == 0 and end_limits is not None:  # an anchor stop on theta_0: the first hinge's range
+            row = end_limits[0]
+        if row is not None:
+            lo, hi = row
             if np.isfinite(lo) or np.isfinite(hi):
                 lo = lo if np.isfinite(lo) else -_BIG
                 hi = hi if np.isfinite(hi) else _BIG
@@ -120,11 +125,19 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
         indent = indent[:-2]
         out.append(f"{indent}</body>")
     out.append("  </worldbody>")
-    if tendons:
+    last = end_limits[1] if end_limits is not None else None
+    last_limited = last is not None and (np.isfinite(last[0]) or np.isfinite(last[1]))
+    if tendons or last_limited:
         out.append("  <tendon>")
-        for k, (damp, coef) in enumerate(tendons):
+        for k, (damp, coef) in enumerate(tendons or []):
             joints = "".join(f'<joint joint="j{i}" coef="{_f(coef[i])}"/>' for i in range(n))
             out.append(f'    <fixed name="mode{k}" damping="{_f(damp)}">{joints}</fixed>')
+        if last_limited:  # an anchor stop on theta_{N-1} = the sum of the hinge angles
+            lo = last[0] if np.isfinite(last[0]) else -_BIG
+            hi = last[1] if np.isfinite(last[1]) else _BIG
+            joints = "".join(f'<joint joint="j{i}" coef="1"/>' for i in range(n))
+            out.append(f'    <fixed name="last_rod" limited="true" range="{_f(lo)} {_f(hi)}" '
+                       f'solreflimit="{sref_lim}" solimplimit="{simp}">{joints}</fixed>')
         out.append("  </tendon>")
     out.append("  <equality>")
     out.append(f'    <connect name="close" site1="tip" site2="anchor_b" solref="{sref}" solimp="{simp}"/>')
@@ -139,7 +152,7 @@ def _qpos_from_angles(theta):
 
 
 def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, angles0, g=9.81,
-                 tol=1e-9, max_time=120.0, **options) -> dict:
+                 tol=1e-9, max_time=120.0, end_limits=None, **options) -> dict:
     """Simulate the chain in MuJoCo until it is at rest and return the rest state.
 
     Parameters
@@ -223,6 +236,7 @@ def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, 
                     inertias=inertias)
 
     # 1) joint-space inertia at the start configuration -> mass-proportional damping
+    build_kw["end_limits"] = None if end_limits is None else np.asarray(end_limits, float).reshape(2, 2)
     m0 = mujoco.MjModel.from_xml_string(build_mjcf(lengths, masses, a, b, com, limits, g, **build_kw))
     d0 = mujoco.MjData(m0)
     d0.qpos[:] = _qpos_from_angles(theta0)

@@ -74,21 +74,15 @@ def solve_with_end_limits(solve, lengths, masses, a, b, com, limits, end_limits,
         g: gravitational acceleration.
     """
     free = solve(lengths, masses, a, b, com, limits)
-    n = len(lengths)
     ok0, ok1 = _inside(free.angles[0], end_limits[0]), _inside(free.angles[-1], end_limits[1])
     if ok0 and ok1:
         return _with_ends(free, np.zeros(2), np.zeros(2, dtype=int))
-    trials = []
-    for c0 in ([None] if ok0 else [None, 0]) if n > 1 else [None]:
-        for c1 in ([None] if ok1 else [None, 1]):
-            if c0 is None and c1 is None:
-                continue
-            trials.append((c0, c1))
-    trials.sort(key=lambda t: -(t[0] is not None) - (t[1] is not None) + 2 * (not ok0 and t[0] is None)
-                + 2 * (not ok1 and t[1] is None))
+    # hold every end that passes its bound; failing that, each of two such ends alone
+    violated = [end for end, ok in ((0, ok0), (1, ok1)) if not ok]
+    trials = [set(violated)] + ([{end} for end in violated] if len(violated) == 2 else [])
     best = None
-    for c0, c1 in trials:
-        r = _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, c0 is not None, c1 is not None)
+    for held in trials:
+        r = _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, 0 in held, 1 in held)
         if r is None:
             continue
         if r.success and r.info.get("fixtures_hold", False):

@@ -107,14 +107,12 @@ class EndOutline:
         """Points along the outline's boundary, :data:`ARC_STEP` apart, with its corners
         exactly (where the faces meet the zone circle and the sides)."""
         pts = []
-        s, r = self.setback, self.zone
-        for sign, t in ((1.0, self.tan_top), (-1.0, self.tan_bottom)):
+        r = self.zone
+        for sign in (1.0, -1.0):
             # the face, x = -s - |y| t on this side, from the zone circle to the side
-            d = np.array([-t, sign]) / math.hypot(1.0, t)
-            p0 = np.array([-s, 0.0])
-            b = p0 @ d
-            disc = b * b - (p0 @ p0 - r * r)
-            u0 = max(0.0, -b + math.sqrt(disc)) if disc >= 0 else 0.0
+            p0, d = self._face(sign)
+            roots = _line_meets_circle(p0, d, np.zeros(2), r)
+            u0 = max(0.0, roots[0]) if roots else 0.0
             end = self._face_meets_side(sign)
             u1 = float((end - p0) @ d)
             if u1 > u0:
@@ -126,6 +124,12 @@ class EndOutline:
         pts = np.array(pts, dtype=float)
         return pts[self.contains(pts, -1e-7)]  # only points of this outline (its boundary)
 
+    def _face(self, sign: float) -> tuple[np.ndarray, np.ndarray]:
+        """The end face's line on the top (sign +1) or bottom (-1) half: its point on the
+        centreline and its unit direction away from it."""
+        t = self.tan_top if sign > 0 else self.tan_bottom
+        return np.array([-self.setback, 0.0]), np.array([-t, sign]) / math.hypot(1.0, t)
+
     def _face_meets_side(self, sign: float) -> np.ndarray:
         """The face's end on the top (sign +1) or bottom (-1) surface."""
         t = self.tan_top if sign > 0 else self.tan_bottom
@@ -136,14 +140,10 @@ class EndOutline:
         rho = 1 / abs(k)
         c = np.array([0.0, math.copysign(rho, k)])
         radius = rho - sign * math.copysign(1.0, k) * h2
-        d = np.array([-t, sign]) / math.hypot(1.0, t)
-        p0 = np.array([-s, 0.0])
-        w = p0 - c
-        b = w @ d
-        disc = b * b - (w @ w - radius * radius)
-        if disc < 0:  # the face misses the side arc: its end is where the stub's side is
+        p0, d = self._face(sign)
+        roots = _line_meets_circle(p0, d, c, radius)
+        if not roots:  # the face misses the side arc: its end is where the stub's side is
             return np.array([-s - h2 * t, sign * h2])
-        roots = [-b + math.sqrt(disc), -b - math.sqrt(disc)]
         u = min((x for x in roots if x >= 0), default=max(roots))
         q = p0 + u * d
         if q[0] >= 0:  # on the stub (ahead of the axis), where the side is straight
@@ -168,6 +168,16 @@ class EndOutline:
             ang = _steps(0.0, self.depth) / rho  # back along the arc from the axis's radial line
             out += list(np.column_stack([-radius * np.sin(ang), cy - math.copysign(1.0, k) * radius * np.cos(ang)]))
         return out
+
+
+def _line_meets_circle(p0: np.ndarray, d: np.ndarray, centre: np.ndarray, radius: float) -> list[float]:
+    """Parameters u (larger first) where p0 + u d (d a unit vector) meets the circle; [] if it misses."""
+    w = p0 - centre
+    b = float(w @ d)
+    disc = b * b - (float(w @ w) - radius * radius)
+    if disc < 0:
+        return []
+    return [-b + math.sqrt(disc), -b - math.sqrt(disc)]
 
 
 def _steps(a: float, b: float) -> np.ndarray:

@@ -127,27 +127,8 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
     Raises:
         InputError: a rod type's parameters make no valid solid.
     """
-    from rodcad.catalog import limits as limits_mod
-    from rodcad.catalog import massrange as massrange_mod
-    from rodcad.catalog.limits import all_pair_limits
-    from rodcad.catalog.massrange import mass_infos
-
-    cache = cache if cache is not None else DiskCache()
     t0 = time.perf_counter()
-    # Build every solid that has work left before starting workers, so that
-    # parameters making no valid solid are reported as bad input (cached
-    # results were computed from solids that built fine).
-    needed = {t.name: t for t in catalog.types if not massrange_mod.is_cached(t, cache)}
-    for a, b in catalog.pairs():
-        if not limits_mod.is_cached(a, b, cache):
-            needed.setdefault(a.name, a)
-            needed.setdefault(b.name, b)
-    for t in needed.values():
-        type_solid(t)
-    masses = mass_infos(list(catalog.types), jobs=jobs, cache=cache,
-                        progress=_progress("mass ranges") if progress else None)
-    limits = all_pair_limits(catalog, jobs=jobs, cache=cache,
-                             progress=_progress("pair limits") if progress else None)
+    masses, limits = _compute_tables(catalog, jobs=jobs, cache=cache, progress=progress)
     types = []
     for t in catalog.types:
         m = masses[t.name]
@@ -212,6 +193,36 @@ def _lookup_deviation(catalog: Catalog, limits: dict[tuple[str, str], Any]) -> d
                 looser.append(f"{left} -> {right}")
     return {"worst_deviation_deg": round(worst, 4), "worst_pair": worst_pair,
             "allows_more_bend_than_the_solids": sorted(set(looser))}
+
+
+def _compute_tables(catalog: Catalog, *, jobs: int | None, cache: DiskCache | None,
+                    progress: bool) -> tuple[dict[str, Any], dict[tuple[str, str], Any]]:
+    """Every type's mass info and every joinable pair's limits, computed where not cached.
+
+    Raises:
+        InputError: a rod type's parameters make no valid solid.
+    """
+    from rodcad.catalog import limits as limits_mod
+    from rodcad.catalog import massrange as massrange_mod
+    from rodcad.catalog.limits import all_pair_limits
+    from rodcad.catalog.massrange import mass_infos
+
+    cache = cache if cache is not None else DiskCache()
+    # Build every solid that has work left before starting workers, so that
+    # parameters making no valid solid are reported as bad input (cached
+    # results were computed from solids that built fine).
+    needed = {t.name: t for t in catalog.types if not massrange_mod.is_cached(t, cache)}
+    for a, b in catalog.pairs():
+        if not limits_mod.is_cached(a, b, cache):
+            needed.setdefault(a.name, a)
+            needed.setdefault(b.name, b)
+    for t in needed.values():
+        type_solid(t)
+    masses = mass_infos(list(catalog.types), jobs=jobs, cache=cache,
+                        progress=_progress("mass ranges") if progress else None)
+    limits = all_pair_limits(catalog, jobs=jobs, cache=cache,
+                             progress=_progress("pair limits") if progress else None)
+    return masses, limits
 
 
 def _limits_json(r: Any) -> list[float | None]:
@@ -325,7 +336,7 @@ def precompute(catalog: Catalog, *, jobs: int | None = None, progress: bool = Fa
         os.environ["RODCAD_SEED_CACHE"] = "0"
         try:
             cache = DiskCache(tmp)
-            check_report(catalog, jobs=jobs, cache=cache, progress=progress)
+            _compute_tables(catalog, jobs=jobs, cache=cache, progress=progress)
             if progress:
                 print(f"rodcad: computing achievable mass intervals of {len(catalog)} types ...",
                       file=sys.stderr, flush=True)

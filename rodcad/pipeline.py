@@ -28,7 +28,6 @@ import numpy as np
 
 from optimize import (
     EquilibriumResult,
-    find_equilibria,
     shape_distance,
     solve_equilibrium,
 )
@@ -46,7 +45,7 @@ from rodcad.cad.rods import (
 from rodcad.design.chains import ChainSpec, design_chains
 from rodcad.design.chandelier import ChandelierDesign, design_chandelier
 from rodcad.design.frame import FramePlan, frame_outline, plan_frame
-from rodcad.design.masses import ChainDesign
+from rodcad.design.masses import ChainDesign, check_equilibrium
 from rodcad.design.model import Design
 from rodcad.design.plan import CatalogArrays, ChainPlan, catalog_arrays
 from rodcad.errors import InputError
@@ -303,21 +302,19 @@ def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult
     lengths, com = arrays.lengths[k], arrays.com[k]
     masses = np.array([r.mass for r in design.chain], float)
     a, b = design.anchors
-    limits = lim if len(names) > 1 else None
     try:
-        eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=design.g)
-        multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=design.g, n_starts=N_STARTS,
-                                seed=design.seed)
+        chk = check_equilibrium(lengths, masses, a, b, com=com, limits=lim, g=design.g, seed=design.seed,
+                                n_starts=N_STARTS)
     except ValueError as err:
         raise InputError([design.problem("anchors", str(err))]) from None
     target = None
     dist = None
     if design.target_curve is not None and len(design.target_curve) == len(names) + 1:
         target = design.target_curve
-        dist = shape_distance(target, eq.points)
+        dist = shape_distance(target, chk.equilibrium.points)
     res = BuildResult(design=design, method="", seed=design.seed, type_names=names, lengths=lengths,
-                      masses=masses, com=com, limits=lim, target_points=target, equilibrium=eq,
-                      distance=dist, n_stable=multi.n_distinct, unique=multi.unique)
+                      masses=masses, com=com, limits=lim, target_points=target, equilibrium=chk.equilibrium,
+                      distance=dist, n_stable=chk.n_stable, unique=chk.unique)
     res.notes += _design_notes(res)
     res.time_s = time.perf_counter() - t0
     return res

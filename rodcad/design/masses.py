@@ -19,7 +19,7 @@ from optimize import (
 )
 from rodcad.design.plan import ChainPlan
 
-__all__ = ['BuildableInfo', 'ChainCheck', 'ChainDesign', 'SNAP_STRATEGIES', 'check_chain', 'design_buildable', 'design_chain']
+__all__ = ['BuildableInfo', 'ChainCheck', 'ChainDesign', 'SNAP_STRATEGIES', 'check_chain', 'check_equilibrium', 'design_buildable', 'design_chain']
 
 
 @dataclass(frozen=True)
@@ -96,10 +96,20 @@ def check_chain(plan: ChainPlan, masses: np.ndarray, *, seed: int = 0, n_starts:
     """Solve the designed chain from scratch and look for other stable equilibria (multi-start)."""
     p = plan.problem
     a, b = p.anchors
-    g = p.g if g is None else g
-    limits = p.limits if p.n > 1 else None
-    eq = solve_equilibrium(p.lengths, masses, a, b, com=p.com, limits=limits, g=g)
-    multi = find_equilibria(p.lengths, masses, a, b, com=p.com, limits=limits, g=g, n_starts=n_starts, seed=seed)
+    return check_equilibrium(p.lengths, masses, a, b, com=p.com, limits=p.limits, g=p.g if g is None else g,
+                             seed=seed, n_starts=n_starts)
+
+
+def check_equilibrium(lengths: np.ndarray, masses: np.ndarray, a: np.ndarray, b: np.ndarray, *, com: np.ndarray,
+                      limits: np.ndarray | None, g: float, seed: int = 0, n_starts: int = 12) -> ChainCheck:
+    """A chain solved from scratch, and a multi-start for other stable equilibria.
+
+    Raises:
+        ValueError: the anchors are out of the chain's reach.
+    """
+    limits = limits if len(lengths) > 1 else None
+    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=g)
+    multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=g, n_starts=n_starts, seed=seed)
     return ChainCheck(eq, multi.n_distinct, multi.unique, n_starts)
 
 

@@ -229,6 +229,33 @@ def _tile_polyline(curve: np.ndarray, allowed: list[float], preferred: float | N
     return Discretization(np.array(points), np.array(lengths, dtype=float), 0.0, 0.0, corners[:-1])
 
 
+def _tile_range(curve: np.ndarray, lo: float, hi: float, preferred: float | None) -> Discretization | None:
+    """Rods printed to order on a polyline whose every segment splits into equal rods of a
+    length in [lo, hi]: vertices become joints (the polyline comes back exactly), each
+    segment split into the count of rods whose length is nearest the preferred one."""
+    seg = np.hypot(*np.diff(curve, axis=0).T)
+    keep = np.concatenate([[True], seg > 0])
+    pts = curve[keep]
+    seg = seg[seg > 0]
+    if seg.size == 0 or seg.size > MAX_RODS or seg.min() < lo * (1 - TILE_TOL):
+        return None
+    if preferred is None:
+        preferred = float(np.clip(seg.sum() / 8, lo, hi))
+    points, lengths, corners = [pts[0]], [], []
+    for a, b, length in zip(pts[:-1], pts[1:], seg):
+        counts = [k for k in range(max(1, math.ceil(length / hi * (1 - TILE_TOL))),
+                                   math.floor(length / lo * (1 + TILE_TOL)) + 1)]
+        if not counts:
+            return None
+        k = min(counts, key=lambda k: (abs(length / k - preferred), k))
+        points += [a + (b - a) * (i / k) for i in range(1, k)] + [b]
+        lengths += [float(length) / k] * k
+        corners.append(len(lengths))
+    if len(lengths) > MAX_RODS:
+        return None
+    return Discretization(np.array(points), np.array(lengths, dtype=float), 0.0, 0.0, corners[:-1])
+
+
 def discretize(
     curve,
     allowed_lengths,
@@ -243,7 +270,8 @@ def discretize(
         curve: (M, 2) polyline from A (first point) to B (last point), dense or not.
         allowed_lengths: rod lengths that may be used (e.g. the catalog's 20, 30, 40 mm).
         preferred: the length to use most (default: the longest that gives at least
-            eight rods, else the shortest).
+            eight rods, else the shortest; for a length range, the length that makes eight
+            rods of the curve's length, clipped to the range).
         corner_angle_deg: a vertex of the given polyline turning more than this is a corner
             that should carry a joint.
         length_range: rods printed to order: any length in (lo, hi) instead of the allowed
@@ -277,7 +305,10 @@ def discretize(
             f"the target is {total_length:.4g} long: it takes at least {math.ceil(total_length / max(allowed))} "
             f"rods of the allowed lengths (up to {max(allowed):g}); rodcad lays chains of up to {MAX_RODS} rods "
             "(allow longer rods, or make the target smaller)")
-    exact = _tile_polyline(curve, allowed, preferred) if length_range is None else None
+    if length_range is None:
+        exact = _tile_polyline(curve, allowed, preferred)
+    else:
+        exact = _tile_range(curve, allowed[0], allowed[1], preferred)
     if exact is not None:
         return _slack(exact)
     corners_in = find_corners(curve, corner_angle_deg)
@@ -302,7 +333,9 @@ def discretize(
     dense = np.column_stack([np.interp(s, s_given[keep], curve[keep, 0]),
                              np.interp(s, s_given[keep], curve[keep, 1])])
     dense[np.searchsorted(s, s_given[keep])] = curve[keep]
-    if preferred is None:
+    if preferred is None and length_range is not None:
+        preferred = float(np.clip(total / 8, allowed[0], allowed[1]))
+    elif preferred is None:
         fits = [l for l in allowed if total / l >= 8]
         preferred = max(fits) if fits else min(allowed)
     breaks = [0.0] + [s_given[c] for c in corners_in] + [total]

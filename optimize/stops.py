@@ -20,7 +20,7 @@ from scipy.optimize import linprog
 from optimize.problem import InverseProblem
 from optimize.statics import moment_signs, scaled_statics, statics_matrix
 
-__all__ = ["needed_stops"]
+__all__ = ["needed_stop_sides", "needed_stops"]
 
 
 def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1e-7) -> np.ndarray | None:
@@ -71,3 +71,59 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
     if mu.size == 0 or mu.max() <= 0:
         return np.zeros(0, dtype=int)
     return np.sort(stops[new][mu > rel_tol * max(mu.max(), 1e-300)]).astype(int)
+
+
+def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1e-7):
+    """Like :func:`needed_stops`, for stops printed to order on either side: a candidate
+    joint may rest on a stop that keeps it from bending further (hi, moment <= 0) or from
+    straightening (lo, moment >= 0), each placed exactly at its target bend.
+
+    Args:
+        problem: the target, rods and mass bounds; joints already on a limit keep it.
+        candidates: joints that may get a stop (either side).
+        rel_tol: a moment counts as needed above this fraction of the largest.
+
+    Returns:
+        (joints, sides): sorted joint indices and, per joint, -1 for a stop on the sagging
+        side (hi) or +1 on the other side (lo); empty arrays when the masses alone can hold
+        the target; None when no set of stops can.
+    """
+    phi = np.diff(problem.angles)
+    on_limit = set(statics_matrix(problem)[1].tolist())
+    cand = np.array(sorted(set(int(j) for j in candidates) - on_limit), dtype=int)
+    lim = problem.limits.copy()
+    lim[cand] = phi[cand, None]  # held both ways: the moment may take either sign
+    trial = replace(problem, limits=lim)
+    A, stops, signs = statics_matrix(trial)
+    n = problem.n
+    row, col = scaled_statics(trial, A)
+    As = (A * row[:, None]) * col[None, :]
+    new = np.isin(stops, cand)
+    # the new stops' moments split into a positive and a negative part, each >= 0
+    As = np.hstack([As, -As[:, n + 2:][:, new]])
+    k = int(new.sum())
+    lb = np.full(As.shape[1], -np.inf)
+    ub = np.full(As.shape[1], np.inf)
+    lb[:n], ub[:n] = problem.mass_bounds[:, 0] / col[:n], problem.mass_bounds[:, 1] / col[:n]
+    old_lb, old_ub = lb[n + 2:n + 2 + stops.size], ub[n + 2:n + 2 + stops.size]
+    moment_signs(signs, old_lb, old_ub)
+    old_lb[new], old_ub[new] = 0.0, np.inf
+    lb[n + 2:n + 2 + stops.size], ub[n + 2:n + 2 + stops.size] = old_lb, old_ub
+    if k:
+        lb[-k:] = 0.0
+    c = np.zeros(As.shape[1])
+    c[n + 2:n + 2 + stops.size][new] = 1.0
+    if k:
+        c[-k:] = 1.0
+    bounds = list(zip(np.where(np.isfinite(lb), lb, None), np.where(np.isfinite(ub), ub, None)))
+    lp = linprog(c, A_eq=As, b_eq=np.zeros(n), bounds=bounds, method="highs")
+    if lp.status != 0:
+        return None
+    mu = lp.x[n + 2:n + 2 + stops.size][new] - (lp.x[-k:] if k else 0.0)
+    if mu.size == 0 or np.abs(mu).max() <= 0:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    keep = np.abs(mu) > rel_tol * np.abs(mu).max()
+    joints = stops[new][keep].astype(int)
+    sides = np.where(mu[keep] > 0, 1, -1).astype(int)
+    order = np.argsort(joints)
+    return joints[order], sides[order]

@@ -46,8 +46,10 @@ from rodcad.design.chains import ChainSpec, design_chains
 from rodcad.design.chandelier import ChandelierDesign, design_chandelier
 from rodcad.design.frame import FramePlan, frame_outline, plan_frame
 from rodcad.design.masses import ChainDesign, check_equilibrium
+from rodcad.catalog.model import RodType
 from rodcad.design.model import Design
 from rodcad.design.plan import CatalogArrays, ChainPlan, catalog_arrays
+from rodcad.design.printed import rods_of
 from rodcad.errors import InputError
 from rodcad.fabrication.intervals import chain_intervals
 from rodcad.outdir import staged_output
@@ -184,9 +186,9 @@ def _arrays(design: Design, jobs: int | None, progress: Progress) -> CatalogArra
 
 def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
     """The achievable mass intervals of the planned types (CAD on)."""
-    def intervals(names: Sequence[str]) -> dict[str, list[tuple[float, float]]]:
-        with progress.step("masses each rod type can really be built at"):
-            return chain_intervals([design.catalog[n] for n in names], seed=design.fabrication_seed, jobs=jobs)
+    def intervals(types: Sequence[RodType]) -> dict[str, list[tuple[float, float]]]:
+        with progress.step(f"masses each of {len(types)} rod types can really be built at"):
+            return chain_intervals(list(types), seed=design.fabrication_seed, jobs=jobs)
     return intervals
 
 
@@ -250,6 +252,8 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
                              n_starts=N_STARTS, g=design.g, progress=progress,
                              intervals=_intervals_fn(design, jobs, progress) if cad else None)
     cd = chain.design
+    if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
+        design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
     p, pr, chk = cd.plan, cd.plan.problem, cd.check
     result = BuildResult(
         design=design, method=method, seed=seed, type_names=list(p.type_names),
@@ -399,6 +403,9 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
                                 intervals=_intervals_fn(design, jobs, progress) if cad else None)
     except ValueError as err:
         raise InputError([design.problem("chandelier", str(err))]) from None
+    made = rods_of([ch.design.plan for ch in res.chains])
+    if made:  # rods printed to order: the catalog now knows them by name
+        design = dataclasses.replace(design, catalog=design.catalog.with_types(made))
     extra = {}
     if spec.frame_kind == "bars":
         # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order

@@ -426,6 +426,10 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     return ChainFabrication(rods, problems, len(distinct), time.perf_counter() - t0)
 
 
+#: STL vertices closer than 10^-WELD_DIGITS mm are welded when a mesh comes out open.
+WELD_DIGITS = 4
+
+
 def _check_files(step: Path, stl: Path, volume: float) -> None:
     import trimesh
 
@@ -438,11 +442,15 @@ def _check_files(step: Path, stl: Path, volume: float) -> None:
     if abs(back.volume - volume) > 1e-6 * volume:
         raise FabricationError(f"{step} re-imports with volume {back.volume:.4f} instead of {volume:.4f} mm^3")
     mesh = trimesh.load(str(stl), force="mesh")
-    if not mesh.is_watertight:
-        # OCCT's sphere poles give zero-area triangles: drop them and rewrite.
+    for digits in (None, WELD_DIGITS):
+        if mesh.is_watertight:
+            break
+        # OCCT's sphere poles give zero-area triangles, and faces meshed apart can leave their
+        # shared edge's vertices a few nanometres apart: weld (to 10^-WELD_DIGITS mm), drop
+        # the zero-area triangles and rewrite
+        mesh.merge_vertices(digits_vertex=digits)
         mesh.update_faces(mesh.nondegenerate_faces())
         mesh.remove_unreferenced_vertices()
-        mesh.merge_vertices()
         if mesh.is_watertight:
             mesh.export(str(stl), file_type="stl")
             mesh = trimesh.load(str(stl), force="mesh")

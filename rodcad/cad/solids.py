@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from build123d import CenterOf, Face, Location, Plane, Solid, Vector, Wire
+from build123d import CenterOf, Edge, Face, Location, Plane, Solid, Vector, Wire
 
 from rodcad.catalog.model import RodGeometry, RodType
 from rodcad.errors import InputError
@@ -111,28 +111,32 @@ def _body(g: RodGeometry) -> Solid:
     """The raw bar: centreline segment or arc plus straight stubs past the axes."""
     h, t, L = g.height, g.thickness, g.length
     stub = _stub_length(g)
-    z0, z1 = -t / 2, t / 2
+    z0 = -t / 2
     if g.curvature == 0:
         return Solid.make_box(L + 2 * stub, h, t, Plane((-stub, -h / 2, z0)))
+    # one outline (stub, arc, stub on each side) extruded once: no seam where the arc meets
+    # its stubs, which a cut through the hinge axis would otherwise leave as a sliver
     rho = 1 / abs(g.curvature)
     sigma = 1 if g.curvature > 0 else -1
     psi = math.radians(abs(g.half_angle_deg))
-    centre = (L / 2, sigma * rho * math.cos(psi))
-    # The arc runs from the first axis to the second, around -90 deg (sigma=+1)
-    # or +90 deg (sigma=-1) as seen from the centre.
-    mid = -90.0 if sigma > 0 else 90.0
-    start = mid - math.degrees(psi)
-    s = math.radians(start)
-    plane = Plane((centre[0], centre[1], z0), x_dir=(math.cos(s), math.sin(s), 0), z_dir=(0, 0, 1))
-    outer = Solid.make_cylinder(rho + h / 2, t, plane, angle=2 * math.degrees(psi))
-    inner = Solid.make_cylinder(rho - h / 2, t + 2, Plane((centre[0], centre[1], z0 - 1)))
-    band = one_solid(outer.cut(inner), "the curved body")
-    parts = [band]
-    for joint in (0, 1):
-        p, u, v = _frame(g, joint)
-        a, b = p - v * h / 2, p + v * h / 2
-        parts.append(prism_solid([a, a + u * stub, b + u * stub, b], z0, z1))
-    return one_solid(parts[0].fuse(*parts[1:]).clean(), "the curved body with its stubs")
+    mid_y = sigma * rho * math.cos(psi) - sigma * rho  # the centreline arc's middle
+    p0, u0, v0 = _frame(g, 0)
+    p1, u1, v1 = _frame(g, 1)
+
+    def pt(x: np.ndarray) -> Vector:
+        return Vector(float(x[0]), float(x[1]), z0)
+
+    edges = []
+    for side in (1, -1):
+        a, b = (p0, p1) if side > 0 else (p1, p0)
+        ua, va, ub, vb = (u0, v0, u1, v1) if side > 0 else (u1, v1, u0, v0)
+        off = side * h / 2
+        mid = np.array([L / 2, mid_y + off])
+        edges.append(Edge.make_line(pt(a + ua * stub + va * off), pt(a + va * off)))
+        edges.append(Edge.make_three_point_arc(pt(a + va * off), pt(mid), pt(b + vb * off)))
+        edges.append(Edge.make_line(pt(b + vb * off), pt(b + ub * stub + vb * off)))
+        edges.append(Edge.make_line(pt(b + ub * stub + vb * off), pt(b + ub * stub - vb * off)))
+    return one_solid(Solid.extrude(Face(Wire(edges)), Vector(0, 0, t)), "the curved body")
 
 
 def _end_cuts(g: RodGeometry) -> list[Solid]:
@@ -141,9 +145,9 @@ def _end_cuts(g: RodGeometry) -> list[Solid]:
     out = []
     for joint, end in ((0, g.first), (1, g.second)):
         p, u, v = _frame(g, joint)
-        a = p - end.setback * u
         stub = _stub_length(g) + 1.0 + end.setback  # past the raw stub's end, whatever the setback
         for side, chamfer in ((1, end.top_chamfer), (-1, end.bottom_chamfer)):
+            a = p - end.setback * u
             n = side * v
             tan_b = math.tan(math.radians(chamfer))
             reach = h / 2 + 1.0

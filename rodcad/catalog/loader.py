@@ -36,6 +36,8 @@ from rodcad.catalog.model import (
     Material,
     Origin,
     Printer,
+    Ranges,
+    max_curvature,
     RodGeometry,
     RodType,
 )
@@ -245,7 +247,12 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
             v.report_at(fpath, f"missing required key {key!r} (give it in the family or under 'defaults')")
         if missing:
             continue
-        family_types = _expand(merged, ctx, printer)
+        expanded = _expand(merged, ctx, printer)
+        ranges, template = None, None
+        if isinstance(expanded, tuple):
+            family_types, ranges, template = expanded
+        else:
+            family_types = expanded
         for t in family_types:
             if t.name in type_names:
                 v.report(Pos(t.origin.line, t.origin.column), t.origin.key,
@@ -254,13 +261,15 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
             type_names[t.name] = f"family {merged['name']!r}"
             types.append(t)
         families.append(Family(merged["name"], merged.get("description", ""),
-                               tuple(t.name for t in family_types), ctx.origin()))
+                               tuple(t.name for t in family_types), ctx.origin(), ranges, template))
     v.raise_if_any()
     return Catalog(data["name"], data.get("description", ""), path, tuple(types), tuple(families), printer)
 
 
-def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None) -> list[RodType]:
-    """The rod types of one complete family, after cross-field checks."""
+def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
+            ) -> list[RodType] | tuple[list[RodType], Ranges, RodType]:
+    """The rod types of one complete family, after cross-field checks (for a family
+    printed to order: its reference types, ranges and template)."""
     sec, jt, ends, mat = f["section"], f["joint"], f["ends"], f["material"]
     material = Material(mat.get("name", ""), mat["density"], mat["min_wall"])
     balls = None
@@ -284,6 +293,8 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None) -> 
     if printer is not None and w < printer.nozzle:
         ctx.report("material.min_wall", f"minimum wall {format_number(w)} mm is thinner than the "
                    f"printer's nozzle ({format_number(printer.nozzle)} mm)")
+    if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f:
+        return _expand_ranges(f, ctx, printer, material, balls, first, second, end_key)
     multi_scale = len(f["scale"]) > 1
     multi_curv = len(f["curvature"]) > 1
     out: list[RodType] = []
@@ -423,4 +434,119 @@ def _check_printer(ctx: _FamilyContext, l_rel: str, g: RodGeometry, printer: Pri
                    f"does not fit the printer's build volume "
                    f"({' x '.join(fmt(b) for b in printer.build_volume)} mm)")
         return False
+    return True
+
+
+#: A stop printed to order must stop within this of the bend it is made for (deg), checked
+#: at the ends of the family's ranges with the end geometry (rodcad.catalog.jointlimits).
+STOP_CHECK_DEG = 0.05
+
+
+def _range(ctx: _FamilyContext, f: dict[str, Any], key: str) -> tuple[float, float] | None:
+    """A {min, max} value as a pair, or None (reported) when it is empty or inverted."""
+    lo, hi = f[key]["min"], f[key]["max"]
+    if not lo < hi:
+        what = "empty" if lo == hi else "inverted"
+        ctx.report(f"{key}.max", f"{what} range: max {format_number(hi)} must be above min {format_number(lo)}"
+                   + (" (a single value is written without min and max)" if lo == hi else ""))
+        return None
+    return float(lo), float(hi)
+
+
+def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None, material: Material,
+                   balls: Balls | None, first: EndShape, second: EndShape, end_key: Any
+                   ) -> list[RodType] | tuple[list[RodType], Ranges, RodType]:
+    """A family printed to order: ranges checked at their ends (every rod the design may
+    make must be buildable), two reference types (shortest and longest, straight)."""
+    fmt = format_number
+    if not isinstance(f["length"], dict):
+        for key in ("curvature", "stops"):
+            if isinstance(f.get(key), dict):
+                ctx.report(key, f"a {key} range is for rods printed to order: give the length as a range "
+                           "{min, max} too")
+        return []
+    if len(f["scale"]) > 1:
+        ctx.report("scale", "a family printed to order has one scale (make one family per scale)")
+        return []
+    length = _range(ctx, f, "length")
+    curv: tuple[float, float] | None
+    if isinstance(f["curvature"], dict):
+        curv = _range(ctx, f, "curvature")
+    elif len(f["curvature"]) == 1:
+        curv = (float(f["curvature"][0]),) * 2
+    else:
+        ctx.report("curvature", "a family printed to order takes one curvature or a range {min, max}, not a list")
+        return []
+    stops = None
+    if "stops" in f:
+        stops = _range(ctx, f, "stops")
+        if stops is None:
+            return []
+    if length is None or curv is None:
+        return []
+    sec, jt = f["section"], f["joint"]
+    scale = f["scale"][0]
+    h, t = sec["height"] * scale, sec["thickness"] * scale
+    hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
+                  jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
+    if not _check_section(ctx, h, t, hinge, material, balls, first, second, end_key, ""):
+        return []
+    ok = True
+    for rel, lv in (("length.min", length[0]), ("length.max", length[1])):
+        ok &= _check_length(ctx, rel, lv, h, hinge, material, first, second, end_key, "")
+    k_big = max(abs(curv[0]), abs(curv[1]))
+    k_rel = "curvature.max" if abs(curv[1]) >= abs(curv[0]) else "curvature.min"
+    if ok and k_big:  # the shortest rod takes the whole range; longer ones at most a 120 deg arc
+        ok &= _check_curvature(ctx, k_rel, math.copysign(k_big, curv[1] if k_rel.endswith("max") else curv[0]),
+                               length[0], h)
+    if ok and printer is not None:
+        k_sig = curv[1] if abs(curv[1]) >= abs(curv[0]) else curv[0]
+        k_sig = math.copysign(min(abs(k_sig), max_curvature(length[1])), k_sig)
+        ok &= _check_printer(ctx, k_rel if k_big else "length.max",
+                             RodGeometry(length[1], h, t, k_sig, hinge, first, second), printer)
+    if ok and stops is not None:
+        ok = _check_stops(ctx, stops, length, curv, h, t, hinge, material, first, second)
+    if not ok:
+        return []
+    k0 = min(max(0.0, curv[0]), curv[1])
+    origin = ctx.origin("length")
+    refs = [RodType(f"{f['name']}-{fmt(lv)}", f["name"], lv, scale, k0,
+                    RodGeometry(lv, h, t, k0, hinge, first, second), material, balls, origin)
+            for lv in length]
+    return refs, Ranges(length, curv, stops), refs[0]
+
+
+def _check_stops(ctx: _FamilyContext, stops: tuple[float, float], length: tuple[float, float],
+                 curv: tuple[float, float], h: float, t: float, hinge: Hinge, material: Material,
+                 first: EndShape, second: EndShape) -> bool:
+    """Every stop of the range, between straight rods at the ends of the length range, is
+    made by flush ends that leave the rod whole and meet exactly at the stop angle (each end's
+    top chamfer half the stop; between curved rods the planner keeps the chamfers within
+    these)."""
+    return all([_check_stop(ctx, rel, s, length, curv, h, t, hinge, material, first, second)
+                for rel, s in (("stops.min", stops[0]), ("stops.max", stops[1]))])
+
+
+def _check_stop(ctx: _FamilyContext, rel: str, s: float, length: tuple[float, float], curv: tuple[float, float],
+                h: float, t: float, hinge: Hinge, material: Material, first: EndShape, second: EndShape) -> bool:
+    from rodcad.catalog.jointlimits import joint_limits
+
+    fmt = format_number
+    for lv in length:
+        for k in (0.0,):
+            c = s / 2  # each end's top chamfer where two straight rods meet at s
+            a, b = EndShape(0.0, c, first.bottom_chamfer), EndShape(0.0, c, second.bottom_chamfer)
+            if not _check_length(ctx, rel, lv, h, hinge, material, a, b, lambda w, key: rel, ""):
+                return False
+            geo = RodGeometry(lv, h, t, k, hinge, a, b)
+            try:
+                hi = joint_limits(geo, geo)[1]
+            except ValueError:
+                hi = None
+            if hi is None or abs(hi - s) > STOP_CHECK_DEG:
+                got = "no stop at all" if hi is None else f"a stop at {fmt(round(hi, 3))} deg"
+                ctx.report(rel, f"a stop at {fmt(s)} deg between two {fmt(lv)} mm rods of curvature {fmt(k)} "
+                           f"needs top chamfers of {fmt(round(c, 3))} deg, which cut into the hinge zone or "
+                           f"knuckle: their outlines give {got} (narrow the stop range)")
+                return False
     return True

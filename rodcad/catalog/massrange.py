@@ -2,7 +2,8 @@
 
 A rod's mass is tuned by removing plastic (closed spherical cavities) or by
 adding metal (balls in closed sockets, inserted at a print pause). This module
-computes, from the exact B-rep:
+computes, from the rod's exact geometry (:mod:`rodcad.catalog.fastgeom`: the solid's volume,
+centre of mass and clearance in closed form, equal to the B-rep's to round-off):
 
 * the plain solid's volume, mass and centre of mass;
 * ``m_min``: the solid less the most plastic that equal spherical cavities can
@@ -56,7 +57,9 @@ __all__ = ['MASSRANGE_VERSION', 'MassInfo', 'layouts', 'compute_mass_info', 'is_
 
 #: Bump when results change (invalidates cached mass ranges).
 #: 2: printable void shapes (capped cavities, silo sockets on one print layer).
-MASSRANGE_VERSION = "2"
+#: 3: clearance, volume and centre of mass from the end geometry (rodcad.catalog.fastgeom,
+#:    exact) instead of kernel queries: the same layouts but for ties at the last digit.
+MASSRANGE_VERSION = "3"
 
 
 @dataclass(frozen=True)
@@ -110,38 +113,37 @@ def _key(rod: RodType) -> str:
 def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
     """The cavity layout at m_min ('capped' voids) and the ball socket layout
     at m_max ('silo' voids, raised by :func:`ball_offset`) of a rod type."""
-    from rodcad.cad.collision import Clearance as _Clearance
-    from rodcad.cad.solids import mass_properties
+    from rodcad.catalog.fastgeom import RodClearance, rod_mass_properties
 
-    solid = type_solid(rod)
-    props = mass_properties(solid)
-    clearance = _Clearance(solid)
+    _, center = rod_mass_properties(rod.geometry)
+    clearance = RodClearance(rod.geometry)
     wall = rod.material.min_wall
-    cavities = max_cavity_layout(clearance, clearance.bounds, props.center, wall, void="capped")
+    cavities = max_cavity_layout(clearance, clearance.bounds, center, wall, void="capped")
     if rod.balls is None:
         return cavities, SphereLayout.empty()
     rs = rod.balls.socket_diameter / 2
     lift = ball_offset(rs, rod.balls.mass, rod.material.density)
-    balls = max_ball_layout(clearance, clearance.bounds, props.center, rod.balls.socket_diameter, wall,
+    balls = max_ball_layout(clearance, clearance.bounds, center, rod.balls.socket_diameter, wall,
                             void="silo", raise_by=lift)
     return cavities, balls
 
 
 def compute_mass_info(rod: RodType) -> MassInfo:
     """Compute :class:`MassInfo` from the B-rep (no cache)."""
-    from rodcad.cad.solids import mass_properties
+    from rodcad.catalog.fastgeom import rod_mass_properties
 
-    props = mass_properties(type_solid(rod))
+    type_solid(rod)  # the solid must build (a GeometryError names what is wrong)
+    volume, center = rod_mass_properties(rod.geometry)
     cavities, balls = layouts(rod)
     rho = rod.material.density / 1000.0  # g/mm^3
-    solid_mass = props.volume * rho
-    m_min = (props.volume - cavities.volume) * rho
+    solid_mass = volume * rho
+    m_min = (volume - cavities.volume) * rho
     if rod.balls is not None and balls.count:
-        m_max = (props.volume - balls.volume) * rho + balls.count * rod.balls.mass
+        m_max = (volume - balls.volume) * rho + balls.count * rod.balls.mass
     else:
         m_max = solid_mass
-    return MassInfo(props.volume, solid_mass, (props.center[0], props.center[1]), m_min,
-                    max(m_max, solid_mass), cavities.radius, cavities.count, balls.count)
+    return MassInfo(float(volume), float(solid_mass), (float(center[0]), float(center[1])), float(m_min),
+                    float(max(m_max, solid_mass)), float(cavities.radius), int(cavities.count), int(balls.count))
 
 
 def is_cached(rod: RodType, cache: DiskCache) -> bool:

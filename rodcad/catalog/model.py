@@ -30,6 +30,16 @@ Rod types are named ``<family>-<length>`` (plus ``-s<scale>`` / ``-k<curvature>`
 when a family lists several scales / curvatures); they are listed family by
 family, then by length, scale and curvature in the order written.
 
+A family *printed to order* gives ranges instead of lists (``catalogs/pla-parametric.yaml``)::
+
+      - name: rod
+        length: {min: 25, max: 60}          # any length: each rod gets its own
+        curvature: {min: -0.04, max: 0.04}  # any curvature in the range
+        stops: {min: -60, max: 60}          # stop angles printed at the bend (deg)
+
+It lists two reference types (its shortest and longest straight rod); a design makes the
+rods it needs with :meth:`Catalog.rod` (see :mod:`rodcad.design.printed`).
+
 Conventions: millimetres, grams, degrees; densities in g/cm^3. Rod frame: the
 first hinge axis through the origin, the second through (length, 0, 0), axes
 along +z, chain plane xy. Top means +y. A chamfer angle tilts an end face away
@@ -38,10 +48,11 @@ from the partner rod (positive) or toward it (negative); see :class:`EndShape`.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -54,6 +65,7 @@ __all__ = [
     "CATALOG_FORMAT",
     "GEOMETRY_VERSION",
     "MAX_ARC_HALF_ANGLE_DEG",
+    "max_curvature",
     "Balls",
     "Catalog",
     "EndShape",
@@ -64,6 +76,7 @@ __all__ = [
     "mm_pos",
     "Origin",
     "Printer",
+    "Ranges",
     "RodGeometry",
     "RodType",
 ]
@@ -87,6 +100,12 @@ GEOMETRY_VERSION = "1"
 
 #: Largest half-angle of a curved rod's arc (the arc spans at most twice this).
 MAX_ARC_HALF_ANGLE_DEG = 60.0
+
+
+def max_curvature(length: float) -> float:
+    """The largest |curvature| (1/mm) a rod of this length is printed with: an arc of
+    2 x MAX_ARC_HALF_ANGLE_DEG through both pins."""
+    return math.sin(math.radians(MAX_ARC_HALF_ANGLE_DEG)) * 2 / length
 
 
 @dataclass(frozen=True)
@@ -303,13 +322,45 @@ class RodType:
 
 
 @dataclass(frozen=True)
+class Ranges:
+    """What a family of rods printed to order leaves to the design (mm, 1/mm, deg).
+
+    Attributes:
+        length: (min, max) pin-to-pin length.
+        curvature: (min, max) signed curvature; (0, 0) for straight rods only.
+        stops: (min, max) stop angles the design may print at a joint (flush ends whose
+            top chamfers add up to the bend), or None: the family's own ends only.
+    """
+
+    length: tuple[float, float]
+    curvature: tuple[float, float]
+    stops: tuple[float, float] | None
+
+
+@dataclass(frozen=True)
 class Family:
-    """A family as written (after defaults): its name, types and origin."""
+    """A family as written (after defaults): its name, types and origin.
+
+    A family printed to order (``ranges`` set) lists two reference types, its shortest
+    and longest straight rod with the family's own ends; the design makes the rods it
+    needs with :meth:`Catalog.rod`, from ``template``.
+    """
 
     name: str
     description: str
     type_names: tuple[str, ...]
     origin: Origin = field(compare=False, repr=False)
+    ranges: Ranges | None = None
+    template: RodType | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def printed_to_order(self) -> bool:
+        return self.ranges is not None
+
+
+def _fmt(x: float, digits: int) -> str:
+    text = f"{round(x, digits):.{digits}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
 
 
 @dataclass(frozen=True)
@@ -364,6 +415,79 @@ class Catalog:
     def type(self, name_or_type: str | RodType) -> RodType:
         """Look up a type by name (a RodType is returned as is)."""
         return name_or_type if isinstance(name_or_type, RodType) else self[name_or_type]
+
+    def family(self, name: str) -> Family:
+        """The family called ``name``."""
+        for f in self.families:
+            if f.name == name:
+                return f
+        raise KeyError(f"unknown rod family {name!r}{suggest(name, [f.name for f in self.families])}")
+
+    @property
+    def printed_families(self) -> list[Family]:
+        """The families printed to order (with ranges), in catalog order."""
+        return [f for f in self.families if f.ranges is not None]
+
+    def rod(self, family: str, length: float, curvature: float = 0.0, *,
+            first_stop: float | None = None, second_stop: float | None = None,
+            first_under: float | None = None, second_under: float | None = None) -> RodType:
+        """A rod of a family printed to order with its own parameters.
+
+        Args:
+            family: the family's name (it must have ranges).
+            length: pin to pin (mm).
+            curvature: signed curvature (1/mm).
+            first_stop, second_stop: top chamfer (deg) of a flush stop end (setback 0) at the
+                first / second joint (the joint cannot bend further), or None.
+            first_under, second_under: bottom chamfer (deg) of a flush end whose bottom
+                face stops the joint from straightening further, or None.
+
+        An end without a stop is the family's own. The name encodes the parameters:
+        ``<family>-<length>[-k<curvature x 1000>][-a<first top>][-b<second top>]
+        [-c<first bottom>][-d<second bottom>]`` (chamfers of the stop faces), rounded to
+        0.001; the rod itself keeps the exact values.
+        """
+        fam = self.family(family)
+        if fam.template is None:
+            raise ValueError(f"rod family {family!r} is not printed to order (it has no ranges)")
+        t = fam.template
+        g = t.geometry
+
+        def end(own: EndShape, top: float | None, under: float | None) -> EndShape:
+            if top is None and under is None:
+                return own
+            return EndShape(0.0, own.top_chamfer if top is None else float(top),
+                            own.bottom_chamfer if under is None else float(under))
+
+        first = end(g.first, first_stop, first_under)
+        second = end(g.second, second_stop, second_under)
+        geom = RodGeometry(float(length), g.height, g.thickness, float(curvature), g.hinge, first, second)
+        name = f"{family}-{_fmt(length, 3)}"
+        if curvature:
+            name += f"-k{_fmt(curvature * 1000, 3)}"
+        for tag, value in (("a", first_stop), ("b", second_stop), ("c", first_under), ("d", second_under)):
+            if value is not None:
+                name += f"-{tag}{_fmt(value, 3)}"
+        return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin)
+
+    def with_types(self, types: Sequence[RodType]) -> Catalog:
+        """This catalog with rods made to order added (a name already known is kept).
+
+        Raises:
+            ValueError: a new rod has the name of a different rod.
+        """
+        extra: list[RodType] = []
+        known = dict(self._by_name)
+        for t in types:
+            old = known.get(t.name)
+            if old is None:
+                known[t.name] = t
+                extra.append(t)
+            elif old != t:
+                raise ValueError(f"two different rods are both named {t.name!r}")
+        if not extra:
+            return self
+        return dataclasses.replace(self, types=self.types + tuple(extra))
 
     def can_join(self, left: str | RodType, right: str | RodType) -> bool:
         """Whether ``right`` can follow ``left`` in a chain: the knuckle at the

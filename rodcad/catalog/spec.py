@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from rodcad.yamlio import MISSING
+import yaml
+
+from rodcad.yamlio import MISSING, Validator
 from rodcad.yamlspec import Field, ListOf, Nullable, Num, Obj, OneOrList, Str
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -15,7 +17,30 @@ from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
 #: Longest design, catalog or family name (it names folders and files).
 MAX_NAME = 100
 
-__all__ = ["catalog_schema", "catalog_spec", "family_spec"]
+__all__ = ["ListOrRange", "catalog_schema", "catalog_spec", "family_spec"]
+
+
+class ListOrRange(OneOrList):
+    """One value, a list of values (a fixed menu: one rod type each) or a range
+    ``{min, max}`` (rods printed to order: the planner picks each rod's own value).
+    The Python value is a list, or a dict with 'min' and 'max' for a range."""
+
+    def __init__(self, item: Num, *, what: str, **kw: Any) -> None:
+        super().__init__(item, unique=True, **kw)
+        self.range = Obj({
+            "min": Field(item, required=True, description=f"Smallest {what}."),
+            "max": Field(item, required=True, description=f"Largest {what}."),
+        }, description=f"Any {what} from min to max: every rod is printed with its own value.")
+
+    def check(self, node: yaml.Node, path: str, v: Validator) -> Any:
+        if isinstance(node, yaml.MappingNode):
+            return self.range.check(node, path, v)
+        return super().check(node, path, v)
+
+    def json_schema(self) -> dict[str, Any]:
+        schema = super().json_schema()
+        schema["anyOf"] = [*schema["anyOf"], self.range.json_schema()]
+        return schema
 
 
 _NAME = r"[A-Za-z0-9][A-Za-z0-9_.+-]*"
@@ -74,9 +99,10 @@ def family_spec() -> Obj:
                           description="Family name; types are named '<family>-<length>'."),
             "description": Field(Str(), description="Free text."),
             "length": Field(
-                num_list(Num(exclusive_minimum=0, maximum=1000, unit="mm")),
+                ListOrRange(Num(exclusive_minimum=0, maximum=1000, unit="mm"), what="length (mm)"),
                 required=True,
-                description="Distance between the two hinge axes (mm); a list makes one type per value.",
+                description="Distance between the two hinge axes (mm); a list makes one type per value, "
+                "a range {min, max} makes rods printed to order, each at the length its place needs.",
             ),
             "scale": Field(
                 num_list(Num(exclusive_minimum=0, maximum=10)),
@@ -86,11 +112,25 @@ def family_spec() -> Obj:
                 "one type per value. Types of different scale do not join.",
             ),
             "curvature": Field(
-                num_list(Num(minimum=-1, maximum=1, unit="1/mm")),
+                ListOrRange(Num(minimum=-1, maximum=1, unit="1/mm"), what="curvature (1/mm)"),
                 default=[0.0],
                 description="Signed curvature of the body's arc through both hinge axes (1/mm; "
                 "1/radius). Positive bulges toward -y (below the chord, like a sagging chain), "
-                "negative toward +y; 0 is straight. A list makes one type per value.",
+                "negative toward +y; 0 is straight. A list makes one type per value; a range "
+                "{min, max} (with a length range) lets every rod follow its piece of the curve.",
+            ),
+            "stops": Field(
+                Obj({
+                    "min": Field(Num(minimum=-60, maximum=90, unit="deg"), required=True,
+                                 description="Most concave stop angle (deg; negative: the joint stops "
+                                 "before straight)."),
+                    "max": Field(Num(minimum=-60, maximum=90, unit="deg"), required=True,
+                                 description="Most convex (sagging) stop angle (deg)."),
+                }),
+                description="Stop angles printed to order (with a length range): where the masses "
+                "alone cannot hold a bend, the two ends that meet there get flush faces (setback 0) "
+                "whose top chamfers add up to the bend, so the joint rests on a stop exactly at it. "
+                "The bend of a stop is measured between the rods' chords (deg, > 0 sagging).",
             ),
             "section": Field(
                 Obj(

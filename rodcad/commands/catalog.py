@@ -159,11 +159,14 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
                 f"rod types {left!r} and {right!r} interfere at every angle: they cannot be joined (their ends "
                 "overlap whatever the bend; shorten the chamfers or add setback)")))
     computed = sum(1 for r in limits.values() if not r.cached)
-    lookup = _lookup_deviation(catalog, limits)
+    extended, sampled = _sampled_limits(catalog, jobs=jobs, cache=cache, progress=progress)
+    lookup = _lookup_deviation(extended, {**limits, **sampled})
+    lookup["sampled_printed_pairs"] = len(sampled)
     return {
         "catalog": catalog.name,
         "file": str(catalog.path) if catalog.path else None,
         "units": {"length": "mm", "mass": "g", "angle": "deg", "volume": "mm^3"},
+        "families": [_family_json(f, catalog) for f in catalog.families],
         "types": types,
         "pairs": pairs,
         "problems": problems,
@@ -171,6 +174,36 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
                   "seconds": round(time.perf_counter() - t0, 3)},
         "limit_lookup": lookup,
     }
+
+
+def _family_json(f: Any, catalog: Catalog) -> dict[str, Any]:
+    """A family's parameters: ranges for rods printed to order, else its fixed menu."""
+    if f.ranges is not None:
+        r = f.ranges
+        return {"name": f.name, "printed_to_order": True, "length": list(r.length),
+                "curvature": list(r.curvature), "stops_deg": list(r.stops) if r.stops else None,
+                "types": list(f.type_names)}
+    ts = [catalog[n] for n in f.type_names]
+    return {"name": f.name, "printed_to_order": False, "length": sorted({t.length for t in ts}),
+            "curvature": sorted({t.curvature for t in ts}), "stops_deg": None, "types": list(f.type_names)}
+
+
+def _family_lines(families: list[dict[str, Any]]) -> list[str]:
+    printed = [f for f in families if f["printed_to_order"]]
+    if not printed:
+        return []
+    lines = ["families printed to order (the design chooses every rod's own values within these ranges):"]
+    for f in printed:
+        lo, hi = f["length"]
+        k0, k1 = f["curvature"]
+        text = f"  {f['name']}: length {lo:g} to {hi:g} mm"
+        text += f", curvature {k0:g} to {k1:g} /mm" if k0 != k1 else (f", curvature {k0:g} /mm" if k0 else ", straight")
+        if f["stops_deg"]:
+            text += f", stops printed at any bend from {f['stops_deg'][0]:g} to {f['stops_deg'][1]:g} deg"
+        else:
+            text += ", no stops printed to order"
+        lines.append(text + f" (reference types {', '.join(f['types'])})")
+    return lines + [""]
 
 
 def _lookup_deviation(catalog: Catalog, limits: dict[tuple[str, str], Any]) -> dict[str, Any]:
@@ -182,7 +215,9 @@ def _lookup_deviation(catalog: Catalog, limits: dict[tuple[str, str], Any]) -> d
         if not r.assemblable:
             continue
         fast = joint_limits(catalog[left].geometry, catalog[right].geometry)
-        for side, (a, b) in enumerate(zip(fast, r.limits_deg)):
+        # the search's bound: a contact found at +-180 deg is nothing stopping before it
+        brep = [None if b is not None and abs(b) >= 180.0 - 10 * TOLERANCE_DEG else b for b in r.limits_deg]
+        for side, (a, b) in enumerate(zip(fast, brep)):
             if a is None or b is None:
                 if (a is None) != (b is None):
                     looser.append(f"{left} -> {right}")
@@ -223,6 +258,21 @@ def _compute_tables(catalog: Catalog, *, jobs: int | None, cache: DiskCache | No
     limits = all_pair_limits(catalog, jobs=jobs, cache=cache,
                              progress=_progress("pair limits") if progress else None)
     return masses, limits
+
+
+def _sampled_limits(catalog: Catalog, *, jobs: int | None, cache: DiskCache | None,
+                    progress: bool) -> tuple[Catalog, dict[tuple[str, str], Any]]:
+    """B-rep limits of rods printed to order sampled over their families' ranges
+    (:func:`rodcad.catalog.printed.sample_pairs`), with the catalog that knows them."""
+    from rodcad.catalog.limits import all_pair_limits
+    from rodcad.catalog.printed import sample_pairs
+
+    pairs = [p for f in catalog.printed_families for p in sample_pairs(catalog, f)]
+    if not pairs:
+        return catalog, {}
+    extended = catalog.with_types([t for p in pairs for t in p])
+    return extended, all_pair_limits(extended, pairs=pairs, jobs=jobs, cache=cache,
+                                     progress=_progress("sampled rods printed to order") if progress else None)
 
 
 def _limits_json(r: Any) -> list[float | None]:
@@ -270,6 +320,7 @@ def _format_report(report: dict[str, Any]) -> str:
         f"catalog {report['catalog']} ({report['file']}): {len(types)} rod types, "
         f"{len(report['pairs'])} joinable ordered pairs",
         "",
+        *_family_lines(report["families"]),
     ]
     header = ["type", "length", "solid mass", "mass range", "com (along, perp)", "limits with itself",
               "cavities", "balls"]
@@ -306,7 +357,9 @@ def _format_report(report: dict[str, Any]) -> str:
     lines.append(f"({stats['pairs_computed']} pairs computed, {stats['pairs_cached']} from cache, "
                  f"{stats['seconds']:.1f} s)")
     lk = report["limit_lookup"]
-    lines.append(f"fast joint-limit function against the B-rep search: worst deviation "
+    sampled = (f", {lk['sampled_printed_pairs']} of them rods printed to order sampled over their ranges"
+               if lk.get("sampled_printed_pairs") else "")
+    lines.append(f"fast joint-limit function against the B-rep search{sampled}: worst deviation "
                  f"{lk['worst_deviation_deg']:.4f} deg ({lk['worst_pair']})"
                  + (f"; allows more bend than the solids at {', '.join(lk['allows_more_bend_than_the_solids'])}"
                     if lk["allows_more_bend_than_the_solids"] else "; never more bend than the solids"))
@@ -327,6 +380,7 @@ def precompute(catalog: Catalog, *, jobs: int | None = None, progress: bool = Fa
         ``{"rodcad_seed_cache": 1, "catalog": NAME, "entries": {kind: {key:
         value}}}`` for the kinds of :data:`SEED_KINDS`.
     """
+    from rodcad.catalog.printed import mass_table
     from rodcad.fabrication.intervals import chain_intervals
 
     saved = {k: os.environ.get(k) for k in ("RODCAD_CACHE_DIR", "RODCAD_SEED_CACHE")}
@@ -337,6 +391,9 @@ def precompute(catalog: Catalog, *, jobs: int | None = None, progress: bool = Fa
         try:
             cache = DiskCache(tmp)
             _compute_tables(catalog, jobs=jobs, cache=cache, progress=progress)
+            for fam in catalog.printed_families:  # the mass tables of rods printed to order
+                mass_table(fam, jobs=jobs)
+            _sampled_limits(catalog, jobs=jobs, cache=cache, progress=progress)
             if progress:
                 print(f"rodcad: computing achievable mass intervals of {len(catalog)} types ...",
                       file=sys.stderr, flush=True)

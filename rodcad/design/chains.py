@@ -22,15 +22,17 @@ import numpy as np
 
 from rodcad.design.masses import ChainDesign, design_buildable, design_chain
 from rodcad.design.model import Constraints
+from rodcad.catalog.model import RodType
 from rodcad.design.plan import CatalogArrays, ChainPlan, plan_constrained
+from rodcad.design.printed import rods_of
 from rodcad.errors import InputError, Problem
 from rodcad.parallel import worker_pool
 from rodcad.progress import Progress
 
 __all__ = ["ChainSpec", "DesignedChain", "IntervalsFn", "design_chains"]
 
-#: Achievable mass intervals [(lo, hi), ...] (g) for each of the given type names.
-IntervalsFn = Callable[[Sequence[str]], Mapping[str, Sequence[tuple[float, float]]]]
+#: Achievable mass intervals [(lo, hi), ...] (g) of the given rod types, by name.
+IntervalsFn = Callable[[Sequence[RodType]], Mapping[str, Sequence[tuple[float, float]]]]
 
 
 @dataclass(frozen=True)
@@ -136,7 +138,10 @@ def design_chains(
         raise InputError(problems)
     ivs = None
     if intervals is not None:
-        ivs = dict(intervals(sorted({n for p in plans.values() for n in p.type_names})))
+        catalog = arrays.catalog.with_types(rods_of(plans.values())) if arrays.catalog is not None else None
+        names = sorted({n for p in plans.values() for n in p.type_names})
+        ivs = dict(intervals([catalog[n] if catalog is not None else arrays.types[arrays.index[n]]
+                              for n in names]))
     order = sorted(plans)
     tasks = [_Task(plans[i], method, seed, n_starts, g, ivs) for i in order]
     rods = sum(len(plans[i].type_names) for i in order)

@@ -5,6 +5,7 @@ A design file is YAML (units: mm, g, degrees)::
     design: 1                     # format version
     name: semicircle              # default output folder outputs/<name>
     catalog: pla-pinned           # shipped catalog name, or a path relative to this file
+                                  # (default: pla-parametric, rods printed to order)
     anchors: [[0, 0], [200, 0]]   # anchor A and anchor B (mm, y up)
     target:                       # the shape to hang in (for `build`)
       form: semicircle            # polyline, arc, semicircle, triangle, polygon, heart,
@@ -15,6 +16,7 @@ A design file is YAML (units: mm, g, degrees)::
       rods: 8                     # number of rods (default: what the chord walk gives)
       fixed:                      # rods whose type (and mass) is imposed
         - {index: 0, type: free-30, mass: 6.5}
+      joints: free                # no stops: weights alone (default: any)
     method: refine                # exact, refine (default), guided-pso, pso
     seed: 0
     tolerance: 0.01               # optional: largest acceptable error / span
@@ -44,11 +46,19 @@ from rodcad.catalog.model import Catalog
 from rodcad.errors import Problem
 from rodcad.yamlspec import Checked
 
-__all__ = ['DESIGN_FORMAT', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
+__all__ = ['DEFAULT_CATALOG', 'DESIGN_FORMAT', 'JOINT_MODES', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
 
 
 #: Design file format this rodcad reads.
 DESIGN_FORMAT = 1
+
+
+#: The shipped catalog a design file that names none uses: PLA rods printed to order.
+DEFAULT_CATALOG = "pla-parametric"
+
+
+#: ``constraints.joints``: 'any' lets joints rest on stops, 'free' forbids stops.
+JOINT_MODES = ("any", "free")
 
 
 #: Inverse-design methods (mirrors optimize.inverse.METHODS).
@@ -80,6 +90,8 @@ class Constraints:
         rods: number of rods (None: what the chord walk gives).
         preferred_length: the length to use most (mm; None: chosen by the walk).
         fixed: imposed rods.
+        joints: 'any' (stops where the masses cannot hold a bend) or 'free' (no stops:
+            weights alone, the best fit where they cannot hold the shape).
     """
 
     types: tuple[str, ...] | None = None
@@ -87,6 +99,7 @@ class Constraints:
     rods: int | None = None
     preferred_length: float | None = None
     fixed: tuple[FixedRod, ...] = ()
+    joints: str = "any"
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,9 @@ from optimize.discretize import Discretization, discretize
 from rodcad.catalog.limits import all_pair_limits
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
+from rodcad.catalog.printed import mass_table
 from rodcad.design.model import Constraints, FixedRod
+from rodcad.design.printed import PrintedFamily, PrintedPlan, count_for, plan_printed
 from rodcad.errors import InputError, Problem
 
 __all__ = ['CatalogArrays', 'ChainPlan', 'catalog_arrays', 'plan_chain', 'plan_constrained', 'STOP_REACH']
@@ -53,7 +55,10 @@ class ChainPlan:
             or concave bend with no stop there, or a bend beyond every limit).
         added_stops: joints put on a stop (at a sagging or straight bend) because the masses
             alone could not hold the target within their ranges; the joints were moved onto
-            the stop angles (see ``plan_chain(add_stops=...)``).
+            the stop angles (see ``plan_chain(add_stops=...)``); for rods printed to order,
+            every joint resting on a stop printed at its bend.
+        rods: the rods made to order (rods printed to order), in chain order; empty for a
+            catalog's fixed menu.
     """
 
     curve: np.ndarray
@@ -65,6 +70,7 @@ class ChainPlan:
     joint_mismatch: np.ndarray = field(default_factory=lambda: np.zeros(0))
     unmet_joints: list[int] = field(default_factory=list)
     added_stops: list[int] = field(default_factory=list)
+    rods: list[RodType] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -78,6 +84,8 @@ class CatalogArrays:
         mass_bounds: (T, 2) achievable mass range [m_min, m_max] (g).
         pair_limits: (T, T, 2) joint limits (rad) of type i followed by type j;
             (nan, nan) where the pair cannot be joined, +-inf on a side nothing stops.
+        catalog: the catalog.
+        printed: its families printed to order, with their mass tables.
     """
 
     types: tuple[RodType, ...]
@@ -85,6 +93,8 @@ class CatalogArrays:
     com: np.ndarray
     mass_bounds: np.ndarray
     pair_limits: np.ndarray
+    catalog: Catalog | None = None
+    printed: tuple[PrintedFamily, ...] = ()
 
     @property
     def names(self) -> list[str]:
@@ -124,10 +134,11 @@ def catalog_arrays(catalog: Catalog, *, jobs: int | None = None,
                 "whatever the bend; shorten the chamfers or add setback)"))
     if problems:
         raise InputError(problems)
+    printed = tuple(PrintedFamily(f, mass_table(f, jobs=jobs)) for f in catalog.printed_families)
     return CatalogArrays(types, np.array([ty.length for ty in types], dtype=float),
                          np.array([mass_info(ty).com for ty in types], dtype=float).reshape(-1, 2),
                          np.array([mass_info(ty).mass_range for ty in types], dtype=float).reshape(-1, 2),
-                         lim)
+                         lim, catalog, printed)
 
 
 def plan_chain(
@@ -361,6 +372,9 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
     """
     c = constraints
     who = f"{label}: " if label else ""
+    printed = _printed_family(arrays, c)
+    if printed is not None:
+        return _plan_printed(curve, c, arrays, printed, problem, who)
     candidates: list[float | None] = [c.preferred_length]
     if c.rods is not None and c.preferred_length is None:
         allowed = {float(x) for x, t in zip(arrays.lengths, arrays.types) if c.types is None or t.name in c.types}
@@ -386,6 +400,55 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
     if c.fixed:
         _apply_fixed(p, c.fixed, arrays, problem, who)
     return p
+
+
+def _printed_family(arrays: CatalogArrays, c: Constraints) -> PrintedFamily | None:
+    """The family printed to order the design uses: the first one the constraints allow
+    (``types`` naming its reference rods), or None for the catalog's fixed menu."""
+    for pf in arrays.printed:
+        if c.types is None or any(n in pf.family.type_names for n in c.types):
+            return pf
+    return None
+
+
+def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: PrintedFamily,
+                  problem: Callable[[str, str], Problem], who: str) -> ChainPlan:
+    """Rods printed to order on the target, with the constraints that apply to them."""
+    problems = []
+    r = pf.family.ranges
+    assert r is not None and arrays.catalog is not None
+    span = f"{r.length[0]:g} to {r.length[1]:g} mm"
+    if c.lengths is not None:
+        problems.append(problem("constraints.lengths", f"{who}family {pf.family.name!r} is printed to order "
+                                f"(any length from {span}): use preferred_length or rods instead"))
+    if c.fixed:
+        problems.append(problem("constraints.fixed", f"{who}family {pf.family.name!r} is printed to order: every "
+                                "rod is made for its place, so there are no catalog rods to fix"))
+    if c.preferred_length is not None and not r.length[0] <= c.preferred_length <= r.length[1]:
+        problems.append(problem("constraints.preferred_length", f"{who}{c.preferred_length:g} mm is outside the "
+                                f"lengths family {pf.family.name!r} prints ({span})"))
+    if problems:
+        raise InputError(problems)
+    free = c.joints == "free"
+    try:
+        if c.rods is not None:
+            lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free)
+            if lp is None:
+                raise InputError([problem("constraints.rods", f"{who}{c.rods} rods of {span} do not lay on this "
+                                          "target with every corner a joint; change the rod count")])
+        else:
+            lp = plan_printed(curve, arrays.catalog, pf, preferred_length=c.preferred_length, stops_allowed=not free)
+    except ValueError as err:
+        raise InputError([problem("target", f"{who}{err}")]) from None
+    return _from_printed(curve, lp)
+
+
+def _from_printed(curve: np.ndarray, lp: PrintedPlan) -> ChainPlan:
+    n = len(lp.rods)
+    mismatch = np.zeros(max(n - 1, 0))
+    mismatch[lp.unmet] = np.inf
+    return ChainPlan(np.asarray(curve, float), lp.discretization, [t.name for t in lp.rods], lp.problem, 0.0,
+                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods))
 
 
 def _apply_fixed(p: ChainPlan, fixed: Sequence[FixedRod], arrays: CatalogArrays,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rodcad.design.model import DESIGN_FORMAT, METHOD_NAMES
+from rodcad.design.model import DEFAULT_CATALOG, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
 from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, Str
 
 #: Longest design, catalog or family name (it names folders and files).
@@ -150,9 +150,9 @@ def design_spec() -> Obj:
             "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT, max_length=MAX_NAME), required=True,
                           description="Design name; the default output folder is outputs/<name>."),
             "description": Field(Str(), description="Free text."),
-            "catalog": Field(Str(), required=True,
+            "catalog": Field(Str(), default=DEFAULT_CATALOG,
                              description="Rod catalog: a shipped catalog's name (e.g. pla-pinned) or a "
-                             "path relative to this file."),
+                             f"path relative to this file (default: {DEFAULT_CATALOG}, rods printed to order)."),
             "anchors": Field(ListOf(_point(), min_items=2),
                              description="Anchor A and anchor B: [[x, y], [x, y]] in mm, y up "
                              "(required unless the design is a chandelier)."),
@@ -174,6 +174,10 @@ def design_spec() -> Obj:
                         "preferred_length": Field(Num(exclusive_minimum=0, unit="mm"),
                                                   description="The rod length to use most (mm)."),
                         "fixed": Field(ListOf(fixed), description="Rods whose type (and mass) is imposed."),
+                        "joints": Field(Str(choices=JOINT_MODES), default="any",
+                                        description="'free' forbids every stop: the masses alone hold "
+                                        "the shape (the best fit where they cannot); 'any' (default) "
+                                        "lets joints rest on stops where the masses cannot hold a bend."),
                     },
                     description="Optional restrictions on the designed chain.",
                 )

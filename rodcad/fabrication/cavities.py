@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rodcad.cad.collision import Clearance
+from rodcad.catalog.fastgeom import RodClearance
 from rodcad.cad.solids import mass_properties
 from rodcad.fabrication.layout import (
     MIN_CAVITY_RADIUS,
@@ -106,7 +106,7 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
 
     solid = type_solid(rod)
     com = np.array(mass_properties(solid).center)
-    clearance = Clearance(solid)
+    clearance = RodClearance(rod.geometry)
     lo, hi = (np.array(b) for b in clearance.bounds)
     rng = np.random.default_rng([seed, 0 if symmetry == "mirror-xyz" else 1])
     dom_lo = lo.copy()
@@ -241,7 +241,7 @@ def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
     which ``skip(radius)`` is true are passed over."""
     solid = type_solid(rod)
     com = mass_properties(solid).center
-    clr = Clearance(solid)
+    clr = RodClearance(rod.geometry)
 
     def clearance(p: np.ndarray) -> np.ndarray:
         return np.minimum(clr(p), silo_distance(p, sockets, socket_r))
@@ -261,7 +261,7 @@ def socket_layout(rod: RodType) -> Any:
     if rod.balls is None:
         return SphereLayout.empty()
     solid = type_solid(rod)
-    clearance = Clearance(solid)
+    clearance = RodClearance(rod.geometry)
     lift = ball_offset(rod.balls.socket_diameter / 2, rod.balls.mass, rod.material.density)
     return max_ball_layout(clearance, clearance.bounds, mass_properties(solid).center, rod.balls.socket_diameter,
                            rod.material.min_wall, void="silo", raise_by=lift)

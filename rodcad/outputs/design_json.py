@@ -107,7 +107,9 @@ def design_json(r) -> dict[str, Any]:
     rods = []
     for i, name in enumerate(r.type_names):
         rod = _rod_json(i, d.catalog[name], r.lengths[i], r.masses[i], r.com[i], r.limits, r.n)
-        rod["mass_range"] = [float(v) for v in mass_info(d.catalog[name]).mass_range]
+        printed = r.plan is not None and r.plan.rods  # rods printed to order: their own ranges
+        bounds = r.plan.problem.mass_bounds[i] if printed else mass_info(d.catalog[name]).mass_range
+        rod["mass_range"] = [float(v) for v in bounds]
         if r.fabrication is not None:
             f = r.fabrication.rods[i]
             rod["fabrication"] = {

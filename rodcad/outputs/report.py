@@ -6,9 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from optimize.discretize import curve_distance
+import numpy as np
+
 from rodcad import __version__
-from rodcad.outputs.design_json import bill_of_materials
+from rodcad.outputs.design_json import bill_of_materials, curve_error
 
 __all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
 
@@ -64,8 +65,11 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         disc = data["discretisation"]
         add(f"- Discretisation (rods laid on the curve): curve error {disc['curve_error_mm']:.3g} mm, "
             f"stop mismatch {disc['stop_mismatch_deg']:.3g} deg (reported apart from the physics error)")
-        add(f"- The simulated chain hangs within {disc['hanging_curve_error_mm']:.3g} mm of the target curve "
-            "(both errors together, everywhere along the rods)")
+        if "curve" in data:
+            cv = data["curve"]
+            add(f"- The hanging rods' centrelines (curved bodies as printed) are within {cv['max_mm']:.3g} mm of "
+                f"the target curve, {100 * cv['rel_span']:.3g} % of the span (both errors together, everywhere "
+                "along the rods)")
     if "as_built" in data:
         add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
     if "inverse" in data:
@@ -179,9 +183,11 @@ def summary_text(r, outdir: Path | None) -> str:
     if r.distance is not None:
         L.append(f"  shape error   {_fmt_err(r.distance.as_dict())}")
     if r.plan is not None:
-        hang = curve_distance(r.plan.curve, r.equilibrium.points)
-        L.append(f"  vs the curve  hangs within {hang:.3g} mm of the target curve "
-                 f"(rods laid on it within {r.plan.discretization.curve_error:.3g} mm)")
+        curvature = np.array([r.design.catalog[n].curvature for n in r.type_names])
+        cv = curve_error(r.plan.curve, r.equilibrium.points, curvature, r.design.span)
+        L.append(f"  vs the curve  the rods' centrelines hang within {cv['max_mm']:.3g} mm of the target curve "
+                 f"({100 * cv['rel_span']:.3g} % of the span)"
+                 + (f"; {len(r.plan.added_stops)} joint(s) on stops" if r.plan.added_stops else ""))
     if r.as_built is not None:
         L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
     eq = r.equilibrium

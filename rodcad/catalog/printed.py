@@ -1,0 +1,158 @@
+"""Numbers of rods printed to order, as fast functions of their parameters.
+
+A family printed to order (``length: {min, max}``, see :class:`rodcad.catalog.model.Ranges`)
+makes a different rod for every place of every design, so the planner needs each rod's
+centre of mass, mass range and joint limits in milliseconds, not from a B-rep search:
+
+* volume and centre of mass: :func:`rodcad.catalog.fastgeom.rod_mass_properties` (the solid's
+  layers integrated in the chain plane, checked against the B-rep in the tests);
+* mass range: a table over the family's length range (:func:`mass_table`: the exact
+  :func:`rodcad.catalog.massrange.mass_info` of the family's straight rod every
+  :data:`TABLE_STEP` mm, disk-cached and shipped with the catalog's seed), read
+  conservatively: the plastic cavities can remove and the metal the balls can add are each
+  the smaller of the two table lengths around the rod's length (ball counts only grow with
+  length), and a rod whose shape differs from the table's (curved, or with stop ends) keeps
+  :data:`SHAPE_MARGIN` of them;
+* joint limits: :func:`rodcad.catalog.jointlimits.joint_limits`; a stop printed to order
+  sits where two flush faces meet, at the sum of their top chamfers and of the rods' half
+  arc angles (:func:`stop_chamfer`).
+
+What the rods really reach is known once they are built (``rodcad build`` re-designs the
+masses on the achievable intervals of the real solids and re-simulates the chain with them).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rodcad.catalog.fastgeom import rod_mass_properties
+from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curvature
+
+__all__ = ["MassTable", "RodNumbers", "SHAPE_MARGIN", "TABLE_STEP", "mass_table", "rod_numbers",
+           "sample_pairs", "stop_chamfer", "table_lengths"]
+
+#: Spacing of the lengths at which a family's mass range is computed on the solids (mm).
+TABLE_STEP = 5.0
+
+#: Share of the table's removable and addable mass a rod of another shape than the table's
+#: straight rod is credited with (curved bodies and stop ends leave a little less room).
+SHAPE_MARGIN = 0.9
+
+
+@dataclass(frozen=True)
+class MassTable:
+    """A family's mass range along its length range (straight rods, the family's ends).
+
+    Attributes:
+        lengths: (K,) table lengths (mm), from the range's min to its max.
+        removable: (K,) fraction of the solid's mass the cavities can remove.
+        addable: (K,) mass the balls can add, less the plastic their sockets take (g).
+    """
+
+    lengths: np.ndarray
+    removable: np.ndarray
+    addable: np.ndarray
+
+    def at(self, length: float) -> tuple[float, float]:
+        """(removable fraction, addable g) for a rod of this length: the smaller of the two
+        table entries around it."""
+        k = int(np.clip(np.searchsorted(self.lengths, length, side="right") - 1, 0, self.lengths.size - 1))
+        j = min(k + 1, self.lengths.size - 1)
+        if self.lengths[k] >= length - 1e-9:
+            j = k
+        return float(min(self.removable[k], self.removable[j])), float(min(self.addable[k], self.addable[j]))
+
+
+@dataclass(frozen=True)
+class RodNumbers:
+    """What the planner needs of one rod.
+
+    Attributes:
+        solid_mass: the plain solid's mass (g).
+        com: centre of mass (along, perp) in the rod frame (mm).
+        mass_range: (m_min, m_max) (g).
+    """
+
+    solid_mass: float
+    com: tuple[float, float]
+    mass_range: tuple[float, float]
+
+
+def table_lengths(family: Family) -> list[float]:
+    """The lengths of a family's mass table: every TABLE_STEP mm and the range's ends."""
+    assert family.ranges is not None
+    lo, hi = family.ranges.length
+    n = max(1, math.ceil((hi - lo) / TABLE_STEP - 1e-9))
+    return [float(x) for x in np.linspace(lo, hi, n + 1)]
+
+
+def mass_table(family: Family, *, jobs: int | None = None) -> MassTable:
+    """The family's mass table from the solids (disk-cached per rod)."""
+    from dataclasses import replace
+
+    from rodcad.catalog.massrange import mass_infos
+
+    if family.template is None:
+        raise ValueError(f"rod family {family.name!r} is not printed to order")
+    t = family.template
+    rods = [replace(t, name=f"{family.name}-table-{x:g}", length=x, curvature=0.0,
+                    geometry=replace(t.geometry, length=x, curvature=0.0)) for x in table_lengths(family)]
+    by_name = mass_infos(rods, jobs=jobs)
+    infos = [by_name[r.name] for r in rods]
+    removable = np.array([(i.solid_mass - i.m_min) / i.solid_mass for i in infos])
+    addable = np.array([i.m_max - i.solid_mass for i in infos])
+    return MassTable(np.array([r.length for r in rods]), removable, addable)
+
+
+def _plain(g: RodGeometry, template: RodType) -> bool:
+    t = template.geometry
+    return g.curvature == 0 and g.first == t.first and g.second == t.second
+
+
+def rod_numbers(rod: RodType, table: MassTable, template: RodType) -> RodNumbers:
+    """Solid mass, centre of mass and mass range of a rod printed to order."""
+    volume, (cx, cy, _) = rod_mass_properties(rod.geometry)
+    solid = volume * rod.material.density / 1000.0
+    removable, addable = table.at(rod.length)
+    if not _plain(rod.geometry, template):
+        removable, addable = removable * SHAPE_MARGIN, addable * SHAPE_MARGIN
+    return RodNumbers(solid, (cx, cy), (solid * (1 - removable), solid + max(addable, 0.0)))
+
+
+def stop_chamfer(bend_deg: float, left: RodGeometry, right: RodGeometry) -> float:
+    """The top chamfer (deg) of each of the two flush ends (setback 0) that meet at a
+    bend of ``bend_deg`` between the chords of ``left`` and ``right``: the faces meet when
+    the tangents have turned by the sum of the chamfers, and the tangents turn by the
+    bend less the two half arc angles at the joint."""
+    return (bend_deg - left.half_angle_deg - right.half_angle_deg) / 2
+
+
+def sample_pairs(catalog: Catalog, family: Family) -> list[tuple[RodType, RodType]]:
+    """Rods of a family printed to order at the ends of its ranges, in joined pairs: two free
+    ends, top stops at the ends of the stop range, bottom stops, a straight stop; where the
+    fast joint-limit function is compared with the B-rep search (``rodcad catalog check``)."""
+    r = family.ranges
+    assert r is not None
+    (l0, l1), (k0, k1) = r.length, r.curvature
+
+    def rod(length: float, k: float, **ends: float) -> RodType:
+        k = math.copysign(min(abs(k), max_curvature(length)), k)
+        return catalog.rod(family.name, length, k, **ends)
+
+    def chamfer(s: float, a: tuple[float, float], b: tuple[float, float]) -> float:
+        c = stop_chamfer(s, rod(*a).geometry, rod(*b).geometry)
+        return min(max(c, r.stops[0] / 2), r.stops[1] / 2) if r.stops else c
+
+    pairs = [(rod(l0, k0), rod(l1, k1)), (rod(l1, k1), rod(l0, 0.0))]
+    if r.stops is not None:
+        for s, a, b in ((r.stops[1], (l0, k1), (l1, 0.0)), (r.stops[0], (l1, 0.0), (l0, k0)),
+                        (0.0, (l0, 0.0), (l1, 0.0))):
+            c = chamfer(s, a, b)
+            pairs.append((rod(*a, second_stop=c), rod(*b, first_stop=c)))
+        for s, a, b in ((r.stops[1] / 2, (l1, k1), (l0, k1)), (r.stops[0] / 2, (l0, 0.0), (l1, k0))):
+            c = -chamfer(s, a, b)
+            pairs.append((rod(*a, second_under=c), rod(*b, first_under=c)))
+    return pairs

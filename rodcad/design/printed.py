@@ -1,0 +1,319 @@
+"""Rods printed to order laid on a target: every rod gets its own length, curvature, stop
+ends and (next, :mod:`rodcad.design.masses`) mass.
+
+    curve + a family printed to order
+      -> joints on the curve     equal chords per piece between corners, every corner a
+                                 joint; a polyline whose segments split into rods of the
+                                 family's lengths comes back exactly (its vertices are joints)
+      -> curvatures              each rod's body follows the curve between its joints
+                                 (the arc through both pins and the curve mid-chord)
+      -> stops                   concave and straight bends need a stop; where the masses
+                                 cannot hold a sagging bend within their ranges, the fewest
+                                 stops that let them (a linear program,
+                                 :func:`optimize.stops.needed_stops`), each printed at the
+                                 bend it holds: two flush ends whose chamfers add up to it
+      -> the inverse problem     centres of mass, mass ranges and joint limits of these
+                                 very rods (:mod:`rodcad.catalog.printed`, no B-rep search)
+
+``constraints: {joints: free}`` forbids stops: the masses alone, the best fit where they
+cannot hold the shape.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import numpy as np
+
+from optimize import InverseProblem
+from optimize.discretize import centerline, curve_distance, discretize, fit_curvatures
+from optimize.statics import exact_masses
+from optimize.stops import needed_stop_sides
+from rodcad.catalog.jointlimits import joint_limits
+from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curvature
+from rodcad.catalog.printed import MassTable, rod_numbers
+
+__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "count_for", "plan_printed", "rods_of"]
+
+#: A stop printed to order must stop, by the rods' outlines, within this of the bend it is
+#: made for (deg); it is designed exactly at the bend.
+STOP_SNAP_DEG = 0.05
+
+#: Rounds of adding the stops the masses need (each round re-derives the rods' centres of
+#: mass and ranges with their new ends).
+STOP_ROUNDS = 3
+
+
+@dataclass(frozen=True)
+class PrintedFamily:
+    """A family printed to order with its mass table (from the solids, cached)."""
+
+    family: Family
+    table: MassTable
+
+
+@lru_cache(maxsize=4096)
+def _limits(left: RodGeometry, right: RodGeometry) -> tuple[float, float]:
+    """Joint limits (deg) of two rods, +-inf where nothing stops."""
+    lo, hi = joint_limits(left, right)
+    return (-math.inf if lo is None else lo, math.inf if hi is None else hi)
+
+
+#: Rods whose parameters (length mm, curvature 1/mm, setbacks mm, chamfers deg) agree to
+#: these are made identical (a symmetric target's mirror images differ by round-off and by
+#: the curve's sampling): one solid to build, one name.
+SAME_ROD = (1e-7, 1e-7, 1e-9, 1e-6, 1e-6, 1e-9, 1e-6, 1e-6)
+
+
+def _params(t: RodType) -> tuple[float, ...]:
+    g = t.geometry
+    return (g.length, g.curvature, g.first.setback, g.first.top_chamfer, g.first.bottom_chamfer,
+            g.second.setback, g.second.top_chamfer, g.second.bottom_chamfer)
+
+
+def _unique(rods: list[RodType], catalog: Catalog) -> list[RodType]:
+    """Rods equal to round-off made one; distinct rods whose rounded names agree renamed."""
+    out: list[RodType] = []
+    by_name: dict[str, RodType] = {t.name: t for t in catalog.types}
+    for t in rods:
+        p = _params(t)
+        same = next((u for u in out if all(abs(a - b) <= tol for a, b, tol in zip(p, _params(u), SAME_ROD))), None)
+        if same is not None:
+            out.append(same)
+            continue
+        name, k = t.name, 2
+        while name in by_name and by_name[name] != t:
+            name, k = f"{t.name}.{k}", k + 1
+        if name != t.name:
+            t = replace(t, name=name)
+        by_name[name] = t
+        out.append(t)
+    return out
+
+
+@dataclass
+class PrintedPlan:
+    """Rods printed to order laid on a target.
+
+    Attributes:
+        discretization: joints on the curve.
+        rods: the rods made to order, in chain order (a rod repeated where identical).
+        problem: the inverse problem with these rods' numbers.
+        notes: what the plan could not do, in words.
+        unmet: joints whose bend these rods cannot hold.
+        stops: joints resting on stops printed at their bends.
+    """
+
+    discretization: object
+    rods: list[RodType]
+    problem: InverseProblem
+    notes: list[str]
+    unmet: list[int]
+    stops: list[int]
+
+
+@dataclass
+class _Laid:
+    rods: list[RodType]
+    problem: InverseProblem
+    notes: list[str]
+    unmet: list[int]
+
+
+#: Stop sides: a hi stop keeps the joint from bending further (top faces meet), a lo stop
+#: from straightening further (bottom faces meet).
+HI, LO = -1, 1
+
+
+def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
+         phi: np.ndarray, stops: dict[int, tuple[float, int]]) -> _Laid:
+    """The rods for given stops (joint -> (bend deg, side)) and their inverse problem."""
+    fam = pf.family
+    r = fam.ranges
+    assert fam.template is not None and r is not None
+    n = lengths.size
+    kappa = kappa.copy()
+
+    def tangent_bends() -> dict[int, float]:
+        psi = np.degrees(np.arcsin(np.clip(kappa * lengths / 2, -1, 1)))
+        return {j: s - psi[j] - psi[j + 1] for j, (s, _) in stops.items()}
+
+    turn = tangent_bends()
+    while r.stops is not None and (bent := [j for j, t in turn.items() if not r.stops[0] <= t <= r.stops[1]]):
+        # faces the family cannot print: the rods beside such a stop are bent less, down to
+        # straight (a stop between straight rods is half the bend on each end, in the range)
+        for j in bent:
+            kappa[[j, j + 1]] = np.where(np.abs(kappa[[j, j + 1]]) > 1e-4, kappa[[j, j + 1]] * 0.8, 0.0)
+        turn = tangent_bends()
+    top = {j: turn[j] / 2 for j, (_, side) in stops.items() if side == HI}
+    under = {j: -turn[j] / 2 for j, (_, side) in stops.items() if side == LO}
+    rods = _unique([catalog.rod(fam.name, float(lengths[i]), float(kappa[i]), first_stop=top.get(i - 1),
+                                second_stop=top.get(i), first_under=under.get(i - 1), second_under=under.get(i))
+                    for i in range(n)], catalog)
+    nums = [rod_numbers(t, pf.table, fam.template) for t in rods]
+    limits = np.zeros((max(n - 1, 0), 2))
+    notes, unmet = [], []
+    for j in range(n - 1):
+        lo, hi = _limits(rods[j].geometry, rods[j + 1].geometry)
+        bend = math.degrees(phi[j])
+        if j in stops:
+            s, side = stops[j]
+            got = hi if side == HI else lo
+            if abs(got - s) > STOP_SNAP_DEG:
+                notes.append(f"joint {j}: the stop printed for {s:.2f} deg stops at {got:.2f} deg by the rods' "
+                             "outlines")
+                unmet.append(j)
+            # designed flush: the faces meet exactly at the bend
+            lo, hi = (lo, s) if side == HI else (s, hi)
+        elif not lo < bend < hi:
+            notes.append(f"joint {j} bends {bend:.1f} deg, beyond what the family's free ends allow "
+                         f"([{lo:.1f}, {hi:.1f}] deg)")
+            unmet.append(j)
+        limits[j] = np.radians([lo, hi])
+    problem = InverseProblem(target=points, lengths=lengths,
+                             mass_bounds=np.array([x.mass_range for x in nums], float),
+                             com=np.array([x.com for x in nums], float), limits=limits)
+    return _Laid(rods, problem, notes, unmet)
+
+
+#: Without a preferred length, the longest rods whose centrelines follow the curve within
+#: this fraction of the span (else the closest fit of the lengths tried).
+FOLLOW_REL = 1e-3
+
+#: Preferred lengths tried, from the range's longest to its shortest (geometric steps).
+FOLLOW_TRIES = 10
+
+
+def _laid_on(curve: np.ndarray, r, preferred: float | None):
+    """Joints and curvatures: at the preferred length, or the longest rods that follow the
+    curve within FOLLOW_REL of the span (the rods' arcs against the curve)."""
+    kmax = max(abs(r.curvature[0]), abs(r.curvature[1]))
+
+    def lay(pref: float | None):
+        disc = discretize(curve, list(r.length), length_range=r.length, preferred=pref)
+        n = disc.lengths.size
+        kappa = np.clip(fit_curvatures(curve, disc.points, max_curvature=kmax) if kmax else np.zeros(n),
+                        *r.curvature)
+        arc = np.array([max_curvature(x) for x in disc.lengths])  # at most a 120 deg arc per rod
+        return disc, np.clip(kappa, -arc, arc)
+
+    if preferred is not None:
+        return lay(preferred)
+    span = max(float(np.hypot(*(curve[-1] - curve[0]))), 1e-9)
+    best = None
+    for pref in np.geomspace(r.length[1], r.length[0], FOLLOW_TRIES):
+        try:
+            disc, kappa = lay(float(pref))
+        except ValueError:
+            continue
+        err = curve_distance(curve, centerline(disc.points, kappa)) / span
+        if best is None or err < best[0] - 1e-12:
+            best = (err, disc, kappa)
+        if err <= FOLLOW_REL:
+            return disc, kappa
+    if best is None:
+        return lay(None)  # raises the discretisation's own explanation
+    return best[1], best[2]
+
+
+def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
+                 stops_allowed: bool = True):
+    """Lay rods printed to order on a target (see the module's docstring).
+
+    Args:
+        curve: (M, 2) target polyline from A to B (mm).
+        catalog: the catalog (rods are made with :meth:`Catalog.rod`).
+        pf: the family and its mass table.
+        preferred_length: the rod length to aim at (default: eight rods on the curve,
+            within the family's range).
+        stops_allowed: False forbids stops (``constraints: {joints: free}``).
+
+    Returns:
+        The :class:`PrintedPlan`.
+
+    Raises:
+        ValueError: the rods cannot be laid on the curve (explained).
+    """
+    fam = pf.family
+    r = fam.ranges
+    assert r is not None
+    curve = np.asarray(curve, float)
+    disc, kappa = _laid_on(curve, r, preferred_length)
+    points, lengths = disc.points, disc.lengths
+    n = lengths.size
+    d = np.diff(points, axis=0)
+    phi = np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0])))
+    deg = np.degrees(phi)
+
+    def printable(j: int) -> bool:
+        return r.stops is not None and r.stops[0] - 1e-9 <= deg[j] <= r.stops[1] + 1e-9
+
+    stops: dict[int, tuple[float, int]] = {}
+    notes: list[str] = []
+    beyond = []
+    for j in np.flatnonzero(phi <= 0):
+        if stops_allowed and printable(int(j)):
+            stops[int(j)] = (float(deg[j]), HI)
+        else:
+            beyond.append(int(j))
+    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops)
+    needed_more = False
+    if stops_allowed and r.stops is not None:
+        for _ in range(STOP_ROUNDS):
+            if exact_masses(laid.problem)[2]:
+                break
+            cand = [j for j in range(n - 1) if j not in stops and printable(j)]
+            need = needed_stop_sides(laid.problem, cand)
+            if need is None or need[0].size == 0:
+                needed_more = need is None
+                break
+            for j, side in zip(*need):
+                stops[int(j)] = (float(deg[j]), int(side))
+            laid = _lay(catalog, pf, points, lengths, kappa, phi, stops)
+    if beyond:
+        why = ("stops are forbidden (constraints.joints: free)" if not stops_allowed else
+               "the family prints no stops" if r.stops is None else
+               f"the family prints stops from {r.stops[0]:g} to {r.stops[1]:g} deg")
+        notes.append(f"joint(s) {beyond} bend {', '.join(f'{deg[j]:.1f}' for j in beyond)} deg, which only a stop "
+                     f"can hold, but {why}; the masses fit the target as well as they can")
+    if stops:
+        notes.append(f"{len(stops)} joint(s) rest on stops printed at the bend they hold: "
+                     + ", ".join(f"{j} ({stops[j][0]:.2f} deg{'' if stops[j][1] == HI else ', kept from straightening'})"
+                                 for j in sorted(stops)))
+    if needed_more:
+        notes.append("even with stops at every joint the family can print, the masses cannot hold this shape "
+                     "within their ranges; the masses fit it as well as they can")
+    notes += laid.notes
+    return PrintedPlan(disc, laid.rods, laid.problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops))
+
+
+def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int, *, stops_allowed: bool = True):
+    """A plan with exactly ``rods`` rods, or None: the preferred length is set so that the
+    curve takes that many (then nudged)."""
+    from optimize.discretize import resample
+
+    c = resample(np.asarray(curve, float), 2000)
+    total = float(np.sum(np.hypot(*np.diff(c, axis=0).T)))
+    r = pf.family.ranges
+    assert r is not None
+    for k in (0.0, 0.25, -0.25, 0.5, -0.5, 0.75, -0.75):
+        pref = float(np.clip(total / (rods + k), *r.length))
+        try:
+            p = plan_printed(curve, catalog, pf, preferred_length=pref, stops_allowed=stops_allowed)
+        except ValueError:
+            continue
+        if len(p.rods) == rods:
+            return p
+    return None
+
+
+def rods_of(plans: Sequence) -> list[RodType]:
+    """The rods made to order of some chain plans (in order, each name once)."""
+    out: dict[str, RodType] = {}
+    for p in plans:
+        for t in p.rods:
+            out.setdefault(t.name, t)
+    return list(out.values())

@@ -77,8 +77,14 @@ def _walk(curve: np.ndarray, s: np.ndarray, start_s: float, lengths) -> tuple[np
         # up to round-off is the joint itself (a polyline whose segments are multiples of the
         # rod length keeps its vertices as joints on every CPU, whatever the last digits)
         tol = VERTEX_TOL * l
-        dist = np.hypot(*(curve[i + 1:] - p).T)
+        # the first such point lies at least l further along the curve; look within a window
+        # of a few rod lengths first (the same point: the first one), then beyond
+        end = int(np.searchsorted(s, cur_s + 4 * l + tol, side="right")) + 1
+        dist = np.hypot(*(curve[i + 1:end] - p).T)
         j = np.flatnonzero(dist >= l - tol)
+        if j.size == 0 and end < len(curve):
+            dist = np.hypot(*(curve[i + 1:] - p).T)
+            j = np.flatnonzero(dist >= l - tol)
         if j.size and abs(dist[j[0]] - l) <= tol:
             j = int(j[0]) + i + 1
             p = curve[j].copy()
@@ -152,7 +158,11 @@ def _equal_chords(curve, s, s0, s1, lo, hi, preferred) -> list[float] | None:
 
     arc = s1 - s0
     best = None
-    for n in range(max(1, math.floor(arc / hi)), min(math.ceil(arc / lo) + 2, MAX_RODS + 1)):
+    counts = range(max(1, math.floor(arc / hi)), min(math.ceil(arc / lo) + 2, MAX_RODS + 1))
+    # n chords of length c span a little less than n c of arc: try the counts whose arc / n is
+    # nearest the preferred length first, and stop once a few have landed
+    landed = 0
+    for n in sorted(counts, key=lambda n: (abs(arc / n - preferred), n)):
         a, b = landing(lo, n), landing(hi, n)
         if a > 0 or b < 0:
             continue
@@ -160,7 +170,14 @@ def _equal_chords(curve, s, s0, s1, lo, hi, preferred) -> list[float] | None:
         key = (abs(c - preferred), n)
         if best is None or key < best[0]:
             best = (key, [c] * n)
+        landed += 1
+        if landed >= EQUAL_CHORD_TRIES:
+            break
     return None if best is None else best[1]
+
+
+#: Rod counts of one piece whose equal chords are solved for (nearest the preferred length).
+EQUAL_CHORD_TRIES = 3
 
 
 def _spread(counts, allowed, preferred) -> list[float]:

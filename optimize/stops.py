@@ -73,6 +73,10 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
     return np.sort(stops[new][mu > rel_tol * max(mu.max(), 1e-300)]).astype(int)
 
 
+#: Reweighted L1 rounds of :func:`needed_stop_sides` (the fewest stops found is kept).
+REWEIGHT_ROUNDS = 4
+
+
 def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1e-7):
     """Like :func:`needed_stops`, for stops printed to order on either side: a candidate
     joint may rest on a stop that keeps it from bending further (hi, moment <= 0) or from
@@ -111,17 +115,28 @@ def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1
     lb[n + 2:n + 2 + stops.size], ub[n + 2:n + 2 + stops.size] = old_lb, old_ub
     if k:
         lb[-k:] = 0.0
-    c = np.zeros(As.shape[1])
-    c[n + 2:n + 2 + stops.size][new] = 1.0
-    if k:
-        c[-k:] = 1.0
     bounds = list(zip(np.where(np.isfinite(lb), lb, None), np.where(np.isfinite(ub), ub, None)))
-    lp = linprog(c, A_eq=As, b_eq=np.zeros(n), bounds=bounds, method="highs")
-    if lp.status != 0:
+    weights = np.ones(k)
+    best = None
+    for _ in range(REWEIGHT_ROUNDS):
+        # L1 of the moments, reweighted by their last size: favours few stops (reweighted L1)
+        c = np.zeros(As.shape[1])
+        c[n + 2:n + 2 + stops.size][new] = weights
+        if k:
+            c[-k:] = weights
+        lp = linprog(c, A_eq=As, b_eq=np.zeros(n), bounds=bounds, method="highs")
+        if lp.status != 0:
+            break
+        mu = lp.x[n + 2:n + 2 + stops.size][new] - (lp.x[-k:] if k else 0.0)
+        if mu.size == 0 or np.abs(mu).max() <= 0:
+            return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+        count = int(np.sum(np.abs(mu) > rel_tol * np.abs(mu).max()))
+        if best is None or count < best[0]:
+            best = (count, mu)
+        weights = 1.0 / (np.abs(mu) + 1e-3 * np.abs(mu).max())
+    if best is None:
         return None
-    mu = lp.x[n + 2:n + 2 + stops.size][new] - (lp.x[-k:] if k else 0.0)
-    if mu.size == 0 or np.abs(mu).max() <= 0:
-        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    mu = best[1]
     keep = np.abs(mu) > rel_tol * np.abs(mu).max()
     joints = stops[new][keep].astype(int)
     sides = np.where(mu[keep] > 0, 1, -1).astype(int)

@@ -502,8 +502,9 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     if ok and printer is not None:
         k_sig = curv[1] if abs(curv[1]) >= abs(curv[0]) else curv[0]
         k_sig = math.copysign(min(abs(k_sig), max_curvature(length[1])), k_sig)
-        ok &= _check_printer(ctx, k_rel if k_big else "length.max",
-                             RodGeometry(length[1], h, t, k_sig, hinge, first, second), printer)
+        ok &= _check_printer(ctx, "length.max", RodGeometry(length[1], h, t, 0.0, hinge, first, second), printer)
+        if ok and k_big:  # straight it fits: does its most curved form?
+            ok &= _check_printer(ctx, k_rel, RodGeometry(length[1], h, t, k_sig, hinge, first, second), printer)
     if ok and stops is not None:
         ok = _check_stops(ctx, stops, length, curv, h, t, hinge, material, first, second)
     if not ok:

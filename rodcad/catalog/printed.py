@@ -37,6 +37,9 @@ __all__ = ["MassTable", "RodNumbers", "SHAPE_MARGIN", "TABLE_STEP", "mass_table"
 #: Spacing of the lengths at which a family's mass range is computed on the solids (mm).
 TABLE_STEP = 5.0
 
+#: A rod within this of a table length (mm) is read at it (its length up to round-off).
+ON_GRID = 1e-6
+
 #: Share of the table's removable and addable mass a rod of another shape than the table's
 #: straight rod is credited with (curved bodies and stop ends leave a little less room).
 SHAPE_MARGIN = 0.9
@@ -59,10 +62,11 @@ class MassTable:
     def at(self, length: float) -> tuple[float, float]:
         """(removable fraction, addable g) for a rod of this length: the smaller of the two
         table entries around it."""
+        on = np.flatnonzero(np.abs(self.lengths - length) <= ON_GRID)
+        if on.size:  # a table length, to round-off
+            return float(self.removable[on[0]]), float(self.addable[on[0]])
         k = int(np.clip(np.searchsorted(self.lengths, length, side="right") - 1, 0, self.lengths.size - 1))
         j = min(k + 1, self.lengths.size - 1)
-        if self.lengths[k] >= length - 1e-9:
-            j = k
         return float(min(self.removable[k], self.removable[j])), float(min(self.addable[k], self.addable[j]))
 
 

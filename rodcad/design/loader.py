@@ -142,7 +142,8 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         types = tuple(c["types"]) if all(good) else None
     lengths = (tuple(float(x) for x in c["lengths"]) if v.ok("constraints.lengths", schema_ok)
                and isinstance(c.get("lengths"), list) else None)
-    if lengths is not None and catalog is not None:
+    if lengths is not None and catalog is not None and not catalog.printed_families:
+        # (rods printed to order: the planner says that lengths do not apply)
         have = sorted({t.length for t in catalog})
         for i, x in enumerate(lengths):
             if not any(math.isclose(x, h, rel_tol=1e-9) for h in have):

@@ -129,8 +129,10 @@ HI, LO = -1, 1
 
 
 def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
-         phi: np.ndarray, stops: dict[int, tuple[float, int]]) -> _Laid:
-    """The rods for given stops (joint -> (bend deg, side)) and their inverse problem."""
+         phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True) -> _Laid:
+    """The rods for given stops (joint -> (bend deg, side)) and their inverse problem; with
+    ``limits`` False, only the stops' designed sides are limits (enough for the statics at
+    the target, which only sees joints resting on a limit)."""
     fam = pf.family
     r = fam.ranges
     assert fam.template is not None and r is not None
@@ -154,11 +156,17 @@ def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.nd
                                 second_stop=top.get(i), first_under=under.get(i - 1), second_under=under.get(i))
                     for i in range(n)], catalog)
     nums = [rod_numbers(t, pf.table, fam.template) for t in rods]
-    limits = np.zeros((max(n - 1, 0), 2))
+    rows = np.zeros((max(n - 1, 0), 2))
     notes, unmet = [], []
     for j in range(n - 1):
-        lo, hi = _limits(rods[j].geometry, rods[j + 1].geometry)
         bend = math.degrees(phi[j])
+        if not limits:  # only the stops: the statics at the target sees nothing else
+            lo, hi = -math.inf, math.inf
+            if j in stops:
+                lo, hi = (lo, stops[j][0]) if stops[j][1] == HI else (stops[j][0], hi)
+            rows[j] = np.radians([lo, hi])
+            continue
+        lo, hi = _limits(rods[j].geometry, rods[j + 1].geometry)
         if j in stops:
             s, side = stops[j]
             got = hi if side == HI else lo
@@ -172,11 +180,29 @@ def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.nd
             notes.append(f"joint {j} bends {bend:.1f} deg, beyond what the family's free ends allow "
                          f"([{lo:.1f}, {hi:.1f}] deg)")
             unmet.append(j)
-        limits[j] = np.radians([lo, hi])
+        rows[j] = np.radians([lo, hi])
     problem = InverseProblem(target=points, lengths=lengths,
                              mass_bounds=np.array([x.mass_range for x in nums], float),
-                             com=np.array([x.com for x in nums], float), limits=limits)
+                             com=np.array([x.com for x in nums], float), limits=rows)
     return _Laid(rods, problem, notes, unmet)
+
+
+#: A bend below this (rad) is straight: only a stop holds it.
+STRAIGHT_TOL = 1e-9
+
+#: Joints mirror each other to this fraction of the span on a symmetric target.
+MIRROR_TOL = 1e-7
+
+
+def _is_mirror_symmetric(points: np.ndarray) -> bool:
+    """Whether the joints are their own mirror image about the vertical through the middle
+    of the anchors (anchors at one height): the chain, its rods and stops then mirror too."""
+    a, b = points[0], points[-1]
+    span = float(np.hypot(*(b - a)))
+    if span <= 0 or abs(b[1] - a[1]) > MIRROR_TOL * span:
+        return False
+    mirror = np.column_stack([a[0] + b[0] - points[::-1, 0], points[::-1, 1]])
+    return bool(np.abs(mirror - points).max() <= MIRROR_TOL * span)
 
 
 #: Without a preferred length, the longest rods whose centrelines follow the curve within
@@ -254,12 +280,13 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     stops: dict[int, tuple[float, int]] = {}
     notes: list[str] = []
     beyond = []
-    for j in np.flatnonzero(phi <= 0):
+    mirrored = _is_mirror_symmetric(points)
+    for j in np.flatnonzero(phi <= STRAIGHT_TOL):  # straight (to round-off) or concave
         if stops_allowed and printable(int(j)):
             stops[int(j)] = (float(deg[j]), HI)
         else:
             beyond.append(int(j))
-    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops)
+    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False)
     needed_more = False
     if stops_allowed and r.stops is not None:
         for _ in range(STOP_ROUNDS):
@@ -272,7 +299,10 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
                 break
             for j, side in zip(*need):
                 stops[int(j)] = (float(deg[j]), int(side))
-            laid = _lay(catalog, pf, points, lengths, kappa, phi, stops)
+                if mirrored and printable(n - 2 - int(j)):  # a symmetric target keeps its symmetry
+                    stops.setdefault(n - 2 - int(j), (float(deg[n - 2 - int(j)]), int(side)))
+            laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False)
+    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops)  # the rods' own limits, checked
     if beyond:
         why = ("stops are forbidden (constraints.joints: free)" if not stops_allowed else
                "the family prints no stops" if r.stops is None else

@@ -66,6 +66,15 @@ def curve_error(curve: np.ndarray, points: np.ndarray, curvature: np.ndarray, sp
     return {"max_mm": _f(d), "rel_span": _f(d / span) if span > 0 else None}
 
 
+def _stop_json(problem, j: int) -> dict[str, Any]:
+    """A joint resting on a stop: the stop's angle (the limit the target bend sits on) and
+    its side ('hi': it keeps the joint from bending further, 'lo': from straightening)."""
+    bend = float(np.diff(problem.angles)[j])
+    lo, hi = problem.limits[j]
+    side = "lo" if abs(lo - bend) < abs(hi - bend) else "hi"
+    return {"joint": int(j), "deg": _f(math.degrees(lo if side == "lo" else hi) + 0.0), "side": side}
+
+
 def _simulated_json(eq, unique: bool) -> dict[str, Any]:
     """design.json's ``simulated``: points, angles, reactions (g * m/s^2 = mN -> N), KKT, stability."""
     return {"points": _pts(eq.points), "angles_deg": [float(math.degrees(v)) for v in eq.angles],
@@ -141,9 +150,7 @@ def design_json(r) -> dict[str, Any]:
                                  "hanging_curve_error_mm": _f(curve_distance(r.plan.curve, eq.points)),
                                  "joint_error_mm": _f(r.plan.discretization.joint_error),
                                  "stop_mismatch_deg": _f(math.degrees(r.plan.assign_cost)),
-                                 "added_stops": [{"joint": int(j),
-                                                  "deg": _f(math.degrees(r.plan.problem.limits[j, 1]) + 0.0)}
-                                                 for j in r.plan.added_stops]}
+                                 "added_stops": [_stop_json(r.plan.problem, j) for j in r.plan.added_stops]}
     if r.chain_design is not None:
         res = r.chain_design.result
         out["inverse"] = {"exact": bool(res.exact), "statics_residual": _f(res.statics_residual),

@@ -47,9 +47,9 @@ defaults:
   balls: {name: steel bearing ball 6 mm, diameter: 6.0, density: 7.85, clearance: 0.2}
 families:
   - name: rod
-    length: {min: 25, max: 60}
-    curvature: {min: -0.04, max: 0.04}
-    stops: {min: -60, max: 60}
+    length: {min: 20, max: 60}
+    curvature: {min: -0.05, max: 0.05}
+    stops: {min: -90, max: 90}
 """
 LENGTH_LINE, CURV_LINE, STOPS_LINE = 12, 13, 14
 
@@ -109,20 +109,20 @@ def test_pla_parametric_is_a_family_printed_to_order(cat):
     (fam,) = cat.printed_families
     assert fam.name == "rod" and fam.printed_to_order
     r = fam.ranges
-    assert r.length == (25.0, 60.0) and r.curvature == (-0.04, 0.04) and r.stops == (-60.0, 60.0)
+    assert r.length == (20.0, 60.0) and r.curvature == (-0.05, 0.05) and r.stops == (-90.0, 90.0)
     # two reference types: the shortest and the longest straight rod with the family's ends
-    assert fam.type_names == ("rod-25", "rod-60") and cat.names == ["rod-25", "rod-60"]
-    for name, length in (("rod-25", 25.0), ("rod-60", 60.0)):
+    assert fam.type_names == ("rod-20", "rod-60") and cat.names == ["rod-20", "rod-60"]
+    for name, length in (("rod-20", 20.0), ("rod-60", 60.0)):
         t = cat[name]
         assert t.length == length and t.curvature == 0 and t.family == "rod"
         assert t.geometry.first == t.geometry.second == EndShape(0.2, 45.0, 45.0)
         assert t.geometry.height == 16 and t.geometry.thickness == 16
         assert t.material.name == "PLA" and t.material.density == pytest.approx(1.24)
-    assert fam.template.geometry == cat["rod-25"].geometry
+    assert fam.template.geometry == cat["rod-20"].geometry
     # the largest curvature is a 120 deg arc through both pins: sqrt(3) / L
-    assert max_curvature(25.0) == pytest.approx(math.sqrt(3) / 25, rel=1e-12)
+    assert max_curvature(20.0) == pytest.approx(math.sqrt(3) / 20, rel=1e-12)
     # the shipped curvature range fits the shortest rod and a 16 mm section
-    assert 0.04 < max_curvature(25.0) and 0.04 * 16 < 1
+    assert 0.05 < max_curvature(20.0) and 0.05 * 16 < 1
     with pytest.raises(ValueError, match="not printed to order"):
         load_catalog("pla-pinned").rod("free", 30.0)
 
@@ -134,7 +134,7 @@ def test_catalog_rod_geometry_and_names(cat):
     g = r.geometry
     assert (r.length, r.curvature, g.length, g.curvature) == (37.5, 0.004, 37.5, 0.004)
     assert g.first == own and g.second == EndShape(0.0, 12.5, 45.0)  # flush stop end: setback 0
-    assert g.hinge == cat["rod-25"].geometry.hinge and g.height == 16 and g.thickness == 16
+    assert g.hinge == cat["rod-20"].geometry.hinge and g.height == 16 and g.thickness == 16
     # a bottom chamfer alone (kept from straightening) and both on one end
     u = cat.rod("rod", 41.0, -0.01, first_under=-7.25, second_stop=3.0, second_under=-4.0)
     assert u.geometry.first == EndShape(0.0, 45.0, -7.25)
@@ -142,7 +142,7 @@ def test_catalog_rod_geometry_and_names(cat):
     assert u.curvature == -0.01 and u.geometry.half_angle_deg == pytest.approx(
         -math.degrees(math.asin(0.01 * 41 / 2)), abs=1e-12)
     # no parameters: the family's own rod (the reference type itself at its length)
-    assert cat.rod("rod", 25.0) == cat["rod-25"]
+    assert cat.rod("rod", 20.0) == cat["rod-20"]
     # the exact values are kept whatever the rounding of the name
     odd = cat.rod("rod", 33.33333333, 0.0123456789, first_stop=-1.23456789)
     assert odd.length == 33.33333333 and odd.geometry.first.top_chamfer == -1.23456789
@@ -170,35 +170,35 @@ def test_with_types_adds_rods_and_refuses_a_name_clash(cat):
     a = cat.rod("rod", 37.5, 0.004, second_stop=12.5)
     b = cat.rod("rod", 44.0, first_under=-3.0)
     more = cat.with_types([a, b, a])
-    assert more.names == ["rod-25", "rod-60", a.name, b.name]
-    assert more[a.name] is a and cat.names == ["rod-25", "rod-60"]  # the catalog itself is unchanged
-    assert more.can_join(a, b) and more.can_join(b, a) and more.can_join("rod-25", a)
+    assert more.names == ["rod-20", "rod-60", a.name, b.name]
+    assert more[a.name] is a and cat.names == ["rod-20", "rod-60"]  # the catalog itself is unchanged
+    assert more.can_join(a, b) and more.can_join(b, a) and more.can_join("rod-20", a)
     assert more.with_types([a]) is more and cat.with_types([cat.rod("rod", 60.0)]) is cat
     # the same name for another rod (parameters equal to the name's 0.001 rounding only)
     twin = cat.rod("rod", 37.5, 0.0040001, second_stop=12.5)
     assert twin.name == a.name and twin != a
     with pytest.raises(ValueError, match="two different rods are both named 'rod-37.5-k4-b12.5'"):
         more.with_types([twin])
-    with pytest.raises(ValueError, match="both named 'rod-25'"):
-        cat.with_types([replace(cat.rod("rod", 25.0, 0.01), name="rod-25")])
+    with pytest.raises(ValueError, match="both named 'rod-20'"):
+        cat.with_types([replace(cat.rod("rod", 20.0, 0.01), name="rod-20")])
 
 
 # --------------------------------------------------------------------------- bad catalogs
 
 
 def test_inverted_and_empty_ranges_point_at_max():
-    text = PARAM.replace("length: {min: 25, max: 60}", "length: {min: 60, max: 25}")
+    text = PARAM.replace("length: {min: 20, max: 60}", "length: {min: 60, max: 25}")
     assert _bad(text) == [(LENGTH_LINE, _col(text, LENGTH_LINE, "25}"), "families[0].length.max",
                            "inverted range: max 25 must be above min 60")]
-    text = PARAM.replace("curvature: {min: -0.04, max: 0.04}", "curvature: {min: 0.01, max: 0.01}")
+    text = PARAM.replace("curvature: {min: -0.05, max: 0.05}", "curvature: {min: 0.01, max: 0.01}")
     got = _bad(text)
     assert len(got) == 1 and got[0][:3] == (CURV_LINE, _col(text, CURV_LINE, "0.01}"), "families[0].curvature.max")
     assert got[0][3].startswith("empty range: max 0.01 must be above min 0.01")
 
 
 def test_every_range_problem_is_reported_at_once():
-    text = (PARAM.replace("length: {min: 25, max: 60}", "length: {min: 40, max: 40}")
-            .replace("stops: {min: -60, max: 60}", "stops: {min: 10, max: -10}")
+    text = (PARAM.replace("length: {min: 20, max: 60}", "length: {min: 40, max: 40}")
+            .replace("stops: {min: -90, max: 90}", "stops: {min: 10, max: -10}")
             + "  - name: tight\n    length: {min: 25, max: 50}\n    curvature: {min: -0.065, max: 0.01}\n")
     got = _bad(text)
     assert [(line, key) for line, _, key, _ in got] == [
@@ -212,7 +212,7 @@ def test_every_range_problem_is_reported_at_once():
 def test_curvature_range_too_tight_for_the_section():
     # 0.065 /mm is under the 120 deg arc limit of a 25 mm rod (0.0693) but its radius
     # (15.4 mm) is under the 16 mm section height
-    text = PARAM.replace("curvature: {min: -0.04, max: 0.04}", "curvature: {min: -0.04, max: 0.065}")
+    text = PARAM.replace("curvature: {min: -0.05, max: 0.05}", "curvature: {min: -0.04, max: 0.065}")
     assert _bad(text) == [(CURV_LINE, _col(text, CURV_LINE, "0.065"), "families[0].curvature.max",
                            ("curvature 0.065 /mm (radius 15.385 mm) is too tight for a 16 mm high section: the "
                             "radius must be at least the section height"))]
@@ -221,8 +221,8 @@ def test_curvature_range_too_tight_for_the_section():
 def test_curvature_range_checked_at_the_shortest_length():
     # 0.05 /mm is a 120 deg arc at 34.6 mm: fine for 30 mm rods, too much for 35 mm ones,
     # so only the range's shortest rod decides (longer rods are bent less by the planner)
-    ok = PARAM.replace("length: {min: 25, max: 60}", "length: {min: 30, max: 60}").replace(
-        "curvature: {min: -0.04, max: 0.04}", "curvature: {min: -0.05, max: 0.05}")
+    ok = PARAM.replace("length: {min: 20, max: 60}", "length: {min: 30, max: 60}").replace(
+        "curvature: {min: -0.05, max: 0.05}", "curvature: {min: -0.05, max: 0.05}")
     assert catalog_from_text(ok).family("rod").ranges.curvature == (-0.05, 0.05)
     bad = ok.replace("length: {min: 30, max: 60}", "length: {min: 35, max: 60}")
     assert _bad(bad) == [(CURV_LINE, _col(bad, CURV_LINE, "0.05}"), "families[0].curvature.max",
@@ -232,20 +232,21 @@ def test_curvature_range_checked_at_the_shortest_length():
 def test_stop_range_limits():
     # -59 .. 60 (and up to 90) is printable on this section: flush ends meet at the stop
     for stops in ("{min: -59, max: 60}", "{min: -60, max: 90}"):
-        c = catalog_from_text(PARAM.replace("{min: -60, max: 60}", stops))
+        c = catalog_from_text(PARAM.replace("{min: -90, max: 90}", stops))
         assert c.family("rod").ranges.stops[0] in (-59.0, -60.0)
-    text = PARAM.replace("stops: {min: -60, max: 60}", "stops: {min: -80, max: 60}")
-    assert _bad(text) == [(STOPS_LINE, _col(text, STOPS_LINE, "-80"), "families[0].stops.min",
-                           "must be between -60 deg and 90 deg (got -80)")]
+    text = PARAM.replace("stops: {min: -90, max: 90}", "stops: {min: -95, max: 60}")
+    assert _bad(text) == [(STOPS_LINE, _col(text, STOPS_LINE, "-95"), "families[0].stops.min",
+                           "must be between -90 deg and 90 deg (got -95)")]
 
 
 def test_stop_range_whose_chamfers_cut_through_the_shortest_rod():
     """A stop of 80 deg needs top chamfers of 40 deg on both ends of a rod: on a 13 mm rod
     16 mm high the two top faces cross."""
-    short = (PARAM.replace("length: {min: 25, max: 60}", "length: {min: 13, max: 60}")
+    short = (PARAM.replace("length: {min: 20, max: 60}", "length: {min: 13, max: 60}")
              .replace("top_chamfer: 45, bottom_chamfer: 45", "top_chamfer: 30, bottom_chamfer: 30")
              .replace("balls: {name: steel bearing ball 6 mm, diameter: 6.0, density: 7.85, clearance: 0.2}",
-                      "balls: {diameter: 6.0, density: 7.85}"))
+                      "balls: {diameter: 6.0, density: 7.85}")
+             .replace("stops: {min: -90, max: 90}", "stops: {min: -60, max: 60}"))
     assert catalog_from_text(short).family("rod").ranges.length == (13.0, 60.0)
     text = short.replace("stops: {min: -60, max: 60}", "stops: {min: -60, max: 80}")
     assert _bad(text) == [(STOPS_LINE, _col(text, STOPS_LINE, "80}"), "families[0].stops.max",
@@ -254,13 +255,13 @@ def test_stop_range_whose_chamfers_cut_through_the_shortest_rod():
 
 
 def test_rod_longer_than_the_printer_is_reported_at_the_length():
-    text = PARAM.replace("curvature: {min: -0.04, max: 0.04}", "curvature: 0").replace(
-        "length: {min: 25, max: 60}", "length: {min: 25, max: 245}")
+    text = PARAM.replace("curvature: {min: -0.05, max: 0.05}", "curvature: 0").replace(
+        "length: {min: 20, max: 60}", "length: {min: 25, max: 245}")
     assert _bad(text) == [(LENGTH_LINE, _col(text, LENGTH_LINE, "245"), "families[0].length.max",
                            ("a 245 mm rod (255 x 16 x 16 mm) does not fit the printer's build volume "
                             "(220 x 220 x 250 mm)"))]
     # with a curvature range the longest rod is too long even straight: still the length's fault
-    text = PARAM.replace("length: {min: 25, max: 60}", "length: {min: 25, max: 300}")
+    text = PARAM.replace("length: {min: 20, max: 60}", "length: {min: 25, max: 300}")
     got = _bad(text)
     assert len(got) == 1 and "does not fit the printer's build volume" in got[0][3], got
     assert got[0][:3] == (LENGTH_LINE, _col(text, LENGTH_LINE, "300"), "families[0].length.max"), got
@@ -271,25 +272,25 @@ def test_curved_rod_taller_than_the_printer_is_reported_at_the_curvature():
     # it sags 17.3 mm: 33.3 mm high
     text = PARAM.replace("build_volume: [220, 220, 250]", "build_volume: [100, 30, 30]")
     got = _bad(text)
-    assert len(got) == 1 and got[0][:3] == (CURV_LINE, _col(text, CURV_LINE, "0.04}"), "families[0].curvature.max")
+    assert len(got) == 1 and got[0][:3] == (CURV_LINE, _col(text, CURV_LINE, "0.05}"), "families[0].curvature.max")
     assert got[0][3] == ("a 60 mm rod (70 x 33.32 x 16 mm) does not fit the printer's build volume "
                          "(100 x 30 x 30 mm)")
 
 
 def test_a_list_of_curvatures_or_scales_is_refused_for_rods_printed_to_order():
-    text = PARAM.replace("curvature: {min: -0.04, max: 0.04}", "curvature: [0, 0.01]")
+    text = PARAM.replace("curvature: {min: -0.05, max: 0.05}", "curvature: [0, 0.01]")
     assert _bad(text) == [(CURV_LINE, _col(text, CURV_LINE, "["), "families[0].curvature",
                            "a family printed to order takes one curvature or a range {min, max}, not a list")]
     # ranges with a list of lengths
-    text = PARAM.replace("length: {min: 25, max: 60}", "length: [25, 30]")
+    text = PARAM.replace("length: {min: 20, max: 60}", "length: [25, 30]")
     assert _bad(text) == [
         (CURV_LINE, _col(text, CURV_LINE, "{"), "families[0].curvature",
          "a curvature range is for rods printed to order: give the length as a range {min, max} too"),
         (STOPS_LINE, _col(text, STOPS_LINE, "{"), "families[0].stops",
          "a stops range is for rods printed to order: give the length as a range {min, max} too")]
     # one curvature (not a range) is fine: every rod has it
-    one = catalog_from_text(PARAM.replace("curvature: {min: -0.04, max: 0.04}", "curvature: 0.01"))
-    assert one.family("rod").ranges.curvature == (0.01, 0.01) and one["rod-25"].curvature == 0.01
+    one = catalog_from_text(PARAM.replace("curvature: {min: -0.05, max: 0.05}", "curvature: 0.01"))
+    assert one.family("rod").ranges.curvature == (0.01, 0.01) and one["rod-20"].curvature == 0.01
 
 
 # --------------------------------------------------------------------------- bad designs
@@ -314,13 +315,13 @@ def test_design_preferred_length_outside_the_range_and_lengths_reported_together
     assert main(["build", str(path), "--no-cad", "-q", "-o", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert f"{path}:5:33: constraints.preferred_length: 70 mm is outside the lengths family 'rod' prints " \
-           "(25 to 60 mm)" in err, err
-    line = "constraints: {lengths: [25], preferred_length: 24.5}"
+           "(20 to 60 mm)" in err, err
+    line = "constraints: {lengths: [25], preferred_length: 19.5}"
     path.write_text(DESIGN + line + "\n")
     assert main(["build", str(path), "--no-cad", "-q", "-o", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert f"{path}:5:{line.index('[25]') + 1}: constraints.lengths: family 'rod' is printed to order" in err, err
-    assert f"{path}:5:{line.index('24.5') + 1}: constraints.preferred_length: 24.5 mm is outside" in err, err
+    assert f"{path}:5:{line.index('19.5') + 1}: constraints.preferred_length: 19.5 mm is outside" in err, err
 
 
 # --------------------------------------------------------------------------- stops

@@ -33,9 +33,9 @@ family, then by length, scale and curvature in the order written.
 A family *printed to order* gives ranges instead of lists (``catalogs/pla-parametric.yaml``)::
 
       - name: rod
-        length: {min: 25, max: 60}          # any length: each rod gets its own
-        curvature: {min: -0.04, max: 0.04}  # any curvature in the range
-        stops: {min: -60, max: 60}          # stop angles printed at the bend (deg)
+        length: {min: 20, max: 60}          # any length: each rod gets its own
+        curvature: {min: -0.05, max: 0.05}  # any curvature in the range
+        stops: {min: -90, max: 90}          # stop angles printed at the bend (deg)
 
 It lists two reference types (its shortest and longest straight rod); a design makes the
 rods it needs with :meth:`Catalog.rod` (see :mod:`rodcad.design.printed`).

@@ -121,10 +121,10 @@ def family_spec() -> Obj:
             ),
             "stops": Field(
                 Obj({
-                    "min": Field(Num(minimum=-60, maximum=90, unit="deg"), required=True,
+                    "min": Field(Num(minimum=-90, maximum=90, unit="deg"), required=True,
                                  description="Most concave stop angle (deg; negative: the joint stops "
                                  "before straight)."),
-                    "max": Field(Num(minimum=-60, maximum=90, unit="deg"), required=True,
+                    "max": Field(Num(minimum=-90, maximum=90, unit="deg"), required=True,
                                  description="Most convex (sagging) stop angle (deg)."),
                 }),
                 description="Stop angles printed to order (with a length range): where the masses "

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -88,6 +88,12 @@ class CavityPool:
     clearance: np.ndarray
     intra: np.ndarray
     order: np.ndarray
+
+    @cached_property
+    def flat(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every image of every candidate in one (M, 3) array, and where each candidate's start."""
+        sizes = np.array([len(im) for im in self.images], dtype=int)
+        return np.concatenate(self.images), np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
 
 
 def _distinct(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -172,14 +178,15 @@ def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, so
     need = radius + wall
     spacing = 2 * radius + wall
     ok = (pool.clearance >= need) & (pool.intra >= spacing - 1e-9)
+    if len(sockets) and len(pool.images):  # clear of the ball sockets, all candidates at once
+        flat, starts = pool.flat
+        ok &= np.minimum.reduceat(silo_distance(flat, sockets, socket_r), starts) >= need
     accepted: list[np.ndarray] = []
     placed = np.zeros((0, 3))
     for i in pool.order:
         if not ok[i]:
             continue
         im = pool.images[i]
-        if len(sockets) and silo_distance(im, sockets, socket_r).min() < need:
-            continue
         if len(placed) and np.min(np.linalg.norm(im[:, None, :] - placed[None], axis=-1)) < spacing:
             continue
         accepted.append(im)

@@ -555,3 +555,50 @@ def test_curved_rod_with_stop_ends_builds_a_valid_solid(cat):
     assert volume == pytest.approx(exact.volume, rel=1e-6)
     assert np.abs(np.subtract(com, exact.center)).max() < 1e-6
     assert com[1] < -1.0  # k > 0 bulges toward -y: the mass below the chord
+
+
+def test_fast_limits_of_rods_printed_to_order_against_the_brep(cat):
+    """The collision-angle lookup at rods sampled over the family's ranges (free ends, top and
+    bottom stops at the ends of the stop range, curved and straight, shortest and longest)
+    against the B-rep interference search: never more bend than the solids, within 0.05 deg.
+    (The B-rep limits of these samples ship in the catalog's seed.)"""
+    from rodcad.catalog.limits import TOLERANCE_DEG, all_pair_limits
+    from rodcad.catalog.printed import sample_pairs
+
+    pairs = sample_pairs(cat, cat.family("rod"))
+    assert len(pairs) >= 7
+    ext = cat.with_types([t for p in pairs for t in p])
+    brep = all_pair_limits(ext, pairs=pairs, jobs=1)
+    for (a, b), r in brep.items():
+        fast = joint_limits(ext[a].geometry, ext[b].geometry)
+        for side, (f, s) in enumerate(zip(fast, r.limits_deg)):
+            if s is not None and abs(s) >= 180 - 10 * TOLERANCE_DEG:
+                s = None  # the search's bound: nothing stops before it
+            assert (f is None) == (s is None), (a, b, fast, r.limits_deg)
+            if f is None:
+                continue
+            assert abs(f - s) <= 0.05, (a, b, fast, r.limits_deg)
+            looser = (s - f) if side == 0 else (f - s)
+            assert looser <= TOLERANCE_DEG, (a, b, fast, r.limits_deg)
+
+
+def test_rods_printed_to_order_are_built_and_checked(tmp_path):
+    """Curved rods with stop ends printed to order, through the whole build: every solid valid,
+    STEP re-imported with its volume and STL watertight (checked by the build, exit 0 or 1),
+    each rod built at its designed mass, and the chain as built hangs as designed."""
+    path = tmp_path / "d.yaml"
+    path.write_text("design: 1\nname: small-arc\nanchors: [[0, 0], [120, 0]]\ntarget: {form: semicircle}\n"
+                    "constraints: {rods: 4}\n")
+    out = tmp_path / "out"
+    assert main(["build", str(path), "-o", str(out), "--jobs", "1", "-q"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    rods = data["rods"]
+    assert len(rods) == 4 and all(r["params"]["family"] == "rod" for r in rods)
+    assert all(abs(r["curvature"]) > 0.01 for r in rods)  # a 60 mm radius: curved bodies
+    assert any(r["params"]["ends"]["second"]["setback"] == 0 for r in rods[:-1])  # a stop printed to order
+    for r in rods:
+        assert r["fabrication"]["in_range"]
+        assert r["fabrication"]["mass"] == pytest.approx(r["mass"], rel=2e-3)
+    assert data["as_built"]["error"]["max_rel_span"] < 1e-3
+    assert data["curve"]["rel_span"] < SHAPE_REL
+    assert len(list((out / "rods").glob("*.step"))) == 4 and len(list((out / "rods").glob("*.stl"))) == 4

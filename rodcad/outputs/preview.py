@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from optimize.discretize import centerline, curve_distance
+
 __all__ = ['plot_chain']
 
 
@@ -13,7 +15,7 @@ def plot_chain(r, *paths: Path) -> None:
     """Draw a :class:`rodcad.pipeline.BuildResult` and save it to every path (PNG, SVG, ...).
 
     The target curve is dashed, its joints are small open circles; each rod is a
-    thick segment coloured from light (blue) to heavy (red) by mass, with a
+    thick segment (the arc of a curved rod) coloured from light (blue) to heavy (red) by mass, with a
     colour bar in grams; anchors are black squares; the as-built chain, when
     present, is a thin dotted line. The title gives the shape error.
     """
@@ -31,13 +33,19 @@ def plot_chain(r, *paths: Path) -> None:
         ax.plot(*d.target_curve.T, "--", color="0.45", lw=1.2, label="target")
     if r.target_points is not None:
         ax.plot(*r.target_points.T, "o", mfc="none", mec="0.35", ms=6, label="target joints")
-    segs = np.stack([pts[:-1], pts[1:]], axis=1)
+    # each rod as it is printed: its chord, or the arc of its curved body
+    curvature = [getattr(d.catalog[n], "curvature", 0.0) if n in d.catalog else 0.0 for n in r.type_names]
+    segs = [centerline(pts[i:i + 2], [k]) for i, k in enumerate(curvature)]
     lc = LineCollection(segs, cmap="coolwarm", linewidths=6, capstyle="round", zorder=3)
     lc.set_array(np.asarray(r.masses, float))
     if np.ptp(r.masses) == 0:
         lc.set_clim(r.masses[0] * 0.95, r.masses[0] * 1.05)
     ax.add_collection(lc)
     ax.plot(*pts.T, "o", color="k", ms=2.5, zorder=4)
+    stops = list(r.plan.added_stops) if r.plan is not None else []
+    if stops:
+        ax.plot(*pts[[j + 1 for j in stops]].T, "^", mfc="gold", mec="k", ms=7, zorder=5,
+                label="joint on a stop")
     if r.as_built is not None:
         ax.plot(*r.as_built.equilibrium.points.T, ":", color="k", lw=1, zorder=5, label="as built")
     ax.plot(*d.anchors.T, "ks", ms=9, zorder=6, label="anchors")
@@ -50,7 +58,10 @@ def plot_chain(r, *paths: Path) -> None:
     if r.method:
         title += f", {r.method}"
     if r.distance is not None:
-        title += f"\nmax error {r.distance.max:.3g} mm = {100 * r.distance.max_rel_span:.3g} % of span"
+        title += f"\njoints {100 * r.distance.max_rel_span:.3g} % of span off the target"
+        if r.plan is not None and d.target_curve is not None:
+            hang = curve_distance(d.target_curve, centerline(pts, curvature))
+            title += f", rods within {100 * hang / d.span:.3g} %"
         if r.as_built is not None:
             title += f" (as built {100 * r.as_built.distance.max_rel_span:.3g} %)"
     if not eq.stable:

@@ -93,7 +93,7 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     add("## Rods")
     add("")
     fab = r.fabrication
-    head = ("| # | type | length mm | curvature 1/mm | ends (stop chamfer deg, F free) | mass g | range g | joint after (deg) "
+    head = ("| # | type | length mm | curvature 1/mm | ends: first / second (chamfer deg) | mass g | range g | joint after (deg) "
             "| x, y of first pin (mm) |")
     rule = "|---|---|---|---|---|---|---|---|---|"
     if fab is not None:
@@ -106,8 +106,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         lim = rod["limits_deg"]
         lim_s = "-" if lim is None else f"{_deg(lim[0])} .. {_deg(lim[1])}"
         lo, hi = rod["mass_range"]
-        ends = rod["params"]["ends"]  # a flush (stop) end by its top chamfer, a free end as F
-        stops = "/".join("F" if e["setback"] else f"{e['top_chamfer']:g}" for e in (ends["first"], ends["second"]))
+        ends = rod["params"]["ends"]
+        stops = " / ".join(_end_text(e) for e in (ends["first"], ends["second"]))
         row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['curvature']:g} | {stops} | {rod['mass']:.3f} "
                f"| {lo:.2f}-{hi:.2f} | {lim_s} | {pts[i][0]:.1f}, {pts[i][1]:.1f} |")
         if fab is not None:
@@ -174,6 +174,14 @@ def _deg(x: float | None) -> str:
 def _rod_file(f) -> str:
     name = getattr(f, "file_stem", None)
     return f"`rods/{name}.step`" if name else "-"
+
+
+def _end_text(e: dict[str, float]) -> str:
+    """One end of a rod for report.md: 'free' (setback > 0: it stops nowhere near the
+    bends it is used at), or the chamfers of its flush faces ('top 12.5', 'bottom -3')."""
+    if e["setback"]:
+        return "free"
+    return f"top {e['top_chamfer']:.4g}, bottom {e['bottom_chamfer']:.4g}"
 
 
 def summary_text(r, outdir: Path | None) -> str:

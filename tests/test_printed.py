@@ -602,3 +602,25 @@ def test_rods_printed_to_order_are_built_and_checked(tmp_path):
     assert data["as_built"]["error"]["max_rel_span"] < 1e-3
     assert data["curve"]["rel_span"] < SHAPE_REL
     assert len(list((out / "rods").glob("*.step"))) == 4 and len(list((out / "rods").glob("*.stl"))) == 4
+
+
+def test_print_resolution_rounds_every_length():
+    """``length: {min, max, resolution}``: every rod's length a multiple of the resolution, the
+    chain closed on its anchors again, still on the curve; a range holding no multiple is
+    bad input at the key."""
+    text = PARAM.replace("length: {min: 20, max: 60}", "length: {min: 20, max: 60, resolution: 0.5}")
+    cat = catalog_from_text(text)
+    assert cat.family("rod").ranges.resolution == 0.5
+    arrays = catalog_arrays(cat)
+    a, b = np.array([0.0, 0.0]), np.array([200.0, 0.0])
+    curve = make_target("semicircle", a, b)
+    plan = plan_constrained(curve, Constraints(), arrays, _problem)
+    lengths = plan.problem.lengths
+    np.testing.assert_allclose(lengths / 0.5, np.round(lengths / 0.5), atol=1e-9)
+    np.testing.assert_allclose(plan.problem.target[[0, -1]], [a, b], atol=1e-9)
+    d = design_chain(plan, "refine")
+    k = np.array([t.curvature for t in plan.rods])
+    assert curve_error(curve, d.check.equilibrium.points, k, 200.0)["rel_span"] < SHAPE_REL
+    bad = PARAM.replace("length: {min: 20, max: 60}", "length: {min: 20.1, max: 20.4, resolution: 0.5}")
+    got = _bad(bad)
+    assert [g[2] for g in got] == ["families[0].length.resolution"], got

@@ -514,7 +514,12 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     refs = [RodType(f"{f['name']}-{fmt(lv)}", f["name"], lv, scale, k0,
                     RodGeometry(lv, h, t, k0, hinge, first, second), material, balls, origin)
             for lv in length]
-    return refs, Ranges(length, curv, stops), refs[0]
+    res = f["length"].get("resolution")
+    if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:
+        ctx.report("length.resolution", f"no multiple of {fmt(res)} mm lies between {fmt(length[0])} and "
+                   f"{fmt(length[1])} mm")
+        return []
+    return refs, Ranges(length, curv, stops, None if res is None else float(res)), refs[0]
 
 
 def _check_stops(ctx: _FamilyContext, stops: tuple[float, float], length: tuple[float, float],

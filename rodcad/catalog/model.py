@@ -330,11 +330,13 @@ class Ranges:
         curvature: (min, max) signed curvature; (0, 0) for straight rods only.
         stops: (min, max) stop angles the design may print at a joint (flush ends whose
             top chamfers add up to the bend), or None: the family's own ends only.
+        resolution: every length a multiple of this (mm), or None: as designed.
     """
 
     length: tuple[float, float]
     curvature: tuple[float, float]
     stops: tuple[float, float] | None
+    resolution: float | None = None
 
 
 @dataclass(frozen=True)

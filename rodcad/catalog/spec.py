@@ -25,11 +25,12 @@ class ListOrRange(OneOrList):
     ``{min, max}`` (rods printed to order: the planner picks each rod's own value).
     The Python value is a list, or a dict with 'min' and 'max' for a range."""
 
-    def __init__(self, item: Num, *, what: str, **kw: Any) -> None:
+    def __init__(self, item: Num, *, what: str, extra: dict[str, Field] | None = None, **kw: Any) -> None:
         super().__init__(item, unique=True, **kw)
         self.range = Obj({
             "min": Field(item, required=True, description=f"Smallest {what}."),
             "max": Field(item, required=True, description=f"Largest {what}."),
+            **(extra or {}),
         }, description=f"Any {what} from min to max: every rod is printed with its own value.")
 
     def check(self, node: yaml.Node, path: str, v: Validator) -> Any:
@@ -99,7 +100,12 @@ def family_spec() -> Obj:
                           description="Family name; types are named '<family>-<length>'."),
             "description": Field(Str(), description="Free text."),
             "length": Field(
-                ListOrRange(Num(exclusive_minimum=0, maximum=1000, unit="mm"), what="length (mm)"),
+                ListOrRange(Num(exclusive_minimum=0, maximum=1000, unit="mm"), what="length (mm)", extra={
+                    "resolution": Field(Num(exclusive_minimum=0, maximum=10, unit="mm"),
+                                        description="Print resolution (mm): every rod's length is a "
+                                        "multiple of it (the joints move off the curve by up to about "
+                                        "that much); default: lengths as designed, to round-off."),
+                }),
                 required=True,
                 description="Distance between the two hinge axes (mm); a list makes one type per value, "
                 "a range {min, max} makes rods printed to order, each at the length its place needs.",

@@ -205,6 +205,37 @@ def _is_mirror_symmetric(points: np.ndarray) -> bool:
     return bool(np.abs(mirror - points).max() <= MIRROR_TOL * span)
 
 
+def _at_resolution(disc, res: float, bounds: tuple[float, float]):
+    """The discretisation with every length a multiple of ``res`` (within the range), the
+    chain closed again on B by the smallest turn of its rods (Gauss-Newton on the closure):
+    the joints move off the curve by about ``res`` at most."""
+    from dataclasses import replace as _replace
+
+    lengths = np.round(disc.lengths / res) * res
+    lo, hi = math.ceil(bounds[0] / res - 1e-9) * res, math.floor(bounds[1] / res + 1e-9) * res
+    lengths = np.clip(lengths, lo, hi)
+    if np.array_equal(lengths, disc.lengths):
+        return disc
+    pts = disc.points
+    d = np.diff(pts, axis=0)
+    theta = np.arctan2(d[:, 1], d[:, 0])
+    goal = pts[-1] - pts[0]
+    span = max(float(np.hypot(*goal)), 1e-9)
+    for _ in range(50):
+        r = np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)]) - goal
+        if np.hypot(*r) <= 1e-13 * span:
+            break
+        J = np.vstack([-lengths * np.sin(theta), lengths * np.cos(theta)])
+        theta = theta - J.T @ np.linalg.solve(J @ J.T, r)
+    else:
+        raise ValueError(f"rods of lengths rounded to {res:g} mm do not close on the anchors")
+    points = np.vstack([pts[:1], pts[0] + np.cumsum(lengths[:, None] * np.column_stack([np.cos(theta),
+                                                                                          np.sin(theta)]), axis=0)])
+    points[-1] = pts[-1]
+    moved = float(np.hypot(*(points - pts).T).max())
+    return _replace(disc, points=points, lengths=lengths, joint_error=max(disc.joint_error, moved))
+
+
 #: Without a preferred length, the longest rods whose centrelines follow the curve within
 #: this fraction of the span (else the closest fit of the lengths tried).
 FOLLOW_REL = 1e-3
@@ -220,6 +251,8 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
     def lay(pref: float | None):
         disc = discretize(curve, list(r.length), length_range=r.length, preferred=pref)
+        if r.resolution is not None:
+            disc = _at_resolution(disc, r.resolution, r.length)
         n = disc.lengths.size
         kappa = np.clip(fit_curvatures(curve, disc.points, max_curvature=kmax) if kmax else np.zeros(n),
                         *r.curvature)

@@ -127,6 +127,12 @@ def design_json(r) -> dict[str, Any]:
                 "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
                 "ball_diameter_mm": None if f.ball_diameter is None else float(f.ball_diameter),
                 "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
+                "pause_zs_mm": [float(z) for z in f.pause_zs],
+                "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
+                "ball_mass_g": float(f.mass - f.filament_mass),
+                "plastic_volume_mm3": float(f.plastic_volume),
+                "file": f"rods/{f.file_stem}.step",
+                "print_matrix": [[float(v) for v in row] for row in np.asarray(f.print_matrix)],
                 "in_range": bool(f.in_range), "message": f.message,
             }
         rods.append(rod)

@@ -153,7 +153,7 @@ def exact_masses(problem: InverseProblem):
     lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=np.zeros(n), bounds=bounds,
                  method="highs")
     if lp.status == 0:
-        x = lp.x[:nvar]
+        x = _central(As, lp.x[:nvar], lb, ub, n, float(lp.x[-1]) * (1 - CENTRAL_SLACK), rng_m)
         resid = float(np.max(np.abs(As @ x)))
         return x[:n] * col[:n], resid, True, "linear program: target is an equilibrium within bounds"
     # bounded least squares on the statics (scale fixed by m >= m_min > 0)
@@ -161,6 +161,76 @@ def exact_masses(problem: InverseProblem):
     x = ls.x
     resid = float(np.max(np.abs(As @ x)))
     return x[:n] * col[:n], resid, False, "bounded least squares on the statics (not reachable)"
+
+
+#: The central masses keep this share of the linear program's margin from the bounds.
+CENTRAL_SLACK = 1e-3
+
+
+def _central(As: np.ndarray, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray, n: int, margin: float,
+             rng_m: np.ndarray) -> np.ndarray:
+    """The one solution of the statics nearest the middle of every mass's bounds (relative
+    to its range) that keeps ``margin`` of each range from both bounds.
+
+    The linear program's optimum is a vertex of a face, and which vertex depends on the
+    last digits of the input (the masses of a reachable target form a family: a common
+    scale and, for free joints, one more parameter). This strictly convex problem, solved in
+    the null space of the statics (so the target balances exactly), has a single answer that
+    moves continuously with the input. Falls back to ``x0`` where it fails.
+    """
+    from scipy.linalg import null_space, qr
+    from scipy.optimize import minimize
+
+    N = null_space(As)
+    if N.shape[1] == 0:
+        return x0
+    lo = lb.copy()
+    hi = ub.copy()
+    lo[:n] = lb[:n] + margin * rng_m
+    hi[:n] = ub[:n] - margin * rng_m
+    mid = (lb[:n] + ub[:n]) / 2
+    z0 = N.T @ x0
+    rows = np.flatnonzero(np.isfinite(lo))
+    rows_hi = np.flatnonzero(np.isfinite(hi))
+    Nm = N[:n] / rng_m[:, None]
+
+    def fun(z: np.ndarray) -> tuple[float, np.ndarray]:
+        r = Nm @ z - mid / rng_m
+        return float(r @ r), 2 * Nm.T @ r
+
+    cons = [{"type": "ineq", "fun": lambda z: N[rows] @ z - lo[rows], "jac": lambda z: N[rows]},
+            {"type": "ineq", "fun": lambda z: hi[rows_hi] - N[rows_hi] @ z, "jac": lambda z: -N[rows_hi]}]
+    res = minimize(fun, z0, jac=True, constraints=cons, method="SLSQP", options={"ftol": 1e-15, "maxiter": 500})
+    z = res.x
+    # polish: the constraints the solver ends on, held as equalities, give the minimiser to
+    # round-off (a linear KKT system) instead of the solver's tolerance
+    G = np.vstack([N[rows], -N[rows_hi]])
+    h = np.concatenate([lo[rows], -hi[rows_hi]])
+    scale = np.maximum(1.0, np.abs(h))
+    active = np.flatnonzero(G @ z - h <= 1e-7 * scale)
+    Ga, ha = G[active], h[active]
+    if Ga.shape[0]:  # independent rows only
+        q, r_, piv = qr(Ga.T, pivoting=True, mode="economic")
+        rank = int(np.sum(np.abs(np.diag(r_)) > 1e-10 * max(1.0, abs(r_[0, 0]))))
+        Ga, ha = Ga[np.sort(piv[:rank])], ha[np.sort(piv[:rank])]
+    d, k = N.shape[1], Ga.shape[0]
+    K = np.zeros((d + k, d + k))
+    K[:d, :d] = 2 * Nm.T @ Nm
+    K[:d, d:] = -Ga.T
+    K[d:, :d] = Ga
+    rhs = np.concatenate([2 * Nm.T @ (mid / rng_m), ha])
+    try:
+        sol = np.linalg.solve(K, rhs)
+        zp = sol[:d]
+        if np.all(G @ zp - h >= -1e-9 * scale) and np.all(sol[d:] >= -1e-9 * max(1.0, np.abs(sol[d:]).max(initial=0))):
+            z = zp
+    except np.linalg.LinAlgError:
+        pass
+    x = N @ z
+    tol = 1e-9 * np.maximum(1.0, np.abs(x))
+    if not res.success or np.any(x < lb - tol) or np.any(x > ub + tol):
+        return x0
+    return x
 
 
 def statics_residual(problem: InverseProblem, masses: np.ndarray) -> float:

@@ -61,3 +61,21 @@ def test_examples_make_the_same_choices_when_perturbed(example):
         np.testing.assert_allclose(r.equilibrium.points, base.equilibrium.points, atol=1e-8 * span)
         np.testing.assert_allclose(r.masses, base.masses, rtol=1e-5)
         assert r.equilibrium.stable == base.equilibrium.stable
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
+def test_design_json_is_identical_across_runs(example, tmp_path):
+    """Two runs of the same design file write the same design.json (but for timings)."""
+    import json
+
+    from rodcad.cli import main
+
+    outs = []
+    for k in range(2):
+        out = tmp_path / f"o{k}"
+        assert main(["build", str(example), "-o", str(out), "--no-cad", "-q"]) in (0, 1)
+        data = json.loads((out / "design.json").read_text())
+        data.pop("time_s", None)
+        data.get("inverse", {}).pop("time_s", None)
+        outs.append(json.dumps(data, sort_keys=True))
+    assert outs[0] == outs[1]

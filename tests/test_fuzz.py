@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from rodcad.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = ["catenary", "triangle", "chain"]
+EXAMPLES = ["catenary", "triangle", "chain", "necklace"]  # necklace: rods printed to order
 NUMBER = re.compile(r"(?<![\w.])-?\d+(\.\d+)?(e-?\d+)?(?![\w.])")
 REPLACEMENTS = ["0", "-1", "1e-9", "0.5", "3", "1e12", "1e13", "-1e300", "10" * 40, ".nan", ".inf", "''", "[]",
                 "{}", "null", "true", "abc", "[1, 2, 3]"]
@@ -82,3 +82,18 @@ def test_mutated_catalog_lengths(tmp_path, capsys, value):
     code = main(["catalog", "check", str(cat)])
     err = capsys.readouterr().err
     assert code == 2 and "Traceback" not in err and f"{cat}:" in err
+
+
+@pytest.mark.parametrize("key,value", [
+    ("length", "{min: 60, max: 20}"), ("length", "{min: 20}"), ("length", "{min: 0, max: 60}"),
+    ("length", "{min: 20, max: 1e13}"), ("length", "{min: 20, max: 60, resolution: 0}"),
+    ("length", "{min: 20, max: 60, step: 1}"), ("curvature", "{min: 0.5, max: 0.9}"),
+    ("curvature", "{min: -0.05, max: .nan}"), ("stops", "{min: 90, max: -90}"), ("stops", "[0, 10]"),
+])
+def test_mutated_ranges_of_rods_printed_to_order(tmp_path, capsys, key, value):
+    text = (ROOT / "catalogs" / "pla-parametric.yaml").read_text()
+    cat = tmp_path / "c.yaml"
+    cat.write_text(re.sub(rf"(?m)^(\s*){key}: .*$", rf"\1{key}: {value}", text, count=1))
+    code = main(["catalog", "check", str(cat)])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err and f"{cat}:" in err and f"{key}" in err, err

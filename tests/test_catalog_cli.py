@@ -84,7 +84,7 @@ def test_bad_catalog_exits_2_with_every_problem(tmp_path: Path, capsys: pytest.C
     assert captured.err.splitlines() == [
         f"{path}:9:13: families[0].length: expected a number, got a string ('thirty')",
         f"{path}:10:5: families[0].colour: unknown key 'colour' (expected one of: name, description, length, "
-        "scale, curvature, stops, section, joint, ends, material, balls)",
+        "scale, curvature, stops, section, joint, ends, material, fill, balls)",
     ]
     assert "Traceback" not in captured.err
 

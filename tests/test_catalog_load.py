@@ -190,7 +190,7 @@ MISTAKES = {
     "unknown key, no close match": (
         BASE + "    colour: red\n",
         [(10, 5, "families[0].colour", "unknown key 'colour' (expected one of: name, description, length, "
-                                        "scale, curvature, stops, section, joint, ends, material, balls)")],
+                                        "scale, curvature, stops, section, joint, ends, material, fill, balls)")],
     ),
     "unknown choice": (
         BASE.replace("knuckle_radius: 3.2,", "layout: tongue-fok, knuckle_radius: 3.2,"),

@@ -95,14 +95,6 @@ __all__ = [
 ]
 
 
-
-
-
-
-
-
-
-
 @dataclass
 class FabricatedRod:
     """One printed rod as built.
@@ -140,6 +132,9 @@ class FabricatedRod:
         print_note: remark on the print orientation ('' for flat-lying rods).
         thickness: rod thickness along the hinge axes (mm), the pin length.
         pin_diameter: hinge pin diameter (mm).
+        fill_mass: grams of shot poured into the chamber at ``pause_z`` (rods with a fill).
+        fill_name: what the shot is ('' without).
+        chamber_volume: the chamber's volume (mm^3; 0 without).
     """
 
     index: int
@@ -169,6 +164,9 @@ class FabricatedRod:
     thickness: float = 0.0
     pin_diameter: float = 0.0
     pause_zs: tuple[float, ...] = ()
+    fill_mass: float = 0.0
+    fill_name: str = ""
+    chamber_volume: float = 0.0
 
 
 @dataclass
@@ -271,6 +269,9 @@ def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
                   cache: DiskCache | None = None, _plan_data: dict[str, Any] | None = None) -> FabricatedRod:
     """Fabricate one rod (see :func:`fabricate_chain`)."""
 
+    if rod.fill is not None:
+        return FabricatedRod(**{**_filled_result(rod, target).__dict__, "index": index,
+                                "file_stem": f"{index:02d}_{rod.name}"})
     cache = cache if cache is not None else DiskCache()
     plan = _plan_data
     if plan is None:
@@ -310,13 +311,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     mass = meas.mass
     if abs(mass - goal) > MASS_TOL * goal:
         raise FabricationError(f"rod {index} ({rod.name}): built {mass:.4f} g for {goal:.4f} g")
-    note = ""
-    if rod.geometry.curvature != 0:
-        g = rod.geometry
-        rho_c = 1 / abs(g.curvature)
-        sag = rho_c * (1 - math.cos(math.radians(abs(g.half_angle_deg))))
-        note = (f"curved: rests on its arc's lowest point, the ends rise {sag:.1f} mm (the underside overhangs up "
-                f"to {abs(g.half_angle_deg):.0f} deg from the bed; add support under the ends)")
+    note = _print_note(rod)
     return FabricatedRod(
         index=index, type_name=rod.name, target_mass=float(target), mass=mass,
         com=meas.com, plastic_volume=meas.volume, filament_mass=meas.volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
@@ -326,6 +321,42 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         min_wall=meas.min_wall, layout=plan.layout, print_matrix=pm,
         file_stem=f"{index:02d}_{rod.name}", print_note=note, thickness=rod.geometry.thickness,
         pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs))
+
+
+def _filled_result(rod: RodType, target: float) -> FabricatedRod:
+    """A rod with a fill: its chamber cut, checked and measured (:mod:`rodcad.cad.filled`)."""
+    from rodcad.cad.filled import build_filled
+
+    b = build_filled(rod, target)
+    if b.min_wall < rod.material.min_wall - 1e-6:
+        raise FabricationError(f"{rod.name}: a wall of {b.min_wall:.3f} mm around its chamber is thinner than "
+                               f"the minimum {rod.material.min_wall} mm")
+    if abs(b.mass - b.goal) > MASS_TOL * b.goal:
+        raise FabricationError(f"{rod.name}: built {b.mass:.4f} g for {b.goal:.4f} g")
+    pm = print_matrix(b.solid)
+    c = b.chamber
+    pause = None if c is None or not c.filled else float(c.roof_y + pm[2, 3])  # rod +y is bed +Z
+    rho = rod.material.density / 1000.0
+    return FabricatedRod(
+        index=0, type_name=rod.name, target_mass=float(target), mass=b.mass, com=b.com, plastic_volume=b.volume,
+        filament_mass=b.volume * rho, cavity_count=0, cavity_radius=0.0, ball_count=0, ball_diameter=None,
+        pause_z=pause, mass_error=(b.mass - b.goal) / b.goal, in_range=not b.message, message=b.message,
+        solid=b.solid, cavity_centers=np.zeros((0, 3)), socket_centers=np.zeros((0, 3)), min_wall=b.min_wall,
+        layout="chamber/filled" if c is not None and c.filled else ("chamber/empty" if c is not None else ""),
+        print_matrix=pm, file_stem=f"00_{rod.name}", print_note=_print_note(rod), thickness=rod.geometry.thickness,
+        pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=() if pause is None else (pause,),
+        fill_mass=c.fill_mass if c is not None else 0.0, fill_name=rod.fill.name if rod.fill else "",
+        chamber_volume=c.volume if c is not None else 0.0)
+
+
+def _print_note(rod: RodType) -> str:
+    """How a curved rod lies on the bed ('' for a straight one)."""
+    g = rod.geometry
+    if g.curvature == 0:
+        return ""
+    sag = (1 - math.cos(math.radians(abs(g.half_angle_deg)))) / abs(g.curvature)
+    return (f"curved: rests on its arc's lowest point, the ends rise {sag:.1f} mm (the underside overhangs up "
+            f"to {abs(g.half_angle_deg):.0f} deg from the bed; add support under the ends)")
 
 
 def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: int = 0, jobs: int | None = None,
@@ -369,9 +400,9 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     plans: list[dict[str, Any] | None] = []
     todo: list[int] = []
     for i, (rod, m) in enumerate(distinct):
-        hit = cache.get("fab", _key(rod, m, seed))
+        hit = None if rod.fill is not None else cache.get("fab", _key(rod, m, seed))
         plans.append(hit)
-        if hit is None:
+        if hit is None and rod.fill is None:  # a rod with a fill is built below, in one boolean
             todo.append(i)
     done = len(distinct) - len(todo)
     if progress:
@@ -413,7 +444,8 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     finally:
         if pool is not None:
             pool.shutdown()
-    built = [_assemble_result(rod, m, 0, plans[i]) for i, (rod, m) in enumerate(distinct)]
+    built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i])
+             for i, (rod, m) in enumerate(distinct)]
     rods: list[FabricatedRod] = []
     problems: list[str] = []
     for index, (rod, m) in enumerate(zip(types, masses)):

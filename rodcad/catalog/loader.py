@@ -5,6 +5,7 @@ expand each family into named rod types, with FILE:LINE:COL for every problem.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +30,7 @@ from rodcad.catalog.model import (
     CATALOG_FORMAT,
     MAX_ARC_HALF_ANGLE_DEG,
     Balls,
+    Fill,
     Catalog,
     EndShape,
     Family,
@@ -294,7 +296,10 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
         ctx.report("material.min_wall", f"minimum wall {format_number(w)} mm is thinner than the "
                    f"printer's nozzle ({format_number(printer.nozzle)} mm)")
     if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f:
-        return _expand_ranges(f, ctx, printer, material, balls, first, second, end_key)
+        return _with_fill(f, ctx, material, _expand_ranges(f, ctx, printer, material, balls, first, second, end_key))
+    if f.get("fill") is not None:
+        ctx.report("fill", "a fill is for rods printed to order: give the length as a range {min, max}")
+        return []
     multi_scale = len(f["scale"]) > 1
     multi_curv = len(f["curvature"]) > 1
     out: list[RodType] = []
@@ -451,6 +456,30 @@ def _range(ctx: _FamilyContext, f: dict[str, Any], key: str) -> tuple[float, flo
                    + (" (a single value is written without min and max)" if lo == hi else ""))
         return None
     return float(lo), float(hi)
+
+
+def _with_fill(f: dict[str, Any], ctx: _FamilyContext, material: Material,
+               expanded: list[RodType] | tuple[list[RodType], Ranges, RodType]
+               ) -> list[RodType] | tuple[list[RodType], Ranges, RodType]:
+    """A family printed to order with its ``fill`` (checked: the longest straight rod holds a
+    chamber) on every rod."""
+    if f.get("fill") is None or not isinstance(expanded, tuple):
+        return expanded
+    from rodcad.catalog.chamber import MAX_BRIDGE, chamber_model
+
+    fl = f["fill"]
+    fill = Fill(fl["name"], float(fl["density"]), float(fl.get("packing", 0.6)))
+    refs, ranges, _ = expanded
+    refs = [dataclasses.replace(r, fill=fill) for r in refs]
+    longest = refs[-1]
+    if chamber_model(longest.geometry, material.min_wall).max_volume <= 0:
+        g = longest.geometry
+        ctx.report("fill", f"no chamber fits in a {format_number(g.length)} mm rod of section "
+                   f"{format_number(g.height)} x {format_number(g.thickness)} mm with the minimum wall of "
+                   f"{format_number(material.min_wall)} mm around it (cells up to {format_number(MAX_BRIDGE)} mm "
+                   "wide, clear of the hinges): a larger section, longer rods or a thinner wall")
+        return []
+    return refs, ranges, refs[0]
 
 
 def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None, material: Material,

@@ -38,6 +38,7 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
 from rodcad.catalog.cache import DiskCache, make_key
+from rodcad.catalog.chamber import CHAMBER_VERSION, fill_numbers
 from rodcad.parallel import cached_map
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -71,8 +72,10 @@ class MassInfo:
         solid_mass: mass of the plain solid (g).
         com: centre of mass (along, perp) in the rod frame (mm); the same over
             the whole mass range (layouts are symmetric about it).
-        m_min: lightest achievable mass, with the most cavities (g).
-        m_max: heaviest achievable mass, with the most balls (g).
+        m_min: lightest achievable mass, with the most cavities (g) (with a fill: the
+            largest chamber, empty).
+        m_max: heaviest achievable mass, with the most balls (g) (with a fill: the largest
+            chamber, filled).
         cavity_radius: radius of the cavities at m_min (mm), 0 if none fit.
         cavity_count: number of cavities at m_min.
         ball_count: number of balls at m_max.
@@ -107,7 +110,8 @@ def _key(rod: RodType) -> str:
 
     return make_key("mass", MASSRANGE_VERSION, GEOMETRY_VERSION, MIN_CAVITY_RADIUS, RADIUS_STEP,
                     asdict(rod.geometry), asdict(rod.material),
-                    asdict(rod.balls) if rod.balls is not None else None)
+                    asdict(rod.balls) if rod.balls is not None else None,
+                    *(() if rod.fill is None else ("fill", CHAMBER_VERSION, asdict(rod.fill))))
 
 
 def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
@@ -134,6 +138,10 @@ def compute_mass_info(rod: RodType) -> MassInfo:
 
     type_solid(rod)  # the solid must build (a GeometryError names what is wrong)
     volume, center = rod_mass_properties(rod.geometry)
+    if rod.fill is not None:  # one chamber, empty to filled (rodcad.catalog.chamber)
+        solid, com, (lo, hi) = fill_numbers(rod)
+        return MassInfo(float(volume), float(solid), (float(com[0]), float(com[1])), float(lo), float(hi),
+                        0.0, 0, 0)
     cavities, balls = layouts(rod)
     rho = rod.material.density / 1000.0  # g/mm^3
     solid_mass = volume * rho

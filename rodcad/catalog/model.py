@@ -70,6 +70,7 @@ __all__ = [
     "Catalog",
     "EndShape",
     "Family",
+    "Fill",
     "Hinge",
     "json_digest",
     "Material",
@@ -267,6 +268,28 @@ class Balls:
 
 
 @dataclass(frozen=True)
+class Fill:
+    """Loose dense shot a rod's chamber may be filled with at a print pause (rods printed to
+    order; see :mod:`rodcad.catalog.chamber`).
+
+    Attributes:
+        name: e.g. 'tungsten shot'.
+        density: of the metal (g/cm^3): tungsten 19.3, lead 11.35, steel 7.85.
+        packing: fraction of the chamber the shot fills (random loose packing of spheres
+            about 0.6).
+    """
+
+    name: str
+    density: float
+    packing: float
+
+    @property
+    def effective_density(self) -> float:
+        """Grams of shot per cm^3 of chamber (g/cm^3)."""
+        return self.density * self.packing
+
+
+@dataclass(frozen=True)
 class Printer:
     """The printer a catalog is sized for.
 
@@ -308,6 +331,7 @@ class RodType:
         material: printing material.
         balls: metal balls it may hold, or None.
         origin: where the type's family (or length) is written in the catalog.
+        fill: loose shot its chamber may hold (rods printed to order), or None.
     """
 
     name: str
@@ -319,6 +343,7 @@ class RodType:
     material: Material
     balls: Balls | None
     origin: Origin = field(compare=False, repr=False)
+    fill: Fill | None = None
 
 
 @dataclass(frozen=True)
@@ -470,7 +495,8 @@ class Catalog:
         for tag, value in (("a", first_stop), ("b", second_stop), ("c", first_under), ("d", second_under)):
             if value is not None:
                 name += f"-{tag}{_fmt(value, 3)}"
-        return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin)
+        return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin,
+                       t.fill)
 
     def with_types(self, types: Sequence[RodType]) -> Catalog:
         """This catalog with rods made to order added (a name already known is kept).

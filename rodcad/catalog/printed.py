@@ -102,6 +102,8 @@ def mass_table(family: Family, *, jobs: int | None = None) -> MassTable:
     if family.template is None:
         raise ValueError(f"rod family {family.name!r} is not printed to order")
     t = family.template
+    if t.fill is not None:  # its rods' ranges come from their chambers: no table to compute
+        return MassTable(np.zeros(0), np.zeros(0), np.zeros(0))
     rods = [replace(t, name=f"{family.name}-table-{x:g}", length=x, curvature=0.0,
                     geometry=replace(t.geometry, length=x, curvature=0.0)) for x in table_lengths(family)]
     by_name = mass_infos(rods, jobs=jobs)
@@ -116,8 +118,17 @@ def _plain(g: RodGeometry, template: RodType) -> bool:
     return g.curvature == 0 and g.first == t.first and g.second == t.second
 
 
-def rod_numbers(rod: RodType, table: MassTable, template: RodType) -> RodNumbers:
-    """Solid mass, centre of mass and mass range of a rod printed to order."""
+def rod_numbers(rod: RodType, table: MassTable | None, template: RodType) -> RodNumbers:
+    """Solid mass, centre of mass and mass range of a rod printed to order (a rod with a
+    ``fill``: its chamber's range in closed form, :func:`rodcad.catalog.chamber.fill_numbers`;
+    the table is not read and may be None)."""
+    if rod.fill is not None:
+        from rodcad.catalog.chamber import fill_numbers
+
+        solid, com, rng = fill_numbers(rod)
+        return RodNumbers(solid, com, rng)
+    if table is None:
+        raise ValueError(f"rod {rod.name!r}: a mass table is needed (it has no fill)")
     volume, (cx, cy, _) = rod_mass_properties(rod.geometry)
     solid = volume * rod.material.density / 1000.0
     removable, addable = table.at(rod.length)

@@ -199,6 +199,22 @@ def family_spec() -> Obj:
                 ),
                 required=True,
             ),
+            "fill": Field(
+                Obj(
+                    {
+                        "name": Field(Str(), required=True, description="e.g. tungsten shot."),
+                        "density": Field(Num(maximum=25, exclusive_minimum=0, unit="g/cm^3"), required=True,
+                                         description="Density of the metal (g/cm^3): tungsten 19.3, "
+                                         "lead 11.35, steel 7.85."),
+                        "packing": Field(Num(exclusive_minimum=0, maximum=0.75), default=0.6,
+                                         description="Fraction of the chamber the loose shot fills "
+                                         "(random loose packing of spheres about 0.6; at most 0.75)."),
+                    },
+                ),
+                description="Loose dense shot (rods printed to order): every rod gets one chamber "
+                "centred on its centre of mass, left empty (lighter) or filled with the shot at a "
+                "print pause (heavier), sized for its mass (see rodcad.catalog.chamber).",
+            ),
             "balls": Field(
                 Nullable(
                     Obj(

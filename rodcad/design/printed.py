@@ -65,7 +65,7 @@ def _limits(left: RodGeometry, right: RodGeometry) -> tuple[float, float]:
 #: Rods whose parameters (length mm, curvature 1/mm, setbacks mm, chamfers deg) agree to
 #: these are made identical (a symmetric target's mirror images differ by round-off and by
 #: the curve's sampling): one solid to build, one name.
-SAME_ROD = (1e-7, 1e-7, 1e-9, 1e-6, 1e-6, 1e-9, 1e-6, 1e-6)
+SAME_ROD = (1e-9, 1e-7, 1e-9, 1e-6, 1e-6, 1e-9, 1e-6, 1e-6)
 
 
 def _params(t: RodType) -> tuple[float, ...]:
@@ -155,6 +155,7 @@ def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.nd
     rods = _unique([catalog.rod(fam.name, float(lengths[i]), float(kappa[i]), first_stop=top.get(i - 1),
                                 second_stop=top.get(i), first_under=under.get(i - 1), second_under=under.get(i))
                     for i in range(n)], catalog)
+    lengths = np.array([t.length for t in rods])  # a rod made one with its twin: the twin's length
     nums = [rod_numbers(t, pf.table, fam.template) for t in rods]
     rows = np.zeros((max(n - 1, 0), 2))
     notes, unmet = [], []

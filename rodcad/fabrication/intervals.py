@@ -1,5 +1,6 @@
 """Masses a rod type can really be built at: per ball count, the interval that cavities
-beside the balls reach; the union over ball counts, merged (disk-cached tables).
+beside the balls reach; the union over ball counts, merged (disk-cached tables). A rod with
+a ``fill`` reaches its whole range continuously (:mod:`rodcad.catalog.chamber`): no table.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rodcad.catalog.cache import DiskCache, make_key
+from rodcad.catalog.chamber import fill_numbers
 from rodcad.catalog.massrange import MASSRANGE_VERSION
 from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, UP, void_volume
 from rodcad.parallel import cached_map
@@ -202,6 +204,8 @@ def achievable_intervals(rod: RodType, *, seed: int = 0, cache: DiskCache | None
         [(lo, hi), ...] in g, ascending, within the type's [m_min, m_max];
         e.g. ``achievable_intervals(cat['free-20'])[0] == (m_min, ~solid mass)``.
     """
+    if rod.fill is not None:  # one chamber, its length set per rod: every mass of the range
+        return [fill_numbers(rod)[2]]
     return [(float(a), float(b)) for a, b in interval_table(rod, seed, cache)["intervals"]]
 
 
@@ -211,7 +215,8 @@ def chain_intervals(types: Sequence[RodType], *, seed: int = 0, jobs: int | None
     the uncached ones computed in ``jobs`` worker processes (default: the CPUs)."""
     cache = cache if cache is not None else DiskCache()
     uniq = list({rod.name: rod for rod in types}.values())
-    cached_map(_table_star, [(rod, seed) for rod in uniq], [intervals_key(rod, seed) for rod in uniq], kind="fabint",
+    tabled = [rod for rod in uniq if rod.fill is None]  # rods with a fill need no table
+    cached_map(_table_star, [(rod, seed) for rod in tabled], [intervals_key(rod, seed) for rod in tabled], kind="fabint",
                cache=cache, jobs=jobs, usable=lambda hit: isinstance(hit, dict))
     return {rod.name: achievable_intervals(rod, seed=seed, cache=cache) for rod in uniq}
 

@@ -90,13 +90,17 @@ def _as_built_json(ab) -> dict[str, Any]:
 
 
 def _filament_and_balls(rods) -> dict[str, Any]:
-    """Filament (g) and metal balls by diameter over fabricated rods."""
+    """Filament (g), metal balls by diameter and shot by kind (g) over fabricated rods."""
     balls: Counter[float] = Counter()
+    shot: dict[str, float] = {}
     for f in rods:
         if f.ball_count:
             balls[float(f.ball_diameter)] += int(f.ball_count)
+        if f.fill_mass > 0:
+            shot[f.fill_name] = shot.get(f.fill_name, 0.0) + float(f.fill_mass)
     return {"filament_g": float(sum(f.filament_mass for f in rods)),
-            "metal_balls": [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]}
+            "metal_balls": [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())],
+            "fill": [{"name": k, "grams": v} for k, v in sorted(shot.items())]}
 
 
 def _header(d, method: str | None, seed: int, time_s: float) -> dict[str, Any]:
@@ -129,7 +133,10 @@ def design_json(r) -> dict[str, Any]:
                 "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
                 "pause_zs_mm": [float(z) for z in f.pause_zs],
                 "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
-                "ball_mass_g": float(f.mass - f.filament_mass),
+                "ball_mass_g": float(f.mass - f.filament_mass - f.fill_mass),
+                "fill": {"name": f.fill_name, "grams": float(f.fill_mass),
+                         "chamber_volume_mm3": float(f.chamber_volume),
+                         "pause_z_mm": None if f.pause_z is None else float(f.pause_z)} if f.fill_name else None,
                 "plastic_volume_mm3": float(f.plastic_volume),
                 "file": f"rods/{f.file_stem}.step",
                 "print_matrix": [[float(v) for v in row] for row in np.asarray(f.print_matrix)],

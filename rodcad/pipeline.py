@@ -35,6 +35,7 @@ from optimize.discretize import MAX_RODS
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.export import export_assembly, export_step, export_stl
+from rodcad.cad.printfile import write_print_files
 from rodcad.cad.rods import (
     ChainFabrication,
     FabricatedRod,
@@ -53,7 +54,7 @@ from rodcad.design.printed import rods_of
 from rodcad.errors import InputError
 from rodcad.fabrication.intervals import chain_intervals
 from rodcad.outdir import staged_output
-from rodcad.outputs.design_json import chandelier_json, design_json, write_json
+from rodcad.outputs.design_json import chandelier_json, design_json, print_profile, write_json
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.preview3d import preview_3d
 from rodcad.outputs.report import chandelier_markdown, report_markdown
@@ -373,6 +374,9 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             with progress.step("writing assembly.step"):
                 write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
                                name=result.design.name)
+            with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
+                write_print_files(result.fabrication.rods, tmp, printer=result.design.catalog.printer,
+                                  profile=print_profile(result.design.catalog))
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
             write_json(tmp / "design.json", data)
@@ -438,13 +442,17 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
 def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
                              progress: Progress | None = None) -> dict[str, Any]:
     """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
-    and <chain>/rods/*.step|stl; staged like :func:`write_outputs`, whose return it shares."""
+    and <chain>/rods/*.step|stl|3mf and <chain>/print.3mf; staged like :func:`write_outputs`, whose return it shares."""
     progress = progress or Progress(quiet=True)
     with staged_output(outdir) as tmp:
         if b.frame is not None:
             with progress.step("writing and checking the rods' STEP/STL files"):
                 for ch, fab in zip(b.result.chains, b.fabrications):
                     write_rod_files(fab, tmp / ch.name)
+            with progress.step("writing each chain's print.3mf (PrusaSlicer project) and rods/*.3mf"):
+                for ch, fab in zip(b.result.chains, b.fabrications):
+                    write_print_files(fab.rods, tmp / ch.name, printer=b.design.catalog.printer,
+                                      profile=print_profile(b.design.catalog))
             with progress.step("writing frame.step, frame.stl and assembly.step"):
                 frame = b.frame[0]
                 export_step(frame, tmp / "frame.step", name="frame")

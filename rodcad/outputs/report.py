@@ -114,6 +114,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
             f = fab.rods[i]
             cav = f"{f.cavity_count} x r {f.cavity_radius:.2f}" if f.cavity_count else "-"
             balls = f"{f.ball_count} x {f.ball_diameter:g} mm" if f.ball_count else "-"
+            if f.fill_mass > 0:
+                balls = f"pour {f.fill_mass:.2f} g of {f.fill_name} at z = {f.pause_z:.2f} mm"
+            elif f.chamber_volume > 0:
+                balls = "empty chamber"
             pause = f"{f.pause_z:.2f}" if f.pause_z is not None else "-"
             row += (f" {f.mass:.3f} | {f.filament_mass:.2f} | {cav} | {balls} | {pause} "
                     f"| {_rod_file(f)} |")
@@ -131,6 +135,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         add(f"- Filament: {bom['filament_g']:.1f} g in all ({d.catalog[r.type_names[0]].material.name})")
         for ball in bom["metal_balls"]:
             add(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
+        for fill in bom.get("fill", []):
+            add(f"- {fill['grams']:.1f} g of {fill['name']} in all (per rod in the table)")
     else:
         add("- Filament and metal balls: run with CAD (without --no-cad) for exact figures")
     add(f"- Total chain mass: {bom['total_mass_g']:.1f} g")
@@ -151,10 +157,14 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     add("## Printing and assembly")
     add("")
     if fab is not None:
-        add("1. Print each file of `rods/` as it lies (it is already in print orientation on the bed, "
-            "no support needed).")
-        add("2. Rods with balls: pause the print at the Z height in the table (e.g. PrusaSlicer: "
-            "right-click the layer in the preview slider, 'Add pause print'), drop the balls in, resume.")
+        add("1. Open `print.3mf` in PrusaSlicer (2.5 or newer): every rod is on the bed, in print orientation, "
+            "with the print settings the masses assume (100 % infill) and a pause (M601) at each layer where "
+            "balls go in; rods whose pauses differ are on separate plates (`print-2.3mf`, ...). Other "
+            "slicers: print each file of `rods/` (`.3mf`, `.stl` or `.step`) as it lies.")
+        add("2. Rods with balls: at each pause drop the balls the message names into the sockets and resume "
+            "(without the project: pause at the Z height in the table, e.g. PrusaSlicer's 'Add pause print'). "
+            "Rods with a chamber to fill: pause at the Z height in the table (the top of the chamber), pour "
+            "the grams of shot the table lists (level with the top, every cell alike), resume.")
     else:
         add("1. Build the solids first: run `rodcad build` without `--no-cad`.")
     add(f"3. Lay the rods out in order 0 to {r.n - 1} (the number leads each file name). Rod k's "
@@ -207,6 +217,7 @@ def summary_text(r, outdir: Path | None) -> str:
     L.append(f"  rods          {rods}")
     if "filament_g" in bom:
         balls = ", ".join(f"{b['count']} x {b['diameter_mm']:g} mm" for b in bom["metal_balls"]) or "none"
+        balls += "".join(f"; {b['grams']:.1f} g of {b['name']}" for b in bom.get("fill", []))
         L.append(f"  filament      {bom['filament_g']:.1f} g; metal balls: {balls}; "
                  f"pins: {bom['pins']['count']} x {bom['pins']['diameter_mm']:g} mm")
     for note in r.notes:
@@ -214,7 +225,7 @@ def summary_text(r, outdir: Path | None) -> str:
     if outdir is not None:
         files = "design.json, report.md, preview.png"
         if r.fabrication is not None:
-            files += ", assembly.step, rods/*.step|stl"
+            files += ", assembly.step, print.3mf, rods/*.step|stl|3mf"
         L.append(f"  files         {outdir}/ ({files})")
     return "\n".join(L)
 

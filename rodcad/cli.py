@@ -23,6 +23,7 @@ from rodcad.outdir import OutputFolderError
 COMMAND_MODULES = (
     "rodcad.commands.build",
     "rodcad.commands.simulate",
+    "rodcad.commands.check",
     "rodcad.commands.catalog",
     "rodcad.commands.schema",
     "rodcad.commands.demo",

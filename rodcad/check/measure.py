@@ -1,0 +1,284 @@
+"""Each rod of a build as it is now: read, checked, measured, compared with design.json.
+
+Per rod (:func:`read_rods`): its STEP file (or its solid in an assembly STEP, matched by
+name) is read and must be one valid closed solid; it is brought back to the rod frame (the
+inverse of its print matrix, or of its placement in the hanging chain for an assembly);
+its plastic volume and centre of volume come from the B-rep, the inserts design.json
+records are added (metal balls at their centres, the shot of a fill chamber at its centre), and the rod counts as *edited* when its mass moved by
+more than :data:`EDIT_MASS_REL` (relative) or its centre of mass by more than
+:data:`EDIT_COM_MM`. Its pin holes must still be where the chain needs them: along z
+through (0, 0) and (length, 0) of the rod frame a pin must pass
+(:func:`rodcad.cad.reread.pin_hole`: no material within the pin's radius) and material must
+still surround the hole (at least :data:`MIN_AROUND` of what the rod type has there).
+
+:func:`joint_overlaps` then checks the joints next to edited rods on the solids: at the
+chain's new bend, and just inside the design's joint limits, the two rods must not overlap.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rodcad.cad.export import rod_matrices
+from rodcad.cad.reread import (
+    PinHole,
+    hinge_reference,
+    measure,
+    moved,
+    pair_overlap,
+    pin_hole,
+    read_assembly_rods,
+    read_rod_step,
+    shape_problem,
+)
+from rodcad.cad.solids import GeometryError
+from rodcad.catalog.model import RodType
+from rodcad.check.built import BuiltChain, BuiltRod
+from rodcad.errors import InputError, Problem
+
+__all__ = [
+    "EDIT_COM_MM",
+    "EDIT_MASS_REL",
+    "JointOverlap",
+    "LIMIT_MARGIN_DEG",
+    "MIN_AROUND",
+    "RodReading",
+    "joint_overlaps",
+    "read_rods",
+]
+
+#: A rod whose mass moved by more than this (relative) counts as edited.
+EDIT_MASS_REL = 1e-6
+
+#: ... or whose centre of mass moved by more than this (mm).
+EDIT_COM_MM = 1e-4
+
+#: Material a pin passes through, at most (mm^3): round-off of the boolean.
+BLOCKED_TOL = 1e-3
+
+#: Least fraction of the rod type's material around a pin hole an edited rod keeps.
+MIN_AROUND = 0.9
+
+#: Joint limits are checked this far inside (deg): at the limit itself the rods touch.
+LIMIT_MARGIN_DEG = 0.05
+
+
+@dataclass
+class RodReading:
+    """One rod as it is now.
+
+    Attributes:
+        index: chain position.
+        file: the file it was read from.
+        solid: the solid in the rod frame (a build123d ``Solid``).
+        volume: plastic volume (mm^3).
+        mass: plastic plus the recorded balls (g).
+        com: (along, perp) centre of mass (mm, rod frame).
+        edited: mass or centre of mass differ from design.json's as-built ones.
+        mass_change: (mass - built mass) / built mass.
+        com_shift: distance of the centre of mass from the built one (mm).
+        pins: what is around its first and second pin holes.
+    """
+
+    index: int
+    file: Path
+    solid: Any
+    volume: float
+    mass: float
+    com: np.ndarray
+    edited: bool
+    mass_change: float
+    com_shift: float
+    pins: tuple[PinHole, PinHole]
+
+
+@dataclass(frozen=True)
+class JointOverlap:
+    """Two neighbouring rods that overlap at a bend.
+
+    Attributes:
+        joint: the joint between rods ``joint`` and ``joint + 1`` (design.json's ``limits_deg``
+            of rod ``joint``).
+        bend_deg: the bend tested (deg).
+        where: 'pose' (the chain's new equilibrium bend), 'lo' or 'hi' (just inside a limit).
+        overlap: shared volume (mm^3).
+    """
+
+    joint: int
+    bend_deg: float
+    where: str
+    overlap: float
+
+    def sentence(self) -> str:
+        if self.where == "pose":
+            return (f"rods {self.joint} and {self.joint + 1} overlap by {self.overlap:.3g} mm^3 at the bend the chain "
+                    f"would now hang at ({self.bend_deg:.2f} deg): the edited rods collide there, so the chain "
+                    "cannot hang as simulated; take material off where they meet")
+        side = "lower" if self.where == "lo" else "upper"
+        return (f"rods {self.joint} and {self.joint + 1} overlap by {self.overlap:.3g} mm^3 just inside the joint's "
+                f"{side} limit ({self.bend_deg:.2f} deg): the edit narrowed how far the joint can bend")
+
+
+def _measured(rod: BuiltRod, volume: float, center: tuple[float, float, float], density: float
+              ) -> tuple[float, np.ndarray]:
+    """Mass (g) and (along, perp) centre of mass of plastic plus the recorded inserts (metal
+    balls at their centres, shot in a fill chamber at its centre)."""
+    plastic = volume * density
+    mass = plastic + rod.ball_mass + rod.fill_mass
+    first = plastic * np.array(center[:2], float)
+    k = len(rod.ball_centers)
+    if k:
+        first = first + rod.ball_mass / k * rod.ball_centers[:, :2].sum(axis=0)
+    if rod.fill_mass and rod.fill_center is not None:
+        first = first + rod.fill_mass * np.asarray(rod.fill_center, float)
+    return mass, first / mass
+
+
+def _label_index(label: str) -> int | None:
+    m = re.match(r"\s*(\d+)_", label)
+    return int(m.group(1)) if m else None
+
+
+def _assembly_solids(built: BuiltChain, path: Path) -> tuple[dict[int, Any], list[Problem]]:
+    """Rod index -> solid in the rod frame, from an assembly STEP in the built pose."""
+    try:
+        parts = read_assembly_rods(path)
+    except GeometryError as err:
+        return {}, [Problem(str(path), 0, 0, "", str(err))]
+    mats = rod_matrices(built.simulated)
+    found: dict[int, list[Any]] = {}
+    for label, solid in parts:
+        i = _label_index(label)
+        if i is None or i >= built.n:
+            continue
+        want = built.rods[i].stem.replace(".", "_")
+        if not label.replace(".", "_").startswith(want):
+            continue
+        found.setdefault(i, []).append(solid)
+    out: dict[int, Any] = {}
+    problems = []
+    for r in built.rods:
+        solids = found.get(r.index, [])
+        if len(solids) != 1:
+            problems.append(Problem(str(path), 0, 0, r.stem, f"{len(solids)} solids named {r.stem!r}; the assembly "
+                                    "must hold each rod once, named as rodcad named it"))
+            continue
+        bad = shape_problem(solids[0])
+        if bad:
+            problems.append(Problem(str(path), 0, 0, r.stem, bad))
+            continue
+        out[r.index] = moved(solids[0], np.linalg.inv(mats[r.index]))
+    return out, problems
+
+
+def _read_one(rod: BuiltRod, solid: Any | None, density: float,
+              reference: Callable[[RodType], tuple[PinHole, PinHole]], rtype: RodType,
+              source: Path | None = None) -> RodReading | str:
+    """Measure one rod (``solid`` already in the rod frame, read from ``source``, or None:
+    read its STEP file); a string says what is wrong with it."""
+    if solid is None:
+        if not rod.file.is_file():
+            return "is missing (every rod's STEP file must be there; restore it from the build)"
+        try:
+            solid = moved(read_rod_step(rod.file), np.linalg.inv(rod.print_matrix))
+        except GeometryError as err:
+            return str(err)
+    volume, center = measure(solid)
+    mass, com = _measured(rod, volume, center, density)
+    change = (mass - rod.mass) / rod.mass
+    shift = float(np.hypot(*(com - rod.com)))
+    edited = abs(change) > EDIT_MASS_REL or shift > EDIT_COM_MM
+    g = rtype.geometry
+    ref = reference(rtype) if edited else None
+    pins = []
+    for k, x in enumerate((0.0, rod.length)):
+        if ref is None:  # an unchanged solid keeps its holes: skip the booleans
+            pins.append(PinHole(0.0, math.nan))
+            continue
+        p = pin_hole(solid, x, pin_radius=g.hinge.pin_diameter / 2, hole_radius=g.hinge.hole_diameter / 2,
+                     knuckle_radius=g.hinge.knuckle_radius, thickness=g.thickness)
+        which = ("first", "(0, 0)") if k == 0 else ("second", f"({rod.length:.3f}, 0)")
+        if p.blocked > BLOCKED_TOL:
+            return (f"its {which[0]} pin hole is blocked: {p.blocked:.3g} mm^3 of material where the "
+                    f"{g.hinge.pin_diameter:g} mm pin goes (along z through {which[1]} of the rod frame); the hole "
+                    "was filled or moved. Keep the rod where it was saved: its placement is how rodcad finds "
+                    "the holes")
+        if p.around < MIN_AROUND * ref[k].around:
+            return (f"its {which[0]} pin hole lost the material around it ({100 * p.around / ref[k].around:.0f} % "
+                    f"of the design's within 1 mm of the hole, along z through {which[1]} of the rod frame): the "
+                    "hole moved or the knuckle was cut away")
+        pins.append(p)
+    return RodReading(rod.index, source or rod.file, solid, volume, mass, com, edited, change, shift, (pins[0], pins[1]))
+
+
+def read_rods(built: BuiltChain, types: list[RodType], *, assembly: Path | None = None) -> list[RodReading]:
+    """Read, check and measure every rod of a build (see the module's doc).
+
+    Args:
+        built: the build's design.json.
+        types: the rod type per position (:func:`rodcad.check.types.chain_types`).
+        assembly: read the rods from this assembly STEP (in the pose design.json's
+            ``simulated.points`` gives, as ``assembly.step`` is written) instead of rods/*.step.
+
+    Raises:
+        InputError: a file that is missing or not one valid closed solid, or a rod whose pin
+            holes moved or vanished (every problem, each naming its file).
+    """
+    solids: dict[int, Any] = {}
+    problems: list[Problem] = []
+    if assembly is not None:
+        solids, problems = _assembly_solids(built, assembly)
+    refs: dict[str, tuple[PinHole, PinHole]] = {}
+
+    def ref(rtype: RodType) -> tuple[PinHole, PinHole]:
+        if rtype.name not in refs:
+            refs[rtype.name] = hinge_reference(rtype)
+        return refs[rtype.name]
+
+    out: list[RodReading] = []
+    for rod, rtype in zip(built.rods, types):
+        if assembly is not None and rod.index not in solids:
+            continue
+        got = _read_one(rod, solids.get(rod.index), built.density, ref, rtype, assembly)
+        if isinstance(got, str):
+            where = str(assembly) if assembly is not None else str(rod.file)
+            problems.append(Problem(where, 0, 0, rod.stem if assembly is not None else "", got))
+        else:
+            out.append(got)
+    if problems:
+        raise InputError(problems)
+    return out
+
+
+def _test_bends(lo: float, hi: float, pose: float) -> list[tuple[str, float]]:
+    """(where, bend deg) to test at a joint with limits [lo, hi] (deg, +-inf where free)."""
+    m = LIMIT_MARGIN_DEG
+    at = float(np.clip(pose, lo + m, hi - m)) if hi - lo > 2 * m else pose
+    tests = [("pose", at)]
+    for where, limit in (("lo", lo + m), ("hi", hi - m)):
+        if math.isfinite(limit) and hi - lo > 2 * m and abs(limit - at) > 1e-9:  # a joint on a stop: tested once
+            tests.append((where, limit))
+    return tests
+
+
+def joint_overlaps(built: BuiltChain, readings: list[RodReading], bends_deg: np.ndarray) -> list[JointOverlap]:
+    """The joints next to an edited rod where the two rods overlap, at the chain's new
+    bend or just inside a design limit (every other joint is as designed)."""
+    out = []
+    lim = np.degrees(built.limits)
+    for j in range(built.n - 1):
+        a, b = readings[j], readings[j + 1]
+        if not (a.edited or b.edited):
+            continue
+        for where, phi in _test_bends(lim[j, 0], lim[j, 1], float(bends_deg[j])):
+            v = pair_overlap(a.solid, b.solid, built.rods[j].length, phi)
+            if v > 0:
+                out.append(JointOverlap(j, phi, where, v))
+    return out

@@ -1,0 +1,183 @@
+"""``rodcad check OUTDIR``: how an earlier build hangs with its rods as they are now.
+
+The steps (numbers here, solids through :mod:`rodcad.cad.reread`)::
+
+    OUTDIR/design.json            -> load_built()        rodcad.check.built
+    catalog, rod types            -> chain_types()       rodcad.check.types
+    rods/*.step (or assembly)     -> read_rods()         rodcad.check.measure: valid closed
+                                     solids, rod frame, mass and centre of mass, pin holes
+    re-simulation                 -> solve_equilibrium with the measured masses and centres
+                                     of mass and the design's joint limits
+    joints next to edited rods    -> joint_overlaps()    the rods must not overlap at the new
+                                     bends nor inside the design's limits
+
+:func:`check` returns a :class:`CheckResult`; :func:`check_json` is what ``--json`` prints.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from optimize import EquilibriumResult, shape_distance, solve_equilibrium
+from optimize.distance import ShapeDistance
+from rodcad.check.built import BuiltChain, load_built
+from rodcad.check.measure import JointOverlap, RodReading, joint_overlaps, read_rods
+from rodcad.check.types import ChainTypes, chain_types
+from rodcad.errors import InputError, Problem
+from rodcad.progress import Progress
+
+__all__ = ["CheckResult", "check", "check_json", "equilibrium_json", "simulate"]
+
+
+@dataclass
+class CheckResult:
+    """An earlier build with its rods as they are now.
+
+    Attributes:
+        built: its design.json.
+        types: its catalog and rod types.
+        readings: every rod, measured.
+        equilibrium: the chain re-simulated with the measured masses and centres of mass.
+        vs_design: its joints against design.json's simulated joints.
+        vs_target: its joints against the target joints.
+        overlaps: joints next to edited rods where the rods now overlap.
+        notes: what the user should know, in sentences.
+        time_s: wall time.
+    """
+
+    built: BuiltChain
+    types: ChainTypes
+    readings: list[RodReading]
+    equilibrium: EquilibriumResult
+    vs_design: ShapeDistance
+    vs_target: ShapeDistance
+    overlaps: list[JointOverlap]
+    notes: list[str] = field(default_factory=list)
+    time_s: float = 0.0
+
+    @property
+    def edited(self) -> list[int]:
+        return [r.index for r in self.readings if r.edited]
+
+    @property
+    def masses(self) -> np.ndarray:
+        return np.array([r.mass for r in self.readings], float)
+
+    @property
+    def com(self) -> np.ndarray:
+        return np.array([r.com for r in self.readings], float)
+
+    @property
+    def blocked(self) -> bool:
+        """The chain cannot hang as simulated: rods overlap at the bend it would take."""
+        return any(o.where == "pose" for o in self.overlaps)
+
+    @property
+    def ok(self) -> bool:
+        return self.equilibrium.success and not self.blocked
+
+
+def simulate(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) -> EquilibriumResult:
+    """The chain's equilibrium with these masses and centres of mass, the design's limits."""
+    a, b = built.anchors
+    return solve_equilibrium(built.lengths, masses, a, b, com=com, limits=built.limits if built.n > 1 else None,
+                             g=g)
+
+
+def check(outdir: str | Path, *, assembly: str | Path | None = None,
+          progress: Progress | None = None) -> CheckResult:
+    """Re-read the rods of an earlier build and re-simulate the chain.
+
+    Args:
+        outdir: the output folder of ``rodcad build`` (with CAD).
+        assembly: read the rods from this assembly STEP instead of OUTDIR/rods/*.step.
+        progress: where to report progress.
+
+    Raises:
+        InputError: OUTDIR is not such a folder, a rod file is not one valid closed solid,
+            or a rod's pin holes moved or vanished.
+    """
+    progress = progress or Progress(quiet=True)
+    t0 = time.perf_counter()
+    built = load_built(outdir)
+    asm = Path(assembly) if assembly is not None else None
+    if asm is not None and not asm.is_file():
+        raise InputError([Problem(str(asm), 0, 0, "--assembly", "no such file")])
+    with progress.step("catalog and rod types of the build"):
+        types = chain_types(built)
+    with progress.step(f"re-reading {built.n} rods (valid closed solids, pin holes, mass, centre of mass)"):
+        readings = read_rods(built, types.rods, assembly=asm)
+    masses = np.array([r.mass for r in readings], float)
+    com = np.array([r.com for r in readings], float)
+    with progress.step("re-simulating the chain"):
+        eq = simulate(built, masses, com, types.g)
+    with progress.step("joints next to edited rods (overlaps at the new bends and at the limits)"):
+        overlaps = joint_overlaps(built, readings, np.degrees(eq.bends))
+    res = CheckResult(built, types, readings, eq, shape_distance(built.simulated, eq.points),
+                      shape_distance(built.target, eq.points), overlaps)
+    res.notes = _notes(res)
+    res.time_s = time.perf_counter() - t0
+    return res
+
+
+def _notes(res: CheckResult) -> list[str]:
+    notes = []
+    edited = res.edited
+    span = res.built.span
+    if not edited:
+        notes.append("no rod was edited: every rod has the mass and centre of mass design.json gives it")
+    else:
+        d = res.vs_design
+        notes.append(f"{len(edited)} edited rod(s) ({', '.join(map(str, edited))}): the chain now hangs up to "
+                     f"{d.max:.3g} mm ({100 * d.max / span:.3g} % of the span) from the designed shape; "
+                     "`rodcad check --rebalance` re-designs the other rods' masses to bring it back")
+    eq = res.equilibrium
+    if not eq.success:
+        notes.append(f"the equilibrium solver did not converge: {eq.message}")
+    elif not eq.stable:
+        notes.append("the re-simulated shape is an equilibrium but NOT a stable one")
+    notes += [o.sentence() for o in res.overlaps]
+    return notes
+
+
+def _f(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def equilibrium_json(eq: EquilibriumResult) -> dict[str, Any]:
+    """Points, angles, stability of an equilibrium (design.json's ``simulated`` fields)."""
+    return {"points": [[float(x), float(y)] for x, y in eq.points],
+            "angles_deg": [float(math.degrees(v)) for v in eq.angles],
+            "reaction": [_f(v * 1e-3) for v in eq.reaction], "reaction_a": [_f(v * 1e-3) for v in eq.reaction_a],
+            "kkt_residual": _f(eq.kkt_residual), "stable": bool(eq.stable), "success": bool(eq.success)}
+
+
+def check_json(res: CheckResult) -> dict[str, Any]:
+    """What ``rodcad check --json`` prints (contract.md's round trip)."""
+    rods = []
+    for r, b in zip(res.readings, res.built.rods):
+        rods.append({"index": r.index, "type": b.type, "file": str(r.file), "mass": float(r.mass),
+                     "com": [float(v) for v in r.com], "edited": bool(r.edited),
+                     "plastic_volume_mm3": float(r.volume), "mass_change_rel": float(r.mass_change),
+                     "com_shift_mm": float(r.com_shift),
+                     "built": {"mass": float(b.mass), "com": [float(v) for v in b.com]}})
+    return {
+        "name": res.built.data.get("name"), "outdir": str(res.built.outdir), "catalog": res.built.catalog,
+        "rods": rods,
+        "edited": res.edited,
+        "simulated": equilibrium_json(res.equilibrium),
+        "error_vs_design": res.vs_design.as_dict(),
+        "error": res.vs_target.as_dict(),
+        "joints": [{"joint": o.joint, "bend_deg": o.bend_deg, "where": o.where, "overlap_mm3": o.overlap}
+                   for o in res.overlaps],
+        "ok": bool(res.ok),
+        "notes": list(res.notes),
+        "time_s": float(res.time_s),
+    }

@@ -1,0 +1,334 @@
+"""`rodcad check OUTDIR [--rebalance]`: the round trip after editing rods by hand.
+
+A small chain (a catenary of 5 rods printed to order) is built with CAD once; rods are then
+edited the way a person does in a CAD program (build123d here): a bead fused onto one
+rod's side face, a groove cut across another's top, saved back as STEP in the same
+placement on the bed. `check` must report the shape a forward simulation gives with the
+edited rods' masses and centres of mass measured independently (trimesh on an STL of the
+solids), and `--rebalance` must bring the chain back onto its design.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from optimize import solve_equilibrium
+from rodcad.cli import main
+
+DESIGN = """\
+design: 1
+name: roundtrip
+anchors: [[0, 0], [160, 0]]
+target: {form: catenary, length: 220}
+constraints: {rods: 5}
+"""
+
+#: The bead's radius (mm) and the groove's length (mm): heavy enough to move the chain
+#: by more than 0.2 % of its span, light enough to be balanced.
+BEAD_R = 7.0
+GROOVE_L = 12.0
+
+#: Edited rods: rods next to each other, so the other three can balance them.
+BEAD_ROD, GROOVE_ROD = 1, 2
+
+
+def _b3d():
+    import build123d
+
+    return build123d
+
+
+def _step(folder: Path, data: dict, i: int) -> Path:
+    return folder / data["rods"][i]["fabrication"]["file"]
+
+
+def _read(path: Path):
+    (solid,) = _b3d().import_step(path).solids()
+    return solid
+
+
+def _write(solid, path: Path) -> None:
+    assert _b3d().export_step(solid, path)
+
+
+def _bead(solid, r: float = BEAD_R):
+    """A sphere fused onto the rod's side face (the rod frame's +z face, the bed's -Y), off
+    the middle towards the second joint."""
+    b = _b3d()
+    bb = solid.bounding_box()
+    at = ((bb.min.X + bb.max.X) / 2 + 8, bb.min.Y, (bb.min.Z + bb.max.Z) / 2)
+    (out,) = solid.fuse(b.Solid.make_sphere(r).moved(b.Location(at))).solids()
+    return out
+
+
+def _groove(solid, length: float = GROOVE_L):
+    """A groove engraved into the rod's other side face (the rod frame's -z face, the bed's
+    +Y), 3 mm wide and 1.5 mm deep, along the rod."""
+    b = _b3d()
+    bb = solid.bounding_box()
+    at = ((bb.min.X + bb.max.X - length) / 2, bb.max.Y - 1.5, (bb.min.Z + bb.max.Z) / 2 - 1.5)
+    (out,) = solid.cut(b.Solid.make_box(length, 3.0, 3.0).moved(b.Location(at))).solids()
+    return out
+
+
+def _copy(src: Path, dst: Path) -> Path:
+    shutil.copytree(src, dst)
+    return dst
+
+
+def _snapshot(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _limits(data: dict) -> np.ndarray:
+    lim = [r["limits_deg"] for r in data["rods"][:-1]]
+    return np.array([[-np.inf if lo is None else math.radians(lo), np.inf if hi is None else math.radians(hi)]
+                     for lo, hi in lim])
+
+
+def _check(args: list[str], capsys) -> tuple[int, dict | None, str]:
+    code = main(["check", *args])
+    out, err = capsys.readouterr()
+    return code, (json.loads(out) if "--json" in args and out.strip() else None), err
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("check")
+    design = root / "roundtrip.yaml"
+    design.write_text(DESIGN, encoding="utf-8")
+    out = root / "built"
+    assert main(["build", str(design), "-o", str(out), "--jobs", "2", "-q"]) == 0
+    return out, json.loads((out / "design.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def edited(built, tmp_path_factory):
+    """The build with a bead on rod 1 and a groove in rod 2, saved back in place."""
+    src, data = built
+    out = _copy(src, tmp_path_factory.mktemp("edited") / "chain")
+    for i, edit in ((BEAD_ROD, _bead), (GROOVE_ROD, _groove)):
+        path = _step(out, data, i)
+        _write(edit(_read(path)), path)
+    return out, data
+
+
+def _mesh(solid, path: Path, tolerance: float) -> tuple[float, np.ndarray]:
+    """(volume, centre of volume) of an STL of the solid, by trimesh."""
+    import trimesh
+
+    _b3d().export_stl(solid, str(path), tolerance=tolerance, angular_tolerance=0.05)
+    mesh = trimesh.load(str(path), force="mesh")
+    return float(mesh.volume), np.asarray(mesh.center_mass, float)
+
+
+def _independent(built_dir: Path, edited_dir: Path, data: dict, i: int, tmp: Path, tolerance: float
+                 ) -> tuple[float, np.ndarray]:
+    """Mass (g) and (along, perp) centre of mass of edited rod i: design.json's as-built rod
+    plus what the edit added (or minus what it cut), both measured by trimesh on STLs of the
+    original and the edited solid meshed alike (the unchanged faces mesh the same and their
+    error cancels; what is left is the chord error on the bead's sphere, hence the fine
+    ``tolerance`` there: 5e-5 mm puts the sphere's volume within about 2e-5)."""
+    fab = data["rods"][i]["fabrication"]
+    rho = data["print"]["density"] / 1000.0
+    m = np.array(fab["print_matrix"], float)
+    v0, c0 = _mesh(_read(_step(built_dir, data, i)), tmp / f"orig{i}.stl", tolerance)
+    v1, c1 = _mesh(_read(_step(edited_dir, data, i)), tmp / f"edit{i}.stl", tolerance)
+    mass = fab["mass"] + rho * (v1 - v0)
+    com_bed = m[:3, :3] @ np.array([*fab["com"], 0.0]) + m[:3, 3]
+    first = fab["mass"] * com_bed + rho * (v1 * c1 - v0 * c0)
+    com = m[:3, :3].T @ (first / mass - m[:3, 3])
+    # and absolutely: the edited mesh alone, plus the balls, within the mesh's accuracy
+    assert rho * v1 + fab["ball_mass_g"] == pytest.approx(mass, rel=5e-4)
+    return mass, com[:2]
+
+
+def test_check_reports_the_shape_of_the_edited_rods(built, edited, tmp_path, capsys):
+    src, data = built
+    out, _ = edited
+    code, res, err = _check([str(out), "--json", "--preview", str(tmp_path / "check.png")], capsys)
+    assert code == 0, err
+    n = len(data["rods"])
+    assert [r["edited"] for r in res["rods"]] == [i in (BEAD_ROD, GROOVE_ROD) for i in range(n)]
+    assert res["edited"] == [BEAD_ROD, GROOVE_ROD]
+    assert res["joints"] == []  # the bead and the groove keep clear of the neighbours
+    assert (tmp_path / "check.png").stat().st_size > 10_000
+    span = math.dist(*data["anchors"])
+    # unedited rods: design.json's as-built numbers
+    for r, d in zip(res["rods"], data["rods"]):
+        if not r["edited"]:
+            assert r["mass"] == pytest.approx(d["fabrication"]["mass"], rel=1e-9)
+            assert np.allclose(r["com"], d["fabrication"]["com"], atol=1e-6)
+    # edited rods: as measured independently
+    masses = np.array([d["fabrication"]["mass"] for d in data["rods"]])
+    com = np.array([d["fabrication"]["com"] for d in data["rods"]])
+    for i, tol in ((BEAD_ROD, 5e-5), (GROOVE_ROD, 1e-3)):  # the groove's faces are planes: meshed exactly
+        masses[i], com[i] = _independent(src, out, data, i, tmp_path, tol)
+        # to the mesh's accuracy (the bead's sphere is meshed to 2e-4 mm)
+        assert res["rods"][i]["mass"] == pytest.approx(masses[i], rel=2e-5)
+        assert np.allclose(res["rods"][i]["com"], com[i], atol=2e-4)
+    assert masses[BEAD_ROD] > data["rods"][BEAD_ROD]["fabrication"]["mass"] * 1.05  # the bead adds > 5 %
+    assert masses[GROOVE_ROD] < data["rods"][GROOVE_ROD]["fabrication"]["mass"]
+    lengths = np.array([d["length"] for d in data["rods"]])
+    a, b = np.array(data["anchors"], float)
+    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=_limits(data))
+    pts = np.array(res["simulated"]["points"])
+    gap = np.max(np.hypot(*(pts - eq.points).T)) / span
+    with capsys.disabled():
+        print(f"\ncheck vs forward simulation with trimesh masses: {gap:.3g} of the span; the edits move the chain "
+              f"{res['error_vs_design']['max_rel_span']:.3g} of the span; masses "
+              f"{[round(r['mass_change_rel'], 5) for r in res['rods']]} relative")
+    assert gap <= 1e-6
+    # the edit moved the chain measurably, and the report says how far
+    moved = np.max(np.hypot(*(pts - np.array(data["simulated"]["points"])).T))
+    assert res["error_vs_design"]["max_mm"] == pytest.approx(moved, rel=1e-9)
+    assert res["error_vs_design"]["max_rel_span"] > 2e-3
+    assert set(res["error"]) >= {"max_mm", "max_rel_span"}
+
+
+def test_rebalance_brings_the_chain_back(built, edited, tmp_path, capsys):
+    src, data = built
+    out = _copy(edited[0], tmp_path / "chain")
+    before = _snapshot(out)
+    code, res, err = _check([str(out), "--rebalance", "--json", "--jobs", "2"], capsys)
+    assert code == 0, err
+    rb = res["rebalance"]
+    span = math.dist(*data["anchors"])
+    design_pts = np.array(data["simulated"]["points"])
+    after = np.max(np.hypot(*(np.array(rb["as_built"]["points"]) - design_pts).T)) / span
+    with capsys.disabled():
+        print(f"\nre-balanced: as built {after:.3g} of the span from the original design "
+              f"(edited, not re-balanced: {res['error_vs_design']['max_rel_span']:.3g}); re-designed "
+              f"{rb['redesigned']}, masses {[round(m, 4) for m in rb['masses']]} g")
+    assert rb["balanced"] and rb["written"] == str(out)
+    assert after <= 2e-3 and after < res["error_vs_design"]["max_rel_span"] / 10
+    assert sorted(rb["redesigned"] + [BEAD_ROD, GROOVE_ROD]) == list(range(len(data["rods"])))
+    now = _snapshot(out)
+    for i, d in enumerate(data["rods"]):
+        step = d["fabrication"]["file"]
+        if i in (BEAD_ROD, GROOVE_ROD):  # kept as saved; its STL made to match
+            assert now[step] == before[step]
+        else:
+            assert now[step] != before[step]
+    assert (out / ".rodcad-output").is_file() and not (tmp_path / "chain.best-fit").exists()
+    new = json.loads((out / "design.json").read_text())
+    assert new["round_trip"][-1]["edited"] == [BEAD_ROD, GROOVE_ROD]
+    assert new["rods"][BEAD_ROD]["fabrication"]["edited"] is True
+    assert "Round trip" in (out / "report.md").read_text()
+    # checked again, nothing is edited any more and the chain hangs as the new design.json says
+    code, again, err = _check([str(out), "--json"], capsys)
+    assert code == 0, err
+    assert again["edited"] == []
+    gap = np.max(np.hypot(*(np.array(again["simulated"]["points"]) - np.array(new["as_built"]["points"])).T))
+    assert gap / span <= 1e-9
+
+
+def test_an_edit_that_cannot_be_balanced_exits_1_with_the_best_fit(built, tmp_path, capsys):
+    """Rods 1 and 3 pulled apart (heavier and lighter) leave the other rods no masses in
+    their ranges that hang the target: exit 1, OUTDIR as it was, the best fit beside it."""
+    src, data = built
+    out = _copy(src, tmp_path / "chain")
+    for i, edit in ((1, _bead), (3, _groove)):
+        _write(edit(_read(_step(out, data, i))), _step(out, data, i))
+    before = _snapshot(out)
+    code, res, err = _check([str(out), "--rebalance", "--json", "--jobs", "2"], capsys)
+    assert code == 1
+    assert not res["rebalance"]["balanced"]
+    assert "cannot be balanced" in res["rebalance"]["notes"][0]
+    assert "best fit" in err
+    assert _snapshot(out) == before
+    best = json.loads((tmp_path / "chain.best-fit" / "design.json").read_text())
+    assert best["round_trip"][-1]["balanced"] is False
+
+
+def test_assembly_step_round_trip(built, capsys):
+    out, data = built
+    code, res, err = _check([str(out), "--json", "--assembly", str(out / "assembly.step")], capsys)
+    assert code == 0, err
+    assert res["edited"] == []
+    assert res["error_vs_design"]["max_rel_span"] < 1e-9
+
+
+def test_overlap_at_a_joint_is_reported(built, tmp_path, capsys):
+    """A bead on top near the second joint: the neighbour can no longer bend as far."""
+    src, data = built
+    out = _copy(src, tmp_path / "chain")
+    b = _b3d()
+    path = _step(out, data, 1)
+    solid = _read(path)
+    bb = solid.bounding_box()
+    (bump,) = solid.fuse(b.Solid.make_sphere(6.0).moved(
+        b.Location(((bb.min.X + bb.max.X) / 2 + 10, (bb.min.Y + bb.max.Y) / 2, bb.max.Z)))).solids()
+    _write(bump, path)
+    code, res, err = _check([str(out), "--json"], capsys)
+    assert code == 0, err  # the chain still hangs: only the joint's range shrank
+    assert res["joints"] and {j["joint"] for j in res["joints"]} <= {0, 1}
+    assert all(j["where"] in ("lo", "hi") and j["overlap_mm3"] > 0 for j in res["joints"])
+    assert any("overlap" in n for n in res["notes"])
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_not_an_output_folder(tmp_path, capsys):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "notes.txt").write_text("mine")
+    code, _, err = _check([str(tmp_path / "a")], capsys)
+    assert code == 2 and "design.json" in err and "Traceback" not in err
+    (tmp_path / "a" / "design.json").write_text('{"rodcad": "0.1.0"}')
+    code, _, err = _check([str(tmp_path / "a"), "--rebalance"], capsys)
+    assert code == 2 and ".rodcad-output" in err
+    code, _, err = _check([str(tmp_path / "missing")], capsys)
+    assert code == 2 and "no such folder" in err
+
+
+def _faces_only(solid):
+    return _b3d().Compound(solid.faces()[:5])
+
+
+def _two_solids(solid):
+    b = _b3d()
+    bb = solid.bounding_box()
+    return b.Compound([solid, b.Solid.make_sphere(2.0).moved(b.Location((bb.max.X + 10, 0, 0)))])
+
+
+def _moved_up(solid):
+    return solid.moved(_b3d().Location((0, 0, 2.0)))  # the rod frame's +y: the holes move 2 mm
+
+
+def _knuckle_cut(solid, matrix):
+    """The material around the first pin hole cut away (a 4 mm cylinder about its axis)."""
+    b = _b3d()
+    x, z = matrix[0][3], matrix[2][3]  # the first pin axis on the bed: along Y through (x, z)
+    cyl = b.Solid.make_cylinder(4.0, 60.0, b.Plane((x, -30.0, z), z_dir=(0, 1, 0)))
+    (out,) = solid.cut(cyl).solids()
+    return out
+
+
+@pytest.mark.parametrize("edit, says", [
+    (_faces_only, "no closed solid"),
+    (_two_solids, "2 solids"),
+    (_moved_up, "pin hole is blocked"),
+    (_knuckle_cut, "lost the material around it"),
+])
+def test_bad_rod_files_are_bad_input_and_nothing_is_written(built, tmp_path, capsys, edit, says):
+    src, data = built
+    out = _copy(src, tmp_path / "chain")
+    i = 3
+    path = _step(out, data, i)
+    solid = _read(path)
+    shape = edit(solid, data["rods"][i]["fabrication"]["print_matrix"]) if edit is _knuckle_cut else edit(solid)
+    _write(shape, path)
+    before = _snapshot(out)
+    code, _, err = _check([str(out), "--rebalance"], capsys)
+    assert code == 2, err
+    assert str(path) in err and says in err and "Traceback" not in err
+    assert _snapshot(out) == before and not (tmp_path / "chain.best-fit").exists()

@@ -380,3 +380,26 @@ def test_unreadable_inputs(tmp_path: Path) -> None:
 
 def test_schema_json_round_trips() -> None:
     assert json.loads(schema_text()) == catalog_schema()
+
+
+@pytest.mark.parametrize("value,key,message", [
+    ("{layer_height: 0}", "print.layer_height", "must be greater than 0"),
+    ("{layer_height: 0.35}", "print.layer_height", "more than 0.8 of the printer's 0.4 mm nozzle"),
+    ("{perimeters: 0}", "print.perimeters", ""),
+    ("{layer_heigth: 0.2}", "print", "layer_heigth"),
+])
+def test_bad_print_profile_is_reported_at_its_key(value, key, message):
+    """The catalog's print profile (what every mass assumes): a zero or too thick layer, no
+    perimeters, a misspelt key: bad input at the key, with its line."""
+    import re
+    from pathlib import Path
+
+    from rodcad.catalog.loader import catalog_from_text
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "catalogs" / "pla-parametric.yaml").read_text()
+    text = re.sub(r"(?m)^print: .*$", f"print: {value}", text)
+    with pytest.raises(InputError) as err:
+        catalog_from_text(text, "c.yaml")
+    probs = err.value.problems
+    assert any(p.key.startswith(key) and message in p.message and p.line > 0 for p in probs), probs

@@ -264,8 +264,17 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
             types.append(t)
         families.append(Family(merged["name"], merged.get("description", ""),
                                tuple(t.name for t in family_types), ctx.origin(), ranges, template))
+    settings: dict[str, Any] = {}
+    if isinstance(data.get("print"), dict) and v.ok("print", schema_failed):
+        settings = dict(data["print"])
+        nozzle = printer.nozzle if printer is not None else None
+        for key in ("layer_height", "first_layer_height"):
+            if nozzle is not None and key in settings and settings[key] > 0.8 * nozzle:
+                v.report_at(f"print.{key}", f"{format_number(settings[key])} mm is more than 0.8 of the printer's "
+                            f"{format_number(nozzle)} mm nozzle: the layers would not bond")
     v.raise_if_any()
-    return Catalog(data["name"], data.get("description", ""), path, tuple(types), tuple(families), printer)
+    return Catalog(data["name"], data.get("description", ""), path, tuple(types), tuple(families), printer,
+                   settings)
 
 
 def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None

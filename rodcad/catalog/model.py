@@ -401,6 +401,8 @@ class Catalog:
         types: rod types in catalog order.
         families: families in catalog order.
         printer: the printer it is sized for, if given.
+        print_settings: the catalog's ``print`` block (layer height, perimeters, ...), the
+            profile every mass assumes besides 100 % infill.
     """
 
     name: str
@@ -409,6 +411,7 @@ class Catalog:
     types: tuple[RodType, ...]
     families: tuple[Family, ...]
     printer: Printer | None = None
+    print_settings: dict[str, Any] = field(default_factory=dict, compare=False)
 
     @cached_property
     def _by_name(self) -> dict[str, RodType]:

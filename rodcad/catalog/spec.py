@@ -285,6 +285,27 @@ def catalog_spec() -> Obj:
                     description="The printer the catalog is sized for (optional; enables size checks).",
                 )
             ),
+            "print": Field(
+                Obj(
+                    {
+                        "layer_height": Field(Num(exclusive_minimum=0, maximum=2, unit="mm"), default=0.2,
+                                              description="Layer height (mm)."),
+                        "first_layer_height": Field(Num(exclusive_minimum=0, maximum=2, unit="mm"),
+                                                    description="First layer height (mm; default: the layer "
+                                                    "height)."),
+                        "perimeters": Field(Num(integer=True, minimum=1, maximum=20), default=2,
+                                            description="Perimeter loops (the rest is 100 % infill)."),
+                        "filament_diameter": Field(Num(exclusive_minimum=0, maximum=5, unit="mm"), default=1.75,
+                                                   description="Filament diameter (mm)."),
+                        "temperature": Field(Num(minimum=100, maximum=500, unit="degC"), default=215,
+                                             description="Nozzle temperature (deg C)."),
+                        "bed_temperature": Field(Num(minimum=0, maximum=200, unit="degC"), default=60,
+                                                 description="Bed temperature (deg C)."),
+                    },
+                    description="The print profile every mass assumes: solid rods (100 % infill) of the "
+                    "families' material at these settings; written into print.3mf and report.md.",
+                )
+            ),
             "defaults": Field(defaults),
             "families": Field(ListOf(entry, min_items=1), required=True,
                               description="Rod families, in the order their types are listed."),

@@ -55,7 +55,8 @@ def rod_params(rod: RodType) -> dict[str, Any]:
 def print_profile(catalog: Catalog) -> dict[str, Any]:
     """The print settings the masses assume (contract.md's ``print``)."""
     m = next(iter(catalog)).material
-    return {"material": m.name, "density": m.density, "infill": 1.0,
+    settings = {"layer_height": 0.2, "perimeters": 2, **getattr(catalog, "print_settings", {})}
+    return {"material": m.name, "density": m.density, "infill": 1.0, **settings,
             "note": "every mass assumes solid rods: print them with 100 % infill"}
 
 

@@ -149,6 +149,17 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         "designed, and the chain will not hang as designed). As only mass ratios shape the chain, a "
         "filament whose density is off by the same amount for every rod does no harm; an infill that differs "
         "between rods does.")
+    add("")
+    add("| setting | value |")
+    add("|---|---|")
+    add("| infill | 100 % (solid) |")
+    for key, label, unit in (("layer_height", "layer height", "mm"), ("first_layer_height", "first layer height", "mm"),
+                             ("perimeters", "perimeters", ""), ("filament_diameter", "filament diameter", "mm"),
+                             ("temperature", "nozzle temperature", "deg C"), ("bed_temperature", "bed temperature",
+                                                                              "deg C")):
+        if prof.get(key) is not None:
+            add(f"| {label} | {prof[key]:g}{' ' + unit if unit else ''} |")
+    add(f"| material | {prof['material']}, {prof['density']:g} g/cm^3 |")
     if fab is not None:
         add("")
         add("Expected printed mass per rod (plastic at that density plus its metal balls): "

@@ -22,20 +22,21 @@ import numpy as np
 from optimize import shape_distance
 from optimize.discretize import centerline
 from rodcad.cad.export import export_assembly
+from rodcad.cad.printfile import write_print_files
 from rodcad.cad.reread import write_rod_step, write_rod_stl
 from rodcad.cad.rods import ChainFabrication, FabricatedRod, chain_parts, write_rod_files
 from rodcad.check.rebalance import Rebalanced
 from rodcad.check.recheck import CheckResult, equilibrium_json
 from rodcad.outdir import MARKER, staged_output
-from rodcad.outputs.design_json import curve_error, write_json
+from rodcad.outputs.design_json import curve_error, print_profile, write_json
 
 __all__ = ["plot_check", "rebalanced_json", "report_section", "write_rebalanced"]
 
 #: Files of OUTDIR a re-balance writes again (the rods it changes come on top).
 REWRITTEN = ("design.json", "report.md", "preview.png", "preview.svg", "assembly.step", MARKER)
 
-#: Files of OUTDIR a re-balance leaves out: slicer projects hold the rods as first built
-#: (their meshes and pauses), so they would print the old chain.
+#: Slicer files of OUTDIR a re-balance writes again from the rods as they are now
+#: (their meshes and pauses would print the old chain).
 STALE = ("*.3mf",)
 
 
@@ -265,6 +266,29 @@ def _copy_tree(src: Path, dst: Path, skip: set[Path]) -> None:
             shutil.copy2(p, dst / rel)
 
 
+def _print_rods(res: CheckResult, rb: Rebalanced, stems: list[str]) -> list[Any]:
+    """Every rod as the slicer project needs it: the rebuilt ones as fabricated, the others
+    (edited or untouched) as read now, with their recorded balls and shot."""
+    from types import SimpleNamespace
+
+    out: list[Any] = []
+    for i, r in enumerate(res.readings):
+        if i in rb.fabricated:
+            out.append(rb.fabricated[i])
+            continue
+        b = res.built.rods[i]
+        balls = res.types.rods[i].balls
+        count = int(np.asarray(b.ball_centers).reshape(-1, 3).shape[0])
+        out.append(SimpleNamespace(
+            index=i, file_stem=stems[i], solid=r.solid, print_matrix=np.asarray(b.print_matrix, float),
+            plastic_volume=float(r.volume), ball_count=count,
+            ball_diameter=None if balls is None or not count else balls.diameter,
+            socket_centers=np.asarray(b.ball_centers, float).reshape(-1, 3),
+            socket_radius=0.0 if balls is None else balls.socket_diameter / 2, pause_zs=(),
+            print_note="", fill_mass=float(b.fill_mass), fill_name=""))
+    return out
+
+
 def write_rebalanced(res: CheckResult, rb: Rebalanced, outdir: Path, *, from_assembly: bool = False) -> dict[str, Any]:
     """Write the re-balanced chain to ``outdir`` (OUTDIR itself, or OUTDIR.best-fit):
     OUTDIR's files, with the re-designed rods' STEP/STL (and the edited rods', when they
@@ -285,11 +309,9 @@ def write_rebalanced(res: CheckResult, rb: Rebalanced, outdir: Path, *, from_ass
         if from_assembly:
             rewrite.add(src / "rods" / f"{stems[i]}.step")
     stale = sorted({p for pattern in STALE for p in src.rglob(pattern) if p.is_file()})
-    if stale:
-        names = [str(p.relative_to(src)) for p in stale]
-        shown = ", ".join(names[:2]) + (f" and {len(names) - 2} more" if len(names) > 2 else "")
-        rb.notes.append(f"the slicer files of the first build ({shown}) were left out: they hold the rods as "
-                        "first built; slice rods/*.stl again")
+    if stale:  # written again below, from the rods as they are now
+        rb.notes.append("print.3mf and rods/*.3mf written again from the rods as they are now (the edited "
+                        "rods as saved, the re-designed ones rebuilt)")
     rewrite |= set(stale)
     data = rebalanced_json(res, rb)
     old_report = (src / "report.md").read_text(encoding="utf-8") if (src / "report.md").is_file() else ""
@@ -310,6 +332,8 @@ def write_rebalanced(res: CheckResult, rb: Rebalanced, outdir: Path, *, from_ass
         export_assembly(tmp / "assembly.step", chain_parts(stems, solids, points, list(rb.masses), pins),
                         str(data.get("name") or "chain"))
         write_json(tmp / "design.json", data)
+        write_print_files(_print_rods(res, rb, stems), tmp, printer=res.types.catalog.printer,
+                          profile=data.get("print") or print_profile(res.types.catalog))
         plot_check(res, tmp / "preview.png", tmp / "preview.svg", rb=rb)
         head, sep, rest = old_report.partition("\n")
         text = (head + sep + "\n" + report_section(res, rb) + "\n" + rest) if old_report else report_section(res, rb)

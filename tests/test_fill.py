@@ -85,3 +85,29 @@ def test_semicircle_with_weights_alone_builds(tmp_path, capsys):
     assert data["error"]["max_rel_span"] <= 0.011
     assert data["bill_of_materials"]["fill"][0]["grams"] > 0
     assert "pour" in (out / "report.md").read_text()
+
+
+def test_a_curved_rod_gets_a_stepped_chamber():
+    """A curved rod's body is an arc band: its chamber is nested boxes sharing one roof (one
+    pause), each shorter one deeper, centred on the centre of mass (exactly, to round-off);
+    it holds more than one straight box. Built on the B-rep: one valid solid with one closed
+    cell per z-cell, walls measured at the minimum, mass and centre of mass as designed."""
+    from rodcad.cad.filled import build_filled
+
+    cat = catalog_from_text(BASE, "pla-parametric-fill.yaml")
+    rod = cat.rod("rod", 51.764, 0.0099995)  # the semicircle's rods
+    mdl = chamber_model(rod.geometry, rod.material.min_wall)
+    assert mdl.slabs and all(y1 <= mdl.slabs[0][2] for _, _, y1 in mdl.slabs)  # one roof
+    area = sum(f * (y1 - y0) for f, y0, y1 in mdl.slabs)
+    centroid = sum(f * (y1 * y1 - y0 * y0) / 2 for f, y0, y1 in mdl.slabs) / area
+    assert abs(centroid - mdl.center[1]) < 1e-9
+    solid, com, (lo, hi) = fill_numbers(rod)
+    assert hi / lo > 7.7  # one straight box: 7.50
+    for m in (lo, 0.5 * (lo + solid), solid * 1.02, hi):
+        ch, built, msg = plan_chamber(rod, m)
+        assert not msg and abs(built - m) <= 1e-9 * m and ch is not None
+        b = build_filled(rod, m)
+        assert len(b.solid.shells()) == 1 + len(ch.cells_z) and b.solid.is_valid
+        assert b.min_wall >= rod.material.min_wall - 1e-6
+        assert abs(b.mass - m) <= 1e-9 * m
+        assert abs(b.com[0] - com[0]) < 1e-6 and abs(b.com[1] - com[1]) < 1e-6

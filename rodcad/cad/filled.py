@@ -50,10 +50,13 @@ class FilledRod:
 
 
 def chamber_solids(chamber: Chamber) -> list[Solid]:
-    """The chamber's cells as box solids in the rod frame."""
+    """The chamber's cells as solids in the rod frame: a box, or a stepped cell's nested boxes
+    fused into one solid (checked: one valid solid per cell)."""
     out = []
-    for (x0, y0, z0), (x1, y1, z1) in chamber.boxes():
-        out.append(Solid.make_box(x1 - x0, y1 - y0, z1 - z0, Plane((x0, y0, z0))))
+    for cell in chamber.cell_boxes():
+        boxes = [Solid.make_box(x1 - x0, y1 - y0, z1 - z0, Plane((x0, y0, z0))) for (x0, y0, z0), (x1, y1, z1) in cell]
+        out.append(boxes[0] if len(boxes) == 1 else one_solid(boxes[0].fuse(*boxes[1:]).clean(),
+                                                              "fusing a stepped chamber cell"))
     return out
 
 

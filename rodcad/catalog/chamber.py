@@ -26,6 +26,13 @@ rho_pla (V_solid - V_max) to rho_pla (V_solid - V_max) + rho_fill V_max is reach
 continuously. A chamber shorter than :data:`MIN_LENGTH` shrinks its section instead (same
 centre), one holding less than :data:`MIN_VOLUME` is left out (the plain solid).
 
+A curved rod's body is an arc band, so one straight box loses height to the band's sag. Its
+cells may instead be STEPPED (:func:`_stepped`): nested boxes centred on the centre of mass
+in x, sharing one roof (one pause), each shorter one deeper, their floors following the
+band; the floors are raised together (or the roof lowered) until the chamber's centroid is
+the centre of mass, and every length is scaled together, so the centroid stays put across
+the range. A rod keeps the stepped chamber where it holds more than the straight one.
+
 The pause height is the cells' roof (the top of the shot) in print orientation. Units: mm,
 mm^3, g; densities g/cm^3.
 """
@@ -45,7 +52,7 @@ __all__ = ["CHAMBER_VERSION", "Chamber", "ChamberModel", "GRID", "MAX_BRIDGE", "
            "chamber_model", "fill_numbers", "plan_chamber"]
 
 #: Bump when chamber shapes change.
-CHAMBER_VERSION = "1"
+CHAMBER_VERSION = "2"
 
 #: Widest flat roof bridged over a chamber cell (mm): the roof of the 6.2 mm sockets of the
 #: shipped catalogs' 6 mm balls (a 'silo' socket's roof is a disc of the socket's diameter).
@@ -91,10 +98,13 @@ class ChamberModel:
     thickness: float
     cells_z: tuple[float, ...]
     max_length: float
+    slabs: tuple[tuple[float, float, float], ...] | None = None
 
     @property
     def area(self) -> float:
-        """Section of all cells together across x (mm^2)."""
+        """Section of all cells together across x (mm^2), per mm of the longest length."""
+        if self.slabs:
+            return len(self.cells_z) * self.thickness * sum(f * (y1 - y0) for f, y0, y1 in self.slabs)
         return len(self.cells_z) * self.height * self.thickness
 
     @property
@@ -115,6 +125,9 @@ class Chamber:
         cells_z: the cells' centres along z (mm).
         filled: True when the chamber is filled with shot, False when empty (air).
         fill_mass: grams of shot it holds (0 when empty).
+        slabs: a stepped chamber (curved rods): per step (fraction of ``length``, floor y,
+            top y), stacked from the roof down, each narrower than the one above (their
+            centroid is ``center``); None: one box of ``height`` centred on ``center``.
     """
 
     center: tuple[float, float]
@@ -124,25 +137,44 @@ class Chamber:
     cells_z: tuple[float, ...]
     filled: bool
     fill_mass: float
+    slabs: tuple[tuple[float, float, float], ...] | None = None
 
     @property
     def volume(self) -> float:
+        if self.slabs:
+            return len(self.cells_z) * self.length * self.thickness * sum(f * (y1 - y0) for f, y0, y1 in self.slabs)
         return len(self.cells_z) * self.length * self.height * self.thickness
 
     @property
     def roof_y(self) -> float:
         """Height of the cells' roofs in the rod frame (mm, along y = print up)."""
+        if self.slabs:
+            return max(y1 for _, _, y1 in self.slabs)
         return self.center[1] + self.height / 2
 
+    def cell_boxes(self) -> list[list[tuple[tuple[float, float, float], tuple[float, float, float]]]]:
+        """Per cell (along z), its boxes as ((xmin, ymin, zmin), (xmax, ymax, zmax)) in the rod
+        frame (mm): one, or a stepped cell's nested boxes (each from its floor to the roof;
+        their union is the cell)."""
+        (cx, cy), c = self.center, self.thickness / 2
+        if not self.slabs:
+            a, b = self.length / 2, self.height / 2
+            return [[((cx - a, cy - b, z - c), (cx + a, cy + b, z + c))] for z in self.cells_z]
+        roof = self.roof_y
+        return [[((cx - f * self.length / 2, y0, z - c), (cx + f * self.length / 2, roof, z + c))
+                 for f, y0, _ in self.slabs] for z in self.cells_z]
+
     def boxes(self) -> list[tuple[tuple[float, float, float], tuple[float, float, float]]]:
-        """Every cell as ((xmin, ymin, zmin), (xmax, ymax, zmax)) in the rod frame (mm)."""
-        (cx, cy), a, b, c = self.center, self.length / 2, self.height / 2, self.thickness / 2
-        return [((cx - a, cy - b, z - c), (cx + a, cy + b, z + c)) for z in self.cells_z]
+        """Every box of every cell (see :meth:`cell_boxes`)."""
+        return [b for cell in self.cell_boxes() for b in cell]
 
     def to_json(self) -> dict[str, object]:
-        return {"center": list(self.center), "length": self.length, "height": self.height,
-                "thickness": self.thickness, "cells_z": list(self.cells_z), "filled": self.filled,
-                "fill_mass": self.fill_mass}
+        out: dict[str, object] = {"center": list(self.center), "length": self.length, "height": self.height,
+                                  "thickness": self.thickness, "cells_z": list(self.cells_z), "filled": self.filled,
+                                  "fill_mass": self.fill_mass}
+        if self.slabs:
+            out["slabs"] = [list(x) for x in self.slabs]
+        return out
 
 
 def _cells(thickness: float, wall: float, bridge: float) -> tuple[float, tuple[float, ...]]:
@@ -225,8 +257,131 @@ def chamber_model(g: RodGeometry, min_wall: float, bridge: float = MAX_BRIDGE) -
         if hc * a > best[0]:
             best = (hc * a, hc, a)
     _, hc, a = best
-    return ChamberModel(float(volume), (float(cx), float(cy)), float(hc), float(tz), tuple(float(z) for z in zs),
-                        float(2 * a))
+    box = ChamberModel(float(volume), (float(cx), float(cy)), float(hc), float(tz), tuple(float(z) for z in zs),
+                       float(2 * a))
+    if g.curvature == 0:
+        return box
+    stepped = _stepped(clear, box, reach, need)
+    return stepped if stepped is not None and stepped.max_volume > box.max_volume else box
+
+
+#: Steps of a stepped chamber (nested boxes; the shortest is 1/STEPS of the longest).
+STEPS = 4
+
+#: Sampling of the columns a stepped chamber is fitted in (mm, along y).
+Y_GRID = 0.05
+
+
+def _slabs_centroid(slabs) -> tuple[float, float]:
+    """(area, centroid y) of slabs (fraction, y0, y1) per unit length."""
+    area = sum(f * (y1 - y0) for f, y0, y1 in slabs)
+    return area, (sum(f * (y1 * y1 - y0 * y0) / 2 for f, y0, y1 in slabs) / area if area > 0 else 0.0)
+
+
+def _stacked(fracs, roof: float, floors) -> tuple[tuple[float, float, float], ...]:
+    """Slabs from a roof and floors (deepest last, each below the one before)."""
+    out, top = [], roof
+    for f, y in zip(fracs, floors):
+        if y < top - 1e-12:
+            out.append((float(f), float(y), float(top)))
+            top = y
+    return tuple(out)
+
+
+def _stepped(clear: RodClearance, box: ChamberModel, reach: float, need: float) -> ChamberModel | None:
+    """The largest stepped chamber (see the module), or None: per column x, the y interval
+    around the centre of mass that keeps ``need`` from every face (sampled every
+    :data:`Y_GRID`, less one sample), then per longest length the roof (the lowest top over
+    it) and each step's floor (the highest bottom over its length), the floors raised together
+    (or the roof lowered) until the centroid is the centre of mass; checked on the faces of
+    every box as the straight chamber is."""
+    cx, cy = box.center
+    tz, zs = box.thickness, box.cells_z
+    z0 = max(zs)
+    (_, y0, _), (_, y1, _) = clear.bounds
+    xs = np.arange(0.0, reach, GRID)
+    ys = np.arange(y0, y1 + Y_GRID, Y_GRID)
+    zc = (z0 - tz / 2, z0, z0 + tz / 2)
+    X, Y, Z = np.meshgrid(cx + xs, ys, zc, indexing="ij")
+    ok = (clear(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])) >= need).reshape(X.shape).all(axis=2)
+    # the solid is symmetric about the centre of mass in x only for symmetric rods: both sides
+    X2 = cx - xs[:, None, None] + 0 * Y
+    ok &= (clear(np.column_stack([X2.ravel(), Y.ravel(), Z.ravel()])) >= need).reshape(X.shape).all(axis=2)
+    j0 = int(np.searchsorted(ys, cy))
+    top = np.full(xs.size, -np.inf)
+    bot = np.full(xs.size, np.inf)
+    for i in range(xs.size):
+        col = ok[i]
+        if not (col[j0 - 1] and col[j0]):
+            break
+        up = j0 + int(np.argmin(np.append(col[j0:], False)))  # first blocked above
+        dn = j0 - 1 - int(np.argmin(np.append(col[j0 - 1::-1], False)))
+        top[i], bot[i] = ys[up - 1] - Y_GRID, ys[dn + 1] + Y_GRID
+    n_ok = int(np.argmax(~np.isfinite(top))) if not np.isfinite(top).all() else xs.size
+    if n_ok < 2:
+        return None
+    top_env = np.minimum.accumulate(top[:n_ok])
+    bot_env = np.maximum.accumulate(bot[:n_ok])
+    fracs = [(STEPS - k) / STEPS for k in range(STEPS)]
+    best = None
+    for i in range(1, n_ok):
+        a = xs[i] - BACKOFF
+        if a <= 0:
+            continue
+        roof = float(top_env[i])
+        floors = [float(bot_env[min(int(np.searchsorted(xs, a * f + BACKOFF)), n_ok - 1)]) for f in fracs]
+        floors = list(np.maximum.accumulate(floors[::-1])[::-1])  # never deeper than a shorter step
+        floors = [min(y, roof) for y in floors]
+        slabs = _fit_centroid(fracs, roof, floors, cy)
+        if slabs is None:
+            continue
+        vol = _slabs_centroid(slabs)[0] * 2 * a
+        if best is None or vol > best[0]:
+            best = (vol, a, slabs)
+    if best is None:
+        return None
+    _, a, slabs = best
+    for f, ylo, _ in slabs:  # every box, floor to roof, on the exact clearance as the straight chamber
+        lo = np.array([cx - a * f, ylo, z0 - tz / 2])
+        hi = np.array([cx + a * f, slabs[0][2], z0 + tz / 2])
+        if not (clear(_face_grid(lo, hi)) >= need).all():
+            return None
+    return ChamberModel(box.solid_volume, box.center, float(slabs[0][2] - slabs[-1][1]), tz, zs, float(2 * a), slabs)
+
+
+def _fit_centroid(fracs, roof: float, floors, cy: float):
+    """Slabs whose centroid is ``cy``: the floors raised to a common level (a centroid below
+    cy) or the roof lowered (above), by bisection to round-off; None if none."""
+    def slabs_at(level: float, r: float):
+        return _stacked(fracs, r, [max(y, level) for y in floors])
+
+    s = slabs_at(-math.inf, roof)
+    if not s:
+        return None
+    area, c = _slabs_centroid(s)
+    if abs(c - cy) <= 1e-12:
+        return s
+    if c < cy:  # too deep: raise the floors together
+        lo, hi = min(floors), roof
+        f = lambda v: _slabs_centroid(slabs_at(v, roof))[1] if slabs_at(v, roof) else roof
+        if f(hi - 1e-9) < cy:
+            return None
+        for _ in range(200):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if f(mid) < cy else (lo, mid)
+            if hi - lo <= 1e-13:
+                break
+        return slabs_at(hi, roof)
+    lo, hi = floors[0], roof  # too high: lower the roof
+    g = lambda r: _slabs_centroid(slabs_at(-math.inf, r))[1] if slabs_at(-math.inf, r) else -math.inf
+    if g(lo + 1e-9) > cy:
+        return None
+    for _ in range(200):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if g(mid) < cy else (lo, mid)
+        if hi - lo <= 1e-13:
+            break
+    return slabs_at(-math.inf, lo)
 
 
 def _model(rod: RodType) -> ChamberModel:
@@ -271,7 +426,10 @@ def plan_chamber(rod: RodType, target: float) -> tuple[Chamber | None, float, st
         scale = math.sqrt(volume / (mdl.area * MIN_LENGTH))
     length = min(length, mdl.max_length)
     hc, tz = mdl.height * scale, mdl.thickness * scale
-    chamber = Chamber(mdl.center, length, hc, tz, mdl.cells_z, filled, 0.0)
+    cy = mdl.center[1]
+    slabs = None if not mdl.slabs else tuple((f, cy + (y0 - cy) * scale, cy + (y1 - cy) * scale)
+                                             for f, y0, y1 in mdl.slabs)
+    chamber = Chamber(mdl.center, length, hc, tz, mdl.cells_z, filled, 0.0, slabs)
     grams = chamber.volume * fill.effective_density / 1000.0 if filled else 0.0
-    chamber = Chamber(mdl.center, length, hc, tz, mdl.cells_z, filled, grams)
+    chamber = Chamber(mdl.center, length, hc, tz, mdl.cells_z, filled, grams, slabs)
     return chamber, (mdl.solid_volume - chamber.volume) * rho + grams, message

@@ -170,7 +170,8 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
                         f"constraints.fixed[{seen[f.index]}]")
         seen[f.index] = i
     constraints = Constraints(types, lengths, int(c["rods"]) if "rods" in c else None,
-                              c.get("preferred_length"), tuple(fixed), c.get("joints", "any"))
+                              c.get("preferred_length"), tuple(fixed), c.get("joints", "any"),
+                              bool(c.get("same_shell", False)))
 
     # target
     form, params, curve = None, {}, None

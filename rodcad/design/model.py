@@ -17,6 +17,7 @@ A design file is YAML (units: mm, g, degrees)::
       fixed:                      # rods whose type (and mass) is imposed
         - {index: 0, type: free-30, mass: 6.5}
       joints: free                # no stops: weights alone (default: any)
+      same_shell: true            # rods printed to order: one outer shell for every rod
     method: refine                # exact, refine (default), guided-pso, pso
     seed: 0
     tolerance: 0.01               # optional: largest acceptable error / span
@@ -92,6 +93,9 @@ class Constraints:
         fixed: imposed rods.
         joints: 'any' (stops where the masses cannot hold a bend) or 'free' (no stops:
             weights alone, the best fit where they cannot hold the shape).
+        same_shell: a family printed to order makes every rod of the chain with one outer
+            shell (one length, one curvature, the family's own ends); masses then differ
+            only inside (the paper's Fig. 7).
     """
 
     types: tuple[str, ...] | None = None
@@ -100,6 +104,7 @@ class Constraints:
     preferred_length: float | None = None
     fixed: tuple[FixedRod, ...] = ()
     joints: str = "any"
+    same_shell: bool = False
 
 
 @dataclass(frozen=True)

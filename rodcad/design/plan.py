@@ -30,7 +30,7 @@ from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
 from rodcad.catalog.printed import mass_table
 from rodcad.design.model import Constraints, FixedRod
-from rodcad.design.printed import PrintedFamily, PrintedPlan, count_for, plan_printed
+from rodcad.design.printed import PrintedFamily, PrintedPlan, ShellError, count_for, plan_printed
 from rodcad.errors import InputError, Problem
 
 __all__ = ['CatalogArrays', 'ChainPlan', 'catalog_arrays', 'plan_chain', 'plan_constrained', 'STOP_REACH']
@@ -375,6 +375,10 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
     printed = _printed_family(arrays, c)
     if printed is not None:
         return _plan_printed(curve, c, arrays, printed, problem, who)
+    if c.same_shell:
+        raise InputError([problem("constraints.same_shell", f"{who}one shell for every rod needs a family printed "
+                                  "to order (the default catalog pla-parametric); this catalog's rod types are a "
+                                  "fixed menu")])
     candidates: list[float | None] = [c.preferred_length]
     if c.rods is not None and c.preferred_length is None:
         allowed = {float(x) for x, t in zip(arrays.lengths, arrays.types) if c.types is None or t.name in c.types}
@@ -420,7 +424,8 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     span = f"{r.length[0]:g} to {r.length[1]:g} mm"
     if c.lengths is not None:
         problems.append(problem("constraints.lengths", f"{who}family {pf.family.name!r} is printed to order "
-                                f"(any length from {span}): use preferred_length or rods instead"))
+                                f"(any length from {span}): use preferred_length or rods instead"
+                                + (" (same_shell gives every rod one length)" if c.same_shell else "")))
     if c.fixed:
         problems.append(problem("constraints.fixed", f"{who}family {pf.family.name!r} is printed to order: every "
                                 "rod is made for its place, so there are no catalog rods to fix"))
@@ -429,15 +434,18 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
                                 f"lengths family {pf.family.name!r} prints ({span})"))
     if problems:
         raise InputError(problems)
-    free = c.joints == "free"
+    free, same = c.joints == "free", c.same_shell
     try:
         if c.rods is not None:
-            lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free)
+            lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same)
             if lp is None:
                 raise InputError([problem("constraints.rods", f"{who}{c.rods} rods of {span} do not lay on this "
                                           "target with every corner a joint; change the rod count")])
         else:
-            lp = plan_printed(curve, arrays.catalog, pf, preferred_length=c.preferred_length, stops_allowed=not free)
+            lp = plan_printed(curve, arrays.catalog, pf, preferred_length=c.preferred_length, stops_allowed=not free,
+                              same_shell=same)
+    except ShellError as err:
+        raise InputError([problem("constraints.same_shell", f"{who}{err}")]) from None
     except ValueError as err:
         raise InputError([problem("target", f"{who}{err}")]) from None
     return _from_printed(curve, lp)

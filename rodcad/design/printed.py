@@ -16,7 +16,8 @@ ends and (next, :mod:`rodcad.design.masses`) mass.
                                  very rods (:mod:`rodcad.catalog.printed`, no B-rep search)
 
 ``constraints: {joints: free}`` forbids stops: the masses alone, the best fit where they
-cannot hold the shape.
+cannot hold the shape. ``constraints: {same_shell: true}`` lays one outer shell for every
+rod (:mod:`rodcad.design.shell`: one length, one curvature, the family's own ends).
 """
 
 from __future__ import annotations
@@ -35,8 +36,9 @@ from optimize.stops import needed_stop_sides
 from rodcad.catalog.jointlimits import joint_limits
 from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curvature
 from rodcad.catalog.printed import MassTable, rod_numbers
+from rodcad.design.shell import ShellError, one_shell
 
-__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "count_for", "plan_printed", "rods_of"]
+__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "plan_printed", "rods_of"]
 
 #: A stop printed to order must stop, by the rods' outlines, within this of the bend it is
 #: made for (deg); it is designed exactly at the bend.
@@ -129,7 +131,7 @@ HI, LO = -1, 1
 
 
 def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
-         phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True) -> _Laid:
+         phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True, same: bool = False) -> _Laid:
     """The rods for given stops (joint -> (bend deg, side)) and their inverse problem; with
     ``limits`` False, only the stops' designed sides are limits (enough for the statics at
     the target, which only sees joints resting on a limit)."""
@@ -147,8 +149,9 @@ def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.nd
     while r.stops is not None and (bent := [j for j, t in turn.items() if not r.stops[0] <= t <= r.stops[1]]):
         # faces the family cannot print: the rods beside such a stop are bent less, down to
         # straight (a stop between straight rods is half the bend on each end, in the range)
-        for j in bent:
-            kappa[[j, j + 1]] = np.where(np.abs(kappa[[j, j + 1]]) > 1e-4, kappa[[j, j + 1]] * 0.8, 0.0)
+        for j in bent[:1] if same else bent:  # one shell: every rod bent less together
+            at = slice(None) if same else [j, j + 1]
+            kappa[at] = np.where(np.abs(kappa[at]) > 1e-4, kappa[at] * 0.8, 0.0)
         turn = tangent_bends()
     top = {j: turn[j] / 2 for j, (_, side) in stops.items() if side == HI}
     under = {j: -turn[j] / 2 for j, (_, side) in stops.items() if side == LO}
@@ -280,7 +283,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
 
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
-                 stops_allowed: bool = True):
+                 stops_allowed: bool = True, same_shell: bool = False):
     """Lay rods printed to order on a target (see the module's docstring).
 
     Args:
@@ -290,18 +293,20 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
         preferred_length: the rod length to aim at (default: eight rods on the curve,
             within the family's range).
         stops_allowed: False forbids stops (``constraints: {joints: free}``).
+        same_shell: one outer shell for every rod (``constraints: {same_shell: true}``).
 
     Returns:
         The :class:`PrintedPlan`.
 
     Raises:
+        ShellError: same_shell, and the curve's corners forbid one length (explained).
         ValueError: the rods cannot be laid on the curve (explained).
     """
     fam = pf.family
     r = fam.ranges
     assert r is not None
     curve = np.asarray(curve, float)
-    disc, kappa = _laid_on(curve, r, preferred_length)
+    disc, kappa = one_shell(curve, r, preferred_length) if same_shell else _laid_on(curve, r, preferred_length)
     points, lengths = disc.points, disc.lengths
     n = lengths.size
     d = np.diff(points, axis=0)
@@ -320,7 +325,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             stops[int(j)] = (float(deg[j]), HI)
         else:
             beyond.append(int(j))
-    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False)
+    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False, same=same_shell)
     needed_more = False
     if stops_allowed and r.stops is not None:
         for _ in range(STOP_ROUNDS):
@@ -335,8 +340,8 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
                 stops[int(j)] = (float(deg[j]), int(side))
                 if mirrored and printable(n - 2 - int(j)):  # a symmetric target keeps its symmetry
                     stops.setdefault(n - 2 - int(j), (float(deg[n - 2 - int(j)]), int(side)))
-            laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False)
-    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops)  # the rods' own limits, checked
+            laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False, same=same_shell)
+    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, same=same_shell)  # the rods' own limits, checked
     if beyond:
         why = ("stops are forbidden (constraints.joints: free)" if not stops_allowed else
                "the family prints no stops" if r.stops is None else
@@ -350,11 +355,17 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     if needed_more:
         notes.append("even with stops at every joint the family can print, the masses cannot hold this shape "
                      "within their ranges; the masses fit it as well as they can")
+    if same_shell:
+        k = laid.problem.lengths[0], laid.rods[0].geometry.curvature
+        notes.append(f"one shell: every rod {k[0]:.4g} mm long with curvature {k[1]:.5g}/mm" + (
+            "; the stops make the ends of the rods beside them differ, so same_shell keeps the length and the "
+            "curvature only" if stops else ", the family's own ends; the masses differ only inside"))
     notes += laid.notes
     return PrintedPlan(disc, laid.rods, laid.problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops))
 
 
-def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int, *, stops_allowed: bool = True):
+def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int, *, stops_allowed: bool = True,
+              same_shell: bool = False):
     """A plan with exactly ``rods`` rods, or None: the preferred length is set so that the
     curve takes that many (then nudged)."""
     from optimize.discretize import resample
@@ -363,14 +374,22 @@ def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int,
     total = float(np.sum(np.hypot(*np.diff(c, axis=0).T)))
     r = pf.family.ranges
     assert r is not None
+    shell_error = None
     for k in (0.0, 0.25, -0.25, 0.5, -0.5, 0.75, -0.75):
         pref = float(np.clip(total / (rods + k), *r.length))
         try:
-            p = plan_printed(curve, catalog, pf, preferred_length=pref, stops_allowed=stops_allowed)
+            p = plan_printed(curve, catalog, pf, preferred_length=pref, stops_allowed=stops_allowed,
+                             same_shell=same_shell)
+        except ShellError as err:
+            shell_error = err
+            continue
         except ValueError:
             continue
         if len(p.rods) == rods:
             return p
+    if shell_error is not None:
+        raise ShellError(f"{rods} rods of one length do not lay on this target with every corner a joint; change "
+                         "the rod count, or drop same_shell")
     return None
 
 

@@ -178,6 +178,10 @@ def design_spec() -> Obj:
                                         description="'free' forbids every stop: the masses alone hold "
                                         "the shape (the best fit where they cannot); 'any' (default) "
                                         "lets joints rest on stops where the masses cannot hold a bend."),
+                        "same_shell": Field(Bool(), default=False,
+                                            description="Rods printed to order: every rod of the chain gets "
+                                            "one outer shell (one length, one curvature, the family's own "
+                                            "ends); the masses differ only inside (the paper's Fig. 7)."),
                     },
                     description="Optional restrictions on the designed chain.",
                 )

@@ -104,7 +104,8 @@ def test_shipped_seeds_are_current(name: str) -> None:
         "mass": {t.name: massrange._key(t) for t in catalog},
         "limits": {f"{a.name} -> {b.name}": limits._cache_key(a.geometry, b.geometry, limits._wall(a, b))
                    for a, b in catalog.pairs()},
-        "fabint": {t.name: fabricate.intervals_key(t, 0) for t in catalog},
+        # rods with a shot fill reach their whole range: no table of achievable masses
+        "fabint": {t.name: fabricate.intervals_key(t, 0) for t in catalog if t.fill is None},
     }
     for kind, keys in wanted.items():
         missing = [what for what, key in keys.items() if key not in entries.get(kind, {})]

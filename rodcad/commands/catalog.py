@@ -144,7 +144,10 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
             "com": [round(m.com[0], 4), round(m.com[1], 4)],
             "cavities": {"radius": round(m.cavity_radius, 4), "count": m.cavity_count},
             "balls": ({"count": m.ball_count, "diameter": t.balls.diameter, "mass_each": round(t.balls.mass, 4)}
-                      if t.balls is not None else None),
+                      if t.balls is not None and t.fill is None else None),
+            "fill": ({"name": t.fill.name, "max_g": round(m.m_max - m.m_min, 4),
+                      "lightest": "the largest chamber, empty", "heaviest": "the largest chamber, filled"}
+                     if t.fill is not None else None),
         }
         self_pair = limits.get((t.name, t.name))
         entry["self_limits_deg"] = _limits_json(self_pair) if self_pair and self_pair.assemblable else None
@@ -180,8 +183,11 @@ def _family_json(f: Any, catalog: Catalog) -> dict[str, Any]:
     """A family's parameters: ranges for rods printed to order, else its fixed menu."""
     if f.ranges is not None:
         r = f.ranges
+        fill = f.template.fill if f.template is not None else None
         return {"name": f.name, "printed_to_order": True, "length": list(r.length),
                 "curvature": list(r.curvature), "stops_deg": list(r.stops) if r.stops else None,
+                "fill": None if fill is None else {"name": fill.name, "density": fill.density,
+                                                   "packing": fill.packing},
                 "types": list(f.type_names)}
     ts = [catalog[n] for n in f.type_names]
     return {"name": f.name, "printed_to_order": False, "length": sorted({t.length for t in ts}),
@@ -202,6 +208,9 @@ def _family_lines(families: list[dict[str, Any]]) -> list[str]:
             text += f", stops printed at any bend from {f['stops_deg'][0]:g} to {f['stops_deg'][1]:g} deg"
         else:
             text += ", no stops printed to order"
+        if f.get("fill"):
+            text += (f"; masses from one chamber per rod, empty or filled with {f['fill']['name']} "
+                     f"({f['fill']['density']:g} g/cm^3 at {f['fill']['packing']:g} packing)")
         lines.append(text + f" (reference types {', '.join(f['types'])})")
     return lines + [""]
 
@@ -323,7 +332,7 @@ def _format_report(report: dict[str, Any]) -> str:
         *_family_lines(report["families"]),
     ]
     header = ["type", "length", "solid mass", "mass range", "com (along, perp)", "limits with itself",
-              "cavities", "balls"]
+              "lightest", "heaviest"]
     rows = []
     for t in types:
         balls = t["balls"]
@@ -334,8 +343,10 @@ def _format_report(report: dict[str, Any]) -> str:
             f"[{t['mass_range'][0]:.3f}, {t['mass_range'][1]:.3f}] g",
             f"({t['com'][0]:.2f}, {t['com'][1]:.2f}) mm",
             _fmt_limits(t["self_limits_deg"]) + " deg" if t["self_limits_deg"] else "-",
-            f"{t['cavities']['count']} x r{t['cavities']['radius']:.2f}" if t["cavities"]["count"] else "none",
-            f"{balls['count']} x {balls['diameter']:g} mm" if balls else "none",
+            (f"{t['cavities']['count']} x r{t['cavities']['radius']:.2f}" if t["cavities"]["count"] else
+             "1 chamber, empty" if t.get("fill") else "none"),
+            (f"{balls['count']} x {balls['diameter']:g} mm" if balls else
+             f"chamber full: {t['fill']['max_g']:.1f} g of {t['fill']['name']}" if t.get("fill") else "none"),
         ])
     widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
     lines.append("  ".join(h.ljust(w) for h, w in zip(header, widths)).rstrip())

@@ -244,6 +244,11 @@ def svg_path(a, b, d: str, samples: int = 800) -> np.ndarray:
         path = parse_path(d)
     except Exception as exc:  # svgpathtools raises bare exceptions on bad syntax
         raise ValueError(f"cannot parse the SVG path: {exc}") from None
+    from rodcad.yamlspec import MAX_MAGNITUDE
+
+    coords = [abs(c) for seg in path for c in getattr(seg, "bpoints", lambda: ())()]
+    if coords and (not np.all(np.isfinite(coords)) or max(coords) > MAX_MAGNITUDE):
+        raise ValueError(f"the SVG path has a coordinate beyond {MAX_MAGNITUDE:g}: no drawing is that large")
     if len(path) == 0 or path.length() == 0:
         raise ValueError("the SVG path is empty")
     # sample segment by segment so that corners between segments stay exact

@@ -44,6 +44,7 @@ def _mutate(text: str, kind: int, which: int, value: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # numpy overflows are bugs too, not noise
 @settings(max_examples=24, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 @given(example=st.sampled_from(EXAMPLES), kind=st.integers(0, 4), which=st.integers(0, 50),
        value=st.sampled_from(REPLACEMENTS))

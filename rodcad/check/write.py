@@ -24,11 +24,11 @@ from optimize.discretize import centerline
 from rodcad.cad.export import export_assembly
 from rodcad.cad.printfile import write_print_files
 from rodcad.cad.reread import write_rod_step, write_rod_stl
-from rodcad.cad.rods import ChainFabrication, FabricatedRod, chain_parts, write_rod_files
+from rodcad.cad.rods import ChainFabrication, chain_parts, write_rod_files
 from rodcad.check.rebalance import Rebalanced
 from rodcad.check.recheck import CheckResult, equilibrium_json
 from rodcad.outdir import MARKER, staged_output
-from rodcad.outputs.design_json import curve_error, print_profile, write_json
+from rodcad.outputs.design_json import curve_error, fabrication_json, print_profile, write_json
 
 __all__ = ["plot_check", "rebalanced_json", "report_section", "write_rebalanced"]
 
@@ -109,35 +109,6 @@ def plot_check(res: CheckResult, *paths: Path, rb: Rebalanced | None = None) -> 
     plt.close(fig)
 
 
-def _fabrication_json(f: FabricatedRod) -> dict[str, Any]:
-    """design.json's ``fabrication`` of a rebuilt rod (as ``rodcad build`` writes it)."""
-    return {
-        "mass": float(f.mass), "com": [float(v) for v in f.com],
-        "filament_g": float(f.filament_mass), "cavities": int(f.cavity_count),
-        "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
-        "ball_diameter_mm": None if f.ball_diameter is None else float(f.ball_diameter),
-        "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
-        "pause_zs_mm": [float(z) for z in f.pause_zs],
-        "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
-        "ball_mass_g": float(f.mass - f.filament_mass - getattr(f, "fill_mass", 0.0)),
-        "plastic_volume_mm3": float(f.plastic_volume),
-        "file": f"rods/{f.file_stem}.step",
-        "print_matrix": [[float(v) for v in row] for row in np.asarray(f.print_matrix)],
-        "in_range": bool(f.in_range), "message": f.message,
-        **_fill_json(f),
-    }
-
-
-def _fill_json(f: FabricatedRod) -> dict[str, Any]:
-    """The ``fill`` entry of a rod with a fill chamber (as ``rodcad build`` writes it)."""
-    name = getattr(f, "fill_name", "")
-    if not name:
-        return {}
-    return {"fill": {"name": name, "grams": float(getattr(f, "fill_mass", 0.0)),
-                     "chamber_volume_mm3": float(getattr(f, "chamber_volume", 0.0)),
-                     "pause_z_mm": None if f.pause_z is None else float(f.pause_z)}}
-
-
 def _bill(data: dict[str, Any]) -> None:
     """Filament, balls and total mass of the bill of materials from the rods' fabrication."""
     bom = data.setdefault("bill_of_materials", {})
@@ -178,7 +149,7 @@ def rebalanced_json(res: CheckResult, rb: Rebalanced) -> dict[str, Any]:
                         "message": "edited by hand; kept as it is by `rodcad check --rebalance`"})
         elif i in rb.fabricated:
             rod["mass"] = float(cd.result.masses[i])
-            rod["fabrication"] = _fabrication_json(rb.fabricated[i])
+            rod["fabrication"] = fabrication_json(rb.fabricated[i])
     eq = cd.check.equilibrium
     data["simulated"] = {**equilibrium_json(eq), "unique": bool(cd.check.unique),
                          "stable_equilibria_found": int(cd.check.n_stable)}

@@ -16,7 +16,7 @@ from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
 
-__all__ = ['design_json', 'bill_of_materials', 'write_json', 'chandelier_json']
+__all__ = ['design_json', 'fabrication_json', 'bill_of_materials', 'write_json', 'chandelier_json']
 
 
 def _f(x: float) -> float | None:
@@ -110,6 +110,28 @@ def _header(d, method: str | None, seed: int, time_s: float) -> dict[str, Any]:
             "method": method, "seed": int(seed), "time_s": float(time_s)}
 
 
+def fabrication_json(f) -> dict[str, Any]:
+    """design.json's ``fabrication`` of one built rod (a :class:`rodcad.cad.rods.FabricatedRod`):
+    as-built mass and centre of mass, voids and inserts, pauses, its file and bed placement."""
+    return {
+        "mass": float(f.mass), "com": [float(v) for v in f.com],
+        "filament_g": float(f.filament_mass), "cavities": int(f.cavity_count),
+        "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
+        "ball_diameter_mm": None if f.ball_diameter is None else float(f.ball_diameter),
+        "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
+        "pause_zs_mm": [float(z) for z in f.pause_zs],
+        "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
+        "ball_mass_g": float(f.mass - f.filament_mass - f.fill_mass),
+        "fill": {"name": f.fill_name, "grams": float(f.fill_mass),
+                 "chamber_volume_mm3": float(f.chamber_volume),
+                 "pause_z_mm": None if f.pause_z is None else float(f.pause_z)} if f.fill_name else None,
+        "plastic_volume_mm3": float(f.plastic_volume),
+        "file": f"rods/{f.file_stem}.step",
+        "print_matrix": [[float(v) for v in row] for row in np.asarray(f.print_matrix)],
+        "in_range": bool(f.in_range), "message": f.message,
+    }
+
+
 def design_json(r) -> dict[str, Any]:
     """The machine-readable result of a run (contract.md's design.json, plus extras).
 
@@ -125,24 +147,7 @@ def design_json(r) -> dict[str, Any]:
         bounds = r.plan.problem.mass_bounds[i] if printed else mass_info(d.catalog[name]).mass_range
         rod["mass_range"] = [float(v) for v in bounds]
         if r.fabrication is not None:
-            f = r.fabrication.rods[i]
-            rod["fabrication"] = {
-                "mass": float(f.mass), "com": [float(v) for v in f.com],
-                "filament_g": float(f.filament_mass), "cavities": int(f.cavity_count),
-                "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
-                "ball_diameter_mm": None if f.ball_diameter is None else float(f.ball_diameter),
-                "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
-                "pause_zs_mm": [float(z) for z in f.pause_zs],
-                "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
-                "ball_mass_g": float(f.mass - f.filament_mass - f.fill_mass),
-                "fill": {"name": f.fill_name, "grams": float(f.fill_mass),
-                         "chamber_volume_mm3": float(f.chamber_volume),
-                         "pause_z_mm": None if f.pause_z is None else float(f.pause_z)} if f.fill_name else None,
-                "plastic_volume_mm3": float(f.plastic_volume),
-                "file": f"rods/{f.file_stem}.step",
-                "print_matrix": [[float(v) for v in row] for row in np.asarray(f.print_matrix)],
-                "in_range": bool(f.in_range), "message": f.message,
-            }
+            rod["fabrication"] = fabrication_json(r.fabrication.rods[i])
         rods.append(rod)
     out: dict[str, Any] = {
         **_header(d, r.method or None, r.seed, r.time_s),

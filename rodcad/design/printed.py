@@ -30,13 +30,13 @@ from functools import lru_cache
 import numpy as np
 
 from optimize import InverseProblem
-from optimize.discretize import centerline, curve_distance, discretize, fit_curvatures
+from optimize.discretize import discretize, fit_curvatures
 from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from rodcad.catalog.jointlimits import joint_limits
 from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curvature
 from rodcad.catalog.printed import MassTable, rod_numbers
-from rodcad.design.shell import ShellError, one_shell
+from rodcad.design.shell import TRIES, ShellError, most_faithful, one_shell
 
 __all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "plan_printed", "rods_of"]
 
@@ -240,17 +240,10 @@ def _at_resolution(disc, res: float, bounds: tuple[float, float]):
     return _replace(disc, points=points, lengths=lengths, joint_error=max(disc.joint_error, moved))
 
 
-#: Without a preferred length, the longest rods whose centrelines follow the curve within
-#: this fraction of the span (else the closest fit of the lengths tried).
-FOLLOW_REL = 1e-3
-
-#: Preferred lengths tried, from the range's longest to its shortest (geometric steps).
-FOLLOW_TRIES = 10
-
-
 def _laid_on(curve: np.ndarray, r, preferred: float | None):
     """Joints and curvatures: at the preferred length, or the longest rods that follow the
-    curve within FOLLOW_REL of the span (the rods' arcs against the curve)."""
+    curve within :data:`rodcad.design.shell.FOLLOW_REL` of the span (the rods' arcs against
+    the curve)."""
     kmax = max(abs(r.curvature[0]), abs(r.curvature[1]))
 
     def lay(pref: float | None):
@@ -265,21 +258,15 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
     if preferred is not None:
         return lay(preferred)
-    span = max(float(np.hypot(*(curve[-1] - curve[0]))), 1e-9)
-    best = None
-    for pref in np.geomspace(r.length[1], r.length[0], FOLLOW_TRIES):
+
+    def tried(pref: float):
         try:
-            disc, kappa = lay(float(pref))
+            return lay(pref)
         except ValueError:
-            continue
-        err = curve_distance(curve, centerline(disc.points, kappa)) / span
-        if best is None or err < best[0] - 1e-12:
-            best = (err, disc, kappa)
-        if err <= FOLLOW_REL:
-            return disc, kappa
-    if best is None:
-        return lay(None)  # raises the discretisation's own explanation
-    return best[1], best[2]
+            return None
+
+    best = most_faithful(curve, (tried(float(x)) for x in np.geomspace(r.length[1], r.length[0], TRIES)))
+    return best if best is not None else lay(None)  # lay(None) raises the discretisation's explanation
 
 
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,

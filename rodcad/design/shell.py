@@ -19,7 +19,7 @@ import numpy as np
 from optimize.discretize import centerline, curve_distance, discretize, find_corners, fit_curvatures
 from rodcad.catalog.model import max_curvature
 
-__all__ = ["CORNER_TOL", "ShellError", "one_shell"]
+__all__ = ["CORNER_TOL", "FOLLOW_REL", "TRIES", "ShellError", "most_faithful", "one_shell"]
 
 #: A corner of the curve is a joint when one lies within this fraction of the span of it.
 CORNER_TOL = 1e-6
@@ -27,11 +27,31 @@ CORNER_TOL = 1e-6
 #: A corner turns more than this (deg), as in the planner's discretisation.
 CORNER_DEG = 25.0
 
-#: Lengths aimed at when none is given (the longest that follows the curve wins).
+#: Lengths aimed at when none is given, from the range's longest to its shortest
+#: (geometric steps): the longest that follows the curve wins.
 TRIES = 10
 
-#: The rods' centrelines follow the curve within this fraction of the span (as the planner).
+#: Without a preferred length, the longest rods whose centrelines follow the curve within
+#: this fraction of the span (else the closest fit of the lengths tried).
 FOLLOW_REL = 1e-3
+
+
+def most_faithful(curve: np.ndarray, layouts):
+    """Of (discretisation, curvatures) layouts in the order tried (None: none at that aim),
+    the first whose rods' centrelines follow the curve within :data:`FOLLOW_REL` of the
+    span, else the closest; None when there is none."""
+    span = max(float(np.hypot(*(curve[-1] - curve[0]))), 1e-9)
+    best = None
+    for laid in layouts:
+        if laid is None:
+            continue
+        disc, kappa = laid
+        err = curve_distance(curve, centerline(disc.points, kappa)) / span
+        if err <= FOLLOW_REL:
+            return disc, kappa
+        if best is None or err < best[0] - 1e-12:
+            best = (err, disc, kappa)
+    return None if best is None else (best[1], best[2])
 
 
 class ShellError(ValueError):
@@ -70,7 +90,6 @@ def one_shell(curve: np.ndarray, r, preferred: float | None):
         ShellError: the curve's corners forbid one length (explained).
     """
     curve = np.asarray(curve, float)
-    span = max(float(np.hypot(*(curve[-1] - curve[0]))), 1e-9)
     total = float(np.sum(np.hypot(*np.diff(curve, axis=0).T)))
     kmax = max(abs(r.curvature[0]), abs(r.curvature[1]))
     lo, hi = r.length
@@ -80,30 +99,27 @@ def one_shell(curve: np.ndarray, r, preferred: float | None):
     counts = range(max(1, math.floor(total / hi)), math.ceil(total / lo) + 2)
     extra = sorted((total / n for n in counts if lo <= total / n <= hi),
                    key=lambda x: abs(x - (preferred if preferred is not None else hi)))
-    best = None
-    for pref in [*aims, *extra]:
+
+    def lay(pref: float):
         try:
             disc = _equal(curve, r, pref)
         except ValueError:
-            continue
+            return None
         if disc is None:
-            continue
-        n = disc.lengths.size
+            return None
         k = float(np.mean(fit_curvatures(curve, disc.points, max_curvature=kmax))) if kmax else 0.0
         k = float(np.clip(k, *r.curvature))
         arc = max_curvature(float(disc.lengths[0]))
-        kappa = np.full(n, float(np.clip(k, -arc, arc)))
-        if preferred is not None:
-            return disc, kappa
-        err = curve_distance(curve, centerline(disc.points, kappa)) / span
-        if best is None or err < best[0] - 1e-12:
-            best = (err, disc, kappa)
-        if err <= FOLLOW_REL:
-            return disc, kappa
+        return disc, np.full(disc.lengths.size, float(np.clip(k, -arc, arc)))
+
+    if preferred is not None:  # the first layout at or near that length, however it follows
+        best = next((laid for laid in map(lay, [*aims, *extra]) if laid is not None), None)
+    else:
+        best = most_faithful(curve, map(lay, [*aims, *extra]))
     if best is None:
         raise ShellError(f"no single rod length from {lo:g} to {hi:g} mm lays on this target with every corner "
                          "a joint: its corners forbid one shell for every rod (drop same_shell, or change the "
                          "target)" + (f" at the preferred length {preferred:g} mm" if preferred is not None else "")
                          + (" (lengths rounded to a resolution are not laid as one shell)"
                             if r.resolution is not None else ""))
-    return best[1], best[2]
+    return best

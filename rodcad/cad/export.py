@@ -19,7 +19,7 @@ from OCP.TopLoc import TopLoc_Location
 
 from rodcad.cad.solids import GeometryError
 
-__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'read_assembly', 'placed']
+__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed']
 
 
 def export_step(solid: Solid, path: str | os.PathLike[str], name: str | None = None) -> Path:
@@ -184,11 +184,11 @@ def export_assembly(path: str | os.PathLike[str], nodes: Sequence[AssemblyPart |
     return path
 
 
-def read_assembly(path: str | os.PathLike[str]) -> list[tuple[str, float]]:
-    """The leaf solids of a STEP file as (label, volume mm^3), depth first
-    (read back through build123d's XCAF importer)."""
+def assembly_leaves(path: str | os.PathLike[str]) -> list[tuple[str, Solid]]:
+    """The leaf solids of a STEP file, depth first, as (label of the leaf shape, solid), each
+    with its placement in the assembly in its geometry (build123d's XCAF importer)."""
     root = _import_step(Path(path))
-    out: list[tuple[str, float]] = []
+    out: list[tuple[str, Solid]] = []
 
     def walk(shape: object) -> None:
         kids = list(getattr(shape, "children", ()) or ())
@@ -197,10 +197,15 @@ def read_assembly(path: str | os.PathLike[str]) -> list[tuple[str, float]]:
                 walk(k)
             return
         for s in shape.solids():  # type: ignore[attr-defined]
-            out.append((getattr(shape, "label", "") or s.label, float(s.volume)))
+            out.append((getattr(shape, "label", "") or "", s))
 
     walk(root)
     return out
+
+
+def read_assembly(path: str | os.PathLike[str]) -> list[tuple[str, float]]:
+    """The leaf solids of a STEP file as (label, volume mm^3), depth first."""
+    return [(label or s.label, float(s.volume)) for label, s in assembly_leaves(path)]
 
 
 def _trsf_of(matrix: np.ndarray) -> gp_Trsf:

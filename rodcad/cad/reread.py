@@ -32,7 +32,7 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
 from OCP.TopLoc import TopLoc_Location
 
-from rodcad.cad.export import export_step, export_stl, transformed
+from rodcad.cad.export import assembly_leaves, export_step, export_stl, transformed
 from rodcad.cad.solids import GeometryError, cylinder_solid, mass_properties, type_solid
 from rodcad.catalog.model import RodType
 
@@ -115,23 +115,10 @@ def read_assembly_rods(path: str | os.PathLike[str]) -> list[tuple[str, Solid]]:
         GeometryError: the file cannot be read.
     """
     try:
-        root = _b3d_import_step(Path(path))
+        leaves = assembly_leaves(path)
     except Exception as err:  # noqa: BLE001
         raise GeometryError(f"cannot be read as STEP ({type(err).__name__}: {err})") from None
-    out: list[tuple[str, Solid]] = []
-
-    def walk(shape: object) -> None:
-        kids = list(getattr(shape, "children", ()) or ())
-        if kids:
-            for k in kids:
-                walk(k)
-            return
-        label = str(getattr(shape, "label", "") or "")
-        for s in shape.solids():  # type: ignore[attr-defined]
-            out.append((label or str(s.label or ""), s))
-
-    walk(root)
-    return out
+    return [(label or str(s.label or ""), s) for label, s in leaves]
 
 
 def shape_problem(solid: Solid) -> str:

@@ -29,6 +29,7 @@ from rodcad.check.rebalance import Rebalanced
 from rodcad.check.recheck import CheckResult, equilibrium_json
 from rodcad.outdir import MARKER, staged_output
 from rodcad.outputs.design_json import curve_error, fabrication_json, print_profile, write_json
+from rodcad.outputs.preview import draw_rods, finish_figure
 
 __all__ = ["plot_check", "rebalanced_json", "report_section", "write_rebalanced"]
 
@@ -65,17 +66,11 @@ def plot_check(res: CheckResult, *paths: Path, rb: Rebalanced | None = None) -> 
     ax.plot(*centerline(b.simulated, curv).T, "-", color="0.6", lw=1.0, label="as designed")
     final = rb.as_built.points if rb is not None else res.equilibrium.points
     masses = rb.masses if rb is not None else res.masses
-    segs = [centerline(final[i:i + 2], [k]) for i, k in enumerate(curv)]
+    lc, segs = draw_rods(ax, final, curv, masses)
     edited = res.edited
-    if edited:
+    if edited:  # outlined in black, under the rods
         ax.add_collection(LineCollection([segs[i] for i in edited], colors="k", linewidths=9, capstyle="round",
                                          zorder=2))
-    lc = LineCollection(segs, cmap="coolwarm", linewidths=6, capstyle="round", zorder=3)
-    lc.set_array(np.asarray(masses, float))
-    if np.ptp(masses) == 0:
-        lc.set_clim(masses[0] * 0.95, masses[0] * 1.05)
-    ax.add_collection(lc)
-    ax.plot(*final.T, "o", color="k", ms=2.5, zorder=4)
     if rb is not None:
         ax.plot(*centerline(res.equilibrium.points, curv).T, ":", color="k", lw=1, zorder=5,
                 label="with the edits, before re-balancing")
@@ -85,12 +80,6 @@ def plot_check(res: CheckResult, *paths: Path, rb: Rebalanced | None = None) -> 
         k = 0.08 * b.span / biggest
         ax.quiver(*b.simulated.T, *(k * shift).T, angles="xy", scale_units="xy", scale=1, color="tab:green",
                   width=0.004, zorder=7, label=f"joint shift from the design x {k:.3g}")
-    ax.plot(*b.anchors.T, "ks", ms=9, zorder=6, label="anchors")
-    fig.colorbar(lc, ax=ax, label="rod mass (g)", shrink=0.8)
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
     name = b.data.get("name") or b.outdir.name
     title = f"{name}: {b.n} rods, {len(edited)} edited (outlined)"
     if rb is None:
@@ -100,13 +89,7 @@ def plot_check(res: CheckResult, *paths: Path, rb: Rebalanced | None = None) -> 
     else:
         title += (f"; re-balanced {len(rb.redesigned)}\nas built {100 * rb.vs_target.max_rel_span:.3g} % of the "
                   f"span from the target (edits alone: {100 * res.vs_target.max_rel_span:.3g} %)")
-    ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    ax.grid(True, lw=0.3, alpha=0.5)
-    fig.tight_layout()
-    for path in paths:
-        fig.savefig(path, dpi=130)
-    plt.close(fig)
+    finish_figure(fig, ax, lc, b.anchors, title, paths)
 
 
 def _bill(data: dict[str, Any]) -> None:

@@ -8,7 +8,7 @@ import numpy as np
 
 from optimize.discretize import centerline, curve_distance
 
-__all__ = ['plot_chain']
+__all__ = ['draw_rods', 'finish_figure', 'plot_chain']
 
 
 def plot_chain(r, *paths: Path) -> None:
@@ -23,7 +23,6 @@ def plot_chain(r, *paths: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection
 
     d = r.design
     eq = r.equilibrium
@@ -33,27 +32,14 @@ def plot_chain(r, *paths: Path) -> None:
         ax.plot(*d.target_curve.T, "--", color="0.45", lw=1.2, label="target")
     if r.target_points is not None:
         ax.plot(*r.target_points.T, "o", mfc="none", mec="0.35", ms=6, label="target joints")
-    # each rod as it is printed: its chord, or the arc of its curved body
     curvature = [getattr(d.catalog[n], "curvature", 0.0) if n in d.catalog else 0.0 for n in r.type_names]
-    segs = [centerline(pts[i:i + 2], [k]) for i, k in enumerate(curvature)]
-    lc = LineCollection(segs, cmap="coolwarm", linewidths=6, capstyle="round", zorder=3)
-    lc.set_array(np.asarray(r.masses, float))
-    if np.ptp(r.masses) == 0:
-        lc.set_clim(r.masses[0] * 0.95, r.masses[0] * 1.05)
-    ax.add_collection(lc)
-    ax.plot(*pts.T, "o", color="k", ms=2.5, zorder=4)
+    lc, _ = draw_rods(ax, pts, curvature, r.masses)
     stops = list(r.plan.added_stops) if r.plan is not None else []
     if stops:
         ax.plot(*pts[[j + 1 for j in stops]].T, "^", mfc="gold", mec="k", ms=7, zorder=5,
                 label="joint on a stop")
     if r.as_built is not None:
         ax.plot(*r.as_built.equilibrium.points.T, ":", color="k", lw=1, zorder=5, label="as built")
-    ax.plot(*d.anchors.T, "ks", ms=9, zorder=6, label="anchors")
-    fig.colorbar(lc, ax=ax, label="rod mass (g)", shrink=0.8)
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
     title = f"{d.name}: {r.n} rods"
     if r.method:
         title += f", {r.method}"
@@ -66,6 +52,35 @@ def plot_chain(r, *paths: Path) -> None:
             title += f" (as built {100 * r.as_built.distance.max_rel_span:.3g} %)"
     if not eq.stable:
         title += "  [NOT STABLE]"
+    finish_figure(fig, ax, lc, d.anchors, title, paths)
+
+
+def draw_rods(ax, points: np.ndarray, curvature, masses) -> tuple[object, list[np.ndarray]]:
+    """Each rod as it is printed (its chord, or the arc of its curved body), thick and
+    coloured by mass, with its joints as dots; returns (the collection, the rods' polylines)."""
+    from matplotlib.collections import LineCollection
+
+    segs = [centerline(points[i:i + 2], [k]) for i, k in enumerate(curvature)]
+    lc = LineCollection(segs, cmap="coolwarm", linewidths=6, capstyle="round", zorder=3)
+    lc.set_array(np.asarray(masses, float))
+    if np.ptp(masses) == 0:
+        lc.set_clim(masses[0] * 0.95, masses[0] * 1.05)
+    ax.add_collection(lc)
+    ax.plot(*np.asarray(points).T, "o", color="k", ms=2.5, zorder=4)
+    return lc, segs
+
+
+def finish_figure(fig, ax, lc, anchors: np.ndarray, title: str, paths) -> None:
+    """Anchors, the mass colour bar, equal axes in mm, title, legend and grid; saved to every
+    path and closed."""
+    import matplotlib.pyplot as plt
+
+    ax.plot(*np.asarray(anchors).T, "ks", ms=9, zorder=6, label="anchors")
+    fig.colorbar(lc, ax=ax, label="rod mass (g)", shrink=0.8)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
     ax.grid(True, lw=0.3, alpha=0.5)

@@ -275,17 +275,18 @@ def rod_pauses(rod: FabricatedRod, profile: Mapping[str, Any] | PrintProfile | N
 def _message(placements: Sequence[Placement], z: float) -> str:
     """What to do at the pause at ``z``: e.g. 'insert 4 balls of 6 mm (2 in each of rods
     00, 03)', 'pour 12.5 g of tungsten shot into rod 04'."""
-    by_d: dict[float, list[tuple[str, int]]] = {}
+    by_d: dict[tuple[float, str], list[tuple[str, int]]] = {}
     parts, pours = [], []
     for p in placements:
         tag = p.rod.file_stem.split("_")[0]
         n = p.pauses.get(z, 0)
         if n:
-            by_d.setdefault(float(p.rod.ball_diameter or 0.0), []).append((tag, n))
+            kind = (float(p.rod.ball_diameter or 0.0), str(getattr(p.rod, "ball_name", "") or ""))
+            by_d.setdefault(kind, []).append((tag, n))
         grams, name = _fill(p.rod)
         if z in p.pauses and grams > 0 and not n:
             pours.append(f"pour {grams:.2f} g of {name} into rod {tag}")
-    for d, rods in sorted(by_d.items()):
+    for (d, name), rods in sorted(by_d.items()):
         total = sum(n for _, n in rods)
         counts = {n for _, n in rods}
         if len(rods) == 1:
@@ -294,7 +295,8 @@ def _message(placements: Sequence[Placement], z: float) -> str:
             who = f"{counts.pop()} in each of rods {', '.join(s for s, _ in rods)}"
         else:
             who = ", ".join(f"{n} in rod {s}" for s, n in rods)
-        parts.append(f"insert {total} ball{'s' if total != 1 else ''} of {d:g} mm ({who})")
+        what = f" [{name}]" if name else ""
+        parts.append(f"insert {total} ball{'s' if total != 1 else ''} of {d:g} mm ({who}){what}")
     return "; ".join(parts + pours)
 
 

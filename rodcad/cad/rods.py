@@ -135,6 +135,9 @@ class FabricatedRod:
         fill_mass: grams of shot poured into the chamber at ``pause_z`` (rods with a fill).
         fill_name: what the shot is ('' without).
         chamber_volume: the chamber's volume (mm^3; 0 without).
+        ball_name: the kind of the balls (catalog name, e.g. 'tungsten carbide ball 6 mm';
+            '' without balls).
+        ball_mass_each: mass of one ball (g; 0 without balls).
     """
 
     index: int
@@ -167,6 +170,8 @@ class FabricatedRod:
     fill_mass: float = 0.0
     fill_name: str = ""
     chamber_volume: float = 0.0
+    ball_name: str = ""
+    ball_mass_each: float = 0.0
 
 
 @dataclass
@@ -201,7 +206,8 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
     plain = type_solid(rod)
     socks, cavs, rs = plan.sockets, plan.cavities, plan.socket_radius
     n_balls = len(socks)
-    metal = n_balls * rod.balls.mass if n_balls and rod.balls is not None else 0.0
+    kind = rod.ball_kinds[plan.ball_kind] if n_balls else None
+    metal = n_balls * kind.mass if kind is not None else 0.0
     target = plan.build_mass
 
     def make(r: float) -> Any:
@@ -233,8 +239,8 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
         to_faces, between = void_walls(plain, voids, rod.material.min_wall + 1.0)
         wall = min(float(to_faces.min()), between)
     c = np.array(props.center) * props.volume * rho
-    if n_balls:
-        c = c + rod.balls.mass * socks.sum(axis=0)  # type: ignore[union-attr]
+    if kind is not None:
+        c = c + kind.mass * socks.sum(axis=0)
     mass = props.volume * rho + metal
     com = c / mass
     return solid, r, Measurement(float(props.volume), float(mass), (float(com[0]), float(com[1])), float(wall),
@@ -246,7 +252,7 @@ def _key(rod: RodType, target: float, seed: int) -> str:
 
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
                     asdict(rod.geometry), asdict(rod.material),
-                    asdict(rod.balls) if rod.balls is not None else None, round(float(target), 9), int(seed))
+                    rod.balls_json(), round(float(target), 9), int(seed))
 
 
 def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None]) -> dict[str, Any]:
@@ -301,6 +307,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     if meas.min_wall < wall - 1e-6:
         raise FabricationError(f"rod {index} ({rod.name}): a wall of {meas.min_wall:.3f} mm around a void is "
                                f"thinner than the minimum {wall} mm")
+    kind = rod.ball_kinds[plan.ball_kind] if len(socks) else None
     pm = print_matrix(solid)
     roofs: list[float] = []
     for z in sorted(socks @ UP + rs + pm[2, 3]):  # rod +y is bed +Z
@@ -315,7 +322,8 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     return FabricatedRod(
         index=index, type_name=rod.name, target_mass=float(target), mass=mass,
         com=meas.com, plastic_volume=meas.volume, filament_mass=meas.volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
-        ball_count=len(socks), ball_diameter=rod.balls.diameter if len(socks) and rod.balls else None,
+        ball_count=len(socks), ball_diameter=kind.diameter if kind is not None else None,
+        ball_name=kind.name if kind is not None else "", ball_mass_each=kind.mass if kind is not None else 0.0,
         pause_z=pause, mass_error=(mass - goal) / goal, in_range=not plan.message, message=plan.message,
         solid=solid, cavity_centers=cavs, socket_centers=socks, socket_radius=rs if len(socks) else 0.0,
         min_wall=meas.min_wall, layout=plan.layout, print_matrix=pm,

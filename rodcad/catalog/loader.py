@@ -4,7 +4,6 @@ expand each family into named rod types, with FILE:LINE:COL for every problem.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -14,15 +13,13 @@ from typing import TYPE_CHECKING, Any
 from rodcad.catalog.cache import register_seed
 from rodcad.errors import InputError, Problem
 from rodcad.yamlio import (
-    MISSING,
     Pos,
     Validator,
-    child_path,
     format_number,
     load_yaml,
     suggest,
 )
-from rodcad.yamlspec import Checked, Nullable, Obj, check_document
+from rodcad.yamlspec import Checked, check_document
 
 if TYPE_CHECKING:  # pragma: no cover
     pass
@@ -43,6 +40,7 @@ from rodcad.catalog.model import (
     RodGeometry,
     RodType,
 )
+from rodcad.catalog.merge import complete, merge_defaults
 from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
 from rodcad.catalog.spec import catalog_spec, family_spec
 
@@ -123,52 +121,6 @@ def catalog_from_text(text: str, filename: str = "<catalog>") -> Catalog:
     return _build(doc, None)
 
 
-def _merge(base: Any, over: Any, base_path: str, over_path: str, sources: dict[str, str], rel: str) -> Any:
-    """Deep-merge ``over`` onto ``base`` (mappings key by key, anything else
-    replaced), recording for every leaf which key path it came from."""
-    if isinstance(base, dict) and isinstance(over, dict):
-        out: dict[str, Any] = {}
-        for key in list(base) + [k for k in over if k not in base]:
-            r = child_path(rel, key)
-            if key in over and key in base:
-                out[key] = _merge(base[key], over[key], child_path(base_path, key),
-                                  child_path(over_path, key), sources, r)
-            elif key in over:
-                out[key] = _record(over[key], child_path(over_path, key), sources, r)
-            else:
-                out[key] = _record(base[key], child_path(base_path, key), sources, r)
-        sources[rel] = over_path
-        return out
-    return _record(over, over_path, sources, rel)
-
-
-def _record(value: Any, path: str, sources: dict[str, str], rel: str) -> Any:
-    sources[rel] = path
-    if isinstance(value, dict):
-        for key, val in value.items():
-            _record(val, child_path(path, key), sources, child_path(rel, key))
-    elif isinstance(value, list):
-        for i, val in enumerate(value):
-            _record(val, child_path(path, i), sources, child_path(rel, i))
-    return copy.deepcopy(value)
-
-
-def _complete(spec: Obj, value: dict[str, Any], rel: str, missing: list[str]) -> None:
-    """Fill defaults into ``value`` and list required keys still missing."""
-    for key, f in spec.fields.items():
-        r = child_path(rel, key)
-        if key not in value:
-            if f.required:
-                missing.append(r)
-                continue
-            if f.default is MISSING:
-                continue
-            value[key] = copy.deepcopy(f.default)
-        sub = f.spec.inner if isinstance(f.spec, Nullable) else f.spec
-        if isinstance(sub, Obj) and isinstance(value.get(key), dict):
-            _complete(sub, value[key], r, missing)
-
-
 @dataclass
 class _FamilyContext:
     """Reports problems about one family at the position each value came from."""
@@ -178,6 +130,7 @@ class _FamilyContext:
     index: int
     sources: dict[str, str]
     seen: set[tuple[str, str]] = field(default_factory=set)
+    ball_keys: tuple[str, ...] = ()  # key of each ball kind: 'balls' or 'balls[i]'
 
     @property
     def path(self) -> str:
@@ -234,7 +187,7 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
         if not isinstance(entry, dict) or "name" not in entry:
             continue
         sources: dict[str, str] = {}
-        merged = _merge(defaults, entry, "defaults", fpath, sources, "")
+        merged = merge_defaults(defaults, entry, "defaults", fpath, sources, "")
         ctx = _FamilyContext(v, entry["name"], i, sources)
         if entry["name"] in family_names:
             ctx.report("name", f"duplicate family name {entry['name']!r} "
@@ -244,8 +197,12 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
         if not (defaults_ok and v.ok(fpath, schema_failed)):
             continue  # its schema problems are reported; cross-checks would add noise
         missing: list[str] = []
-        _complete(full, merged, "", missing)
+        complete(full, merged, "", missing)
         for key in missing:
+            if "[" in key:  # an item of a list (one ball kind of several): point at the item
+                item = key.rsplit(".", 1)[0]
+                v.report_at(ctx.source(item), f"missing required key {key.rsplit('.', 1)[1]!r}", fallback=fpath)
+                continue
             v.report_at(fpath, f"missing required key {key!r} (give it in the family or under 'defaults')")
         if missing:
             continue
@@ -283,10 +240,11 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
     printed to order: its reference types, ranges and template)."""
     sec, jt, ends, mat = f["section"], f["joint"], f["ends"], f["material"]
     material = Material(mat.get("name", ""), mat["density"], mat["min_wall"])
-    balls = None
-    if f.get("balls") is not None:
-        b = f["balls"]
-        balls = Balls(b["diameter"], b["density"], b.get("clearance", 0.2), b.get("name", ""))
+    raw = f.get("balls")
+    listed = isinstance(raw, list)
+    kinds = tuple(Balls(b["diameter"], b["density"], b.get("clearance", 0.2), b.get("name", ""))
+                  for b in (raw if listed else [raw] if raw is not None else []))
+    ctx.ball_keys = tuple(f"balls[{i}]" if listed else "balls" for i in range(len(kinds)))
 
     def end(which: str) -> EndShape:
         over = ends.get(which, {})
@@ -305,7 +263,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
         ctx.report("material.min_wall", f"minimum wall {format_number(w)} mm is thinner than the "
                    f"printer's nozzle ({format_number(printer.nozzle)} mm)")
     if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f:
-        return _with_fill(f, ctx, material, _expand_ranges(f, ctx, printer, material, balls, first, second, end_key))
+        return _with_fill(f, ctx, material, _expand_ranges(f, ctx, printer, material, kinds, first, second, end_key))
     if f.get("fill") is not None:
         ctx.report("fill", "a fill is for rods printed to order: give the length as a range {min, max}")
         return []
@@ -319,7 +277,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
         hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
                       jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
         at = f" at scale {format_number(scale)}" if scale != 1 else ""
-        ok &= _check_section(ctx, h, t, hinge, material, balls, first, second, end_key, at)
+        ok &= _check_section(ctx, h, t, hinge, material, kinds, first, second, end_key, at)
         per_scale[si] = (h, t, hinge, at)
     for li, length in enumerate(f["length"]):
         l_rel = f"length[{li}]" if len(f["length"]) > 1 else "length"
@@ -337,13 +295,13 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
                     name += f"-s{format_number(scale)}"
                 if multi_curv:
                     name += f"-k{format_number(curv)}"
-                out.append(RodType(name, f["name"], length, scale, curv, geom, material, balls,
-                                   ctx.origin(l_rel)))
+                out.append(RodType(name, f["name"], length, scale, curv, geom, material, kinds[0] if kinds else None,
+                                   ctx.origin(l_rel), heavier=kinds[1:]))
     return out if ok else []
 
 
 def _check_section(ctx: _FamilyContext, h: float, t: float, hinge: Hinge, m: Material,
-                   balls: Balls | None, first: EndShape, second: EndShape, end_key: Any, at: str) -> bool:
+                   kinds: tuple[Balls, ...], first: EndShape, second: EndShape, end_key: Any, at: str) -> bool:
     """Checks on the cross-section and hinge that make a rod impossible to build."""
     ok = True
     fmt = format_number
@@ -385,10 +343,10 @@ def _check_section(ctx: _FamilyContext, h: float, t: float, hinge: Hinge, m: Mat
                        f"setback {fmt(e.setback)} mm detaches the end face from the "
                        f"{fmt(hinge.knuckle_radius)} mm knuckle: must be less than the knuckle radius{at}")
             ok = False
-    if balls is not None:
-        need = balls.socket_diameter + 2 * w
+    for key, kind in zip(ctx.ball_keys, kinds):
+        need = kind.socket_diameter + 2 * w
         if need > min(h, t):
-            ctx.report("balls.diameter", f"a {fmt(balls.diameter)} mm ball in a {fmt(balls.socket_diameter)} mm "
+            ctx.report(f"{key}.diameter", f"a {fmt(kind.diameter)} mm ball in a {fmt(kind.socket_diameter)} mm "
                        f"socket with {fmt(w)} mm walls needs a section of at least {fmt(need)} mm; the rod is "
                        f"{fmt(h)} x {fmt(t)} mm{at}")
             ok = False
@@ -492,7 +450,7 @@ def _with_fill(f: dict[str, Any], ctx: _FamilyContext, material: Material,
 
 
 def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None, material: Material,
-                   balls: Balls | None, first: EndShape, second: EndShape, end_key: Any
+                   kinds: tuple[Balls, ...], first: EndShape, second: EndShape, end_key: Any
                    ) -> list[RodType] | tuple[list[RodType], Ranges, RodType]:
     """A family printed to order: ranges checked at their ends (every rod the design may
     make must be buildable), two reference types (shortest and longest, straight)."""
@@ -527,7 +485,7 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     h, t = sec["height"] * scale, sec["thickness"] * scale
     hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
                   jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
-    if not _check_section(ctx, h, t, hinge, material, balls, first, second, end_key, ""):
+    if not _check_section(ctx, h, t, hinge, material, kinds, first, second, end_key, ""):
         return []
     ok = True
     for rel, lv in (("length.min", length[0]), ("length.max", length[1])):
@@ -550,7 +508,8 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     k0 = min(max(0.0, curv[0]), curv[1])
     origin = ctx.origin("length")
     refs = [RodType(f"{f['name']}-{fmt(lv)}", f["name"], lv, scale, k0,
-                    RodGeometry(lv, h, t, k0, hinge, first, second), material, balls, origin)
+                    RodGeometry(lv, h, t, k0, hinge, first, second), material, kinds[0] if kinds else None, origin,
+                    heavier=kinds[1:])
             for lv in length]
     res = f["length"].get("resolution")
     if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:

@@ -53,7 +53,7 @@ from rodcad.fabrication.layout import (
     max_cavity_layout,
 )
 
-__all__ = ['MASSRANGE_VERSION', 'MassInfo', 'layouts', 'compute_mass_info', 'is_cached', 'mass_info', 'mass_infos']
+__all__ = ['MASSRANGE_VERSION', 'MassInfo', 'ball_layout', 'layouts', 'compute_mass_info', 'is_cached', 'mass_info', 'mass_infos']
 
 
 #: Bump when results change (invalidates cached mass ranges).
@@ -79,6 +79,8 @@ class MassInfo:
         cavity_radius: radius of the cavities at m_min (mm), 0 if none fit.
         cavity_count: number of cavities at m_min.
         ball_count: number of balls at m_max.
+        ball_kind: which of the rod's ball kinds (:attr:`RodType.ball_kinds`) gives m_max.
+        kind_max: per ball kind, (balls that fit, heaviest mass with them) (g).
     """
 
     volume: float
@@ -89,6 +91,8 @@ class MassInfo:
     cavity_radius: float
     cavity_count: int
     ball_count: int
+    ball_kind: int = 0
+    kind_max: tuple[tuple[int, float], ...] = ()
 
     @property
     def mass_range(self) -> tuple[float, float]:
@@ -96,12 +100,17 @@ class MassInfo:
         return (self.m_min, self.m_max)
 
     def to_json(self) -> dict[str, object]:
-        return asdict(self)
+        out = asdict(self)
+        if len(self.kind_max) <= 1:  # one ball kind: the format cached before kinds existed
+            out.pop("ball_kind")
+            out.pop("kind_max")
+        return out
 
     @classmethod
     def from_json(cls, data: dict[str, object]) -> MassInfo:
         data = dict(data)
         data["com"] = tuple(data["com"])  # type: ignore[arg-type]
+        data["kind_max"] = tuple((int(n), float(m)) for n, m in data.get("kind_max", ()))  # type: ignore[union-attr]
         return cls(**data)  # type: ignore[arg-type]
 
 
@@ -110,26 +119,35 @@ def _key(rod: RodType) -> str:
 
     return make_key("mass", MASSRANGE_VERSION, GEOMETRY_VERSION, MIN_CAVITY_RADIUS, RADIUS_STEP,
                     asdict(rod.geometry), asdict(rod.material),
-                    asdict(rod.balls) if rod.balls is not None else None,
+                    rod.balls_json(),
                     *(() if rod.fill is None else ("fill", CHAMBER_VERSION, asdict(rod.fill))))
 
 
 def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
     """The cavity layout at m_min ('capped' voids) and the ball socket layout
-    at m_max ('silo' voids, raised by :func:`ball_offset`) of a rod type."""
+    at m_max ('silo' voids, raised by :func:`ball_offset`) of a rod type (its first ball
+    kind; :func:`ball_layout` for another)."""
     from rodcad.catalog.fastgeom import RodClearance, rod_mass_properties
 
     _, center = rod_mass_properties(rod.geometry)
     clearance = RodClearance(rod.geometry)
-    wall = rod.material.min_wall
-    cavities = max_cavity_layout(clearance, clearance.bounds, center, wall, void="capped")
-    if rod.balls is None:
-        return cavities, SphereLayout.empty()
-    rs = rod.balls.socket_diameter / 2
-    lift = ball_offset(rs, rod.balls.mass, rod.material.density)
-    balls = max_ball_layout(clearance, clearance.bounds, center, rod.balls.socket_diameter, wall,
-                            void="silo", raise_by=lift)
-    return cavities, balls
+    cavities = max_cavity_layout(clearance, clearance.bounds, center, rod.material.min_wall, void="capped")
+    return cavities, ball_layout(rod)
+
+
+def ball_layout(rod: RodType, kind: int = 0) -> SphereLayout:
+    """The most sockets of ball kind ``kind`` the rod holds (empty without balls)."""
+    from rodcad.catalog.fastgeom import RodClearance, rod_mass_properties
+
+    if not rod.ball_kinds:
+        return SphereLayout.empty()
+    balls = rod.ball_kinds[kind]
+    _, center = rod_mass_properties(rod.geometry)
+    clearance = RodClearance(rod.geometry)
+    rs = balls.socket_diameter / 2
+    lift = ball_offset(rs, balls.mass, rod.material.density)
+    return max_ball_layout(clearance, clearance.bounds, center, balls.socket_diameter, rod.material.min_wall,
+                           void="silo", raise_by=lift)
 
 
 def compute_mass_info(rod: RodType) -> MassInfo:
@@ -142,16 +160,21 @@ def compute_mass_info(rod: RodType) -> MassInfo:
         solid, com, (lo, hi) = fill_numbers(rod)
         return MassInfo(float(volume), float(solid), (float(com[0]), float(com[1])), float(lo), float(hi),
                         0.0, 0, 0)
-    cavities, balls = layouts(rod)
     rho = rod.material.density / 1000.0  # g/mm^3
     solid_mass = volume * rho
+    m_max, count, kind = solid_mass, 0, 0
+    cavities, _ = layouts(rod)
+    kind_max = []
+    for k in range(len(rod.ball_kinds)):  # the heaviest over the ball kinds
+        balls = ball_layout(rod, k)
+        m_k = (volume - balls.volume) * rho + balls.count * rod.ball_kinds[k].mass if balls.count else solid_mass
+        kind_max.append((int(balls.count), float(m_k)))
+        if balls.count:
+            if m_k > m_max:
+                m_max, count, kind = m_k, balls.count, k
     m_min = (volume - cavities.volume) * rho
-    if rod.balls is not None and balls.count:
-        m_max = (volume - balls.volume) * rho + balls.count * rod.balls.mass
-    else:
-        m_max = solid_mass
     return MassInfo(float(volume), float(solid_mass), (float(center[0]), float(center[1])), float(m_min),
-                    float(max(m_max, solid_mass)), float(cavities.radius), int(cavities.count), int(balls.count))
+                    float(m_max), float(cavities.radius), int(cavities.count), int(count), kind, tuple(kind_max))
 
 
 def is_cached(rod: RodType, cache: DiskCache) -> bool:

@@ -332,6 +332,9 @@ class RodType:
         balls: metal balls it may hold, or None.
         origin: where the type's family (or length) is written in the catalog.
         fill: loose shot its chamber may hold (rods printed to order), or None.
+        heavier: further ball kinds, in the catalog's order of preference after ``balls``:
+            a rod uses one kind, a later one only where the kinds before cannot make it
+            heavy enough (see :attr:`ball_kinds`).
     """
 
     name: str
@@ -344,6 +347,25 @@ class RodType:
     balls: Balls | None
     origin: Origin = field(compare=False, repr=False)
     fill: Fill | None = None
+    heavier: tuple[Balls, ...] = ()
+
+    @property
+    def ball_kinds(self) -> tuple[Balls, ...]:
+        """Every ball kind this rod may hold, ``balls`` first (empty without balls)."""
+        return () if self.balls is None else (self.balls, *self.heavier)
+
+    def balls_json(self) -> Any:
+        """The ball kinds as plain data (cache keys): None, one kind's dict, or a list."""
+        if self.balls is None:
+            return None
+        return asdict(self.balls) if not self.heavier else [asdict(b) for b in self.ball_kinds]
+
+    def with_kind(self, k: int) -> RodType:
+        """This rod with ball kind ``k`` only (the kind a fabricated rod holds)."""
+        kinds = self.ball_kinds
+        if not kinds or (k == 0 and not self.heavier):
+            return self
+        return dataclasses.replace(self, balls=kinds[k], heavier=())
 
 
 @dataclass(frozen=True)
@@ -499,7 +521,7 @@ class Catalog:
             if value is not None:
                 name += f"-{tag}{_fmt(value, 3)}"
         return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin,
-                       t.fill)
+                       t.fill, t.heavier)
 
     def with_types(self, types: Sequence[RodType]) -> Catalog:
         """This catalog with rods made to order added (a name already known is kept).

@@ -17,7 +17,7 @@ from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
 #: Longest design, catalog or family name (it names folders and files).
 MAX_NAME = 100
 
-__all__ = ["ListOrRange", "catalog_schema", "catalog_spec", "family_spec"]
+__all__ = ["ListOrRange", "OneOrMany", "catalog_schema", "catalog_spec", "family_spec"]
 
 
 class ListOrRange(OneOrList):
@@ -42,6 +42,28 @@ class ListOrRange(OneOrList):
         schema = super().json_schema()
         schema["anyOf"] = [*schema["anyOf"], self.range.json_schema()]
         return schema
+
+
+class OneOrMany(ListOf):
+    """One mapping or a list of mappings of the same spec (e.g. one ball kind or several).
+    Unlike :class:`OneOrList` the Python value keeps the form written: a dict for one
+    mapping (so 'defaults' and a family merge key by key), a list for several."""
+
+    def check(self, node: yaml.Node, path: str, v: Validator) -> Any:
+        if isinstance(node, yaml.SequenceNode):
+            if not node.value:
+                v.report(node, path, "expected a mapping or a list of at least 1 item, got an empty list")
+                return MISSING
+            return self._check_items(node, path, v)
+        return self.item.check(node, path, v)
+
+    def json_schema(self) -> dict[str, Any]:
+        item = dict(self.item.json_schema())
+        description = item.pop("description", "")
+        schema: dict[str, Any] = {"anyOf": [item, {"type": "array", "items": item, "minItems": 1,
+                                                   "uniqueItems": True}]}
+        description = self.description or description
+        return {"description": description, **schema} if description else schema
 
 
 _NAME = r"[A-Za-z0-9][A-Za-z0-9_.+-]*"
@@ -217,19 +239,24 @@ def family_spec() -> Obj:
             ),
             "balls": Field(
                 Nullable(
-                    Obj(
-                        {
-                            "name": Field(Str(), default="", description="e.g. steel 5 mm."),
-                            "diameter": Field(Num(maximum=100, **mm_pos), required=True,
-                                              description="Ball diameter (mm)."),
-                            "density": Field(Num(maximum=25, exclusive_minimum=0, unit="g/cm^3"),
-                                             required=True, description="Ball density (g/cm^3)."),
-                            "clearance": Field(Num(minimum=0, maximum=5, unit="mm"), default=0.2,
-                                               description="Socket diameter minus ball diameter (mm)."),
-                        },
+                    OneOrMany(
+                        Obj(
+                            {
+                                "name": Field(Str(), default="", description="e.g. steel 5 mm."),
+                                "diameter": Field(Num(maximum=100, **mm_pos), required=True,
+                                                  description="Ball diameter (mm)."),
+                                "density": Field(Num(maximum=25, exclusive_minimum=0, unit="g/cm^3"),
+                                                 required=True, description="Ball density (g/cm^3): steel "
+                                                 "7.85, tungsten carbide 15.6, tungsten alloy 17-18.5."),
+                                "clearance": Field(Num(minimum=0, maximum=5, unit="mm"), default=0.2,
+                                                   description="Socket diameter minus ball diameter (mm)."),
+                            },
+                        ),
+                        unique=True,
                     ),
-                    description="Metal balls the rods may hold in closed sockets to add mass; "
-                    "null for none.",
+                    description="Metal balls the rods may hold in closed sockets to add mass: one kind, "
+                    "or a list of kinds (first listed first: each further kind is used where the ones "
+                    "before cannot make a rod heavy enough, one kind per rod); null for none.",
                 ),
                 default=None,
             ),
@@ -251,6 +278,8 @@ def _partial(spec: Any) -> Any:
         )
     if isinstance(spec, Nullable):
         return Nullable(_partial(spec.inner), spec.description)
+    if isinstance(spec, OneOrMany):  # one mapping merges with 'defaults'; list items are complete
+        return OneOrMany(_partial(spec.item), unique=spec.unique, description=spec.description)
     return spec
 
 

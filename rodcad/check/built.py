@@ -39,6 +39,7 @@ class BuiltRod:
         ball_centers: (k, 3) ball centres (mm).
         ball_mass: all balls together (g).
         fill_mass: shot poured into a fill chamber (g; 0 without).
+        ball_diameter, ball_kind: the balls' diameter (mm) and kind name as recorded (None, '').
         fill_center: (along, perp) where the shot acts (mm): the chamber is centred on the
             rod's centre of mass (:mod:`rodcad.catalog.chamber`), so design.json's as-built
             centre of mass unless its ``fill`` gives a ``center``.
@@ -66,6 +67,8 @@ class BuiltRod:
     thickness: float
     fill_mass: float = 0.0
     fill_center: np.ndarray | None = None
+    ball_diameter: float | None = None
+    ball_kind: str = ""
 
     @property
     def stem(self) -> str:
@@ -234,7 +237,9 @@ def _rod(rd: _Reader, outdir: Path, i: int, r: Any) -> BuiltRod | None:
             return None
         fill_mass, fill_center = max(grams, 0.0), center
     return BuiltRod(i, name, length, designed, mass, com, volume, balls, max(ball_mass, 0.0), path, matrix, params,
-                    (float(lo_hi[0]), float(lo_hi[1])), pin, thick, fill_mass, fill_center)
+                    (float(lo_hi[0]), float(lo_hi[1])), pin, thick, fill_mass, fill_center,
+                    float(fab["ball_diameter_mm"]) if isinstance(fab.get("ball_diameter_mm"), (int, float)) else None,
+                    str(fab.get("ball_kind") or ""))
 
 
 def _folder_problems(outdir: Path) -> list[Problem]:

@@ -28,7 +28,14 @@ from rodcad.cad.rods import ChainFabrication, chain_parts, write_rod_files
 from rodcad.check.rebalance import Rebalanced
 from rodcad.check.recheck import CheckResult, equilibrium_json
 from rodcad.outdir import MARKER, staged_output
-from rodcad.outputs.design_json import curve_error, fabrication_json, print_profile, write_json
+from rodcad.outputs.design_json import (
+    ball_text,
+    curve_error,
+    fabrication_json,
+    metal_balls,
+    print_profile,
+    write_json,
+)
 from rodcad.outputs.preview import draw_rods, finish_figure
 
 __all__ = ["plot_check", "rebalanced_json", "report_section", "write_rebalanced"]
@@ -97,11 +104,12 @@ def _bill(data: dict[str, Any]) -> None:
     bom = data.setdefault("bill_of_materials", {})
     fabs = [r["fabrication"] for r in data["rods"]]
     bom["filament_g"] = float(sum(f["filament_g"] for f in fabs))
-    balls: dict[float, int] = {}
+    balls: dict[tuple[float, str], int] = {}
     for f in fabs:
         if f.get("balls") and f.get("ball_diameter_mm") is not None:
-            balls[float(f["ball_diameter_mm"])] = balls.get(float(f["ball_diameter_mm"]), 0) + int(f["balls"])
-    bom["metal_balls"] = [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())]
+            key = (float(f["ball_diameter_mm"]), str(f.get("ball_kind") or ""))
+            balls[key] = balls.get(key, 0) + int(f["balls"])
+    bom["metal_balls"] = metal_balls(balls)
     shot: dict[str, float] = {}
     for f in fabs:
         fill = f.get("fill")
@@ -197,7 +205,7 @@ def report_section(res: CheckResult, rb: Rebalanced | None) -> str:
                  f"hangs {rb.vs_target.max:.3g} mm ({100 * rb.vs_target.max_rel_span:.3g} % of the span) from the "
                  f"target and {rb.vs_design.max:.3g} mm from the original design.")
         for i, f in sorted(rb.fabricated.items()):
-            balls = f", {f.ball_count} x {f.ball_diameter:g} mm balls (pause at {f.pause_z:.2f} mm)" if f.ball_count \
+            balls = f", {f.ball_count} x {ball_text(f.ball_diameter, f.ball_name)} (pause at {f.pause_z:.2f} mm)" if f.ball_count \
                 else ""
             L.append(f"  - rod {i} ({f.type_name}): {f.mass:.4f} g, {f.cavity_count} cavities{balls}; print "
                      f"`rods/{f.file_stem}.step` again")
@@ -231,12 +239,16 @@ def _print_rods(res: CheckResult, rb: Rebalanced, stems: list[str]) -> list[Any]
             out.append(rb.fabricated[i])
             continue
         b = res.built.rods[i]
-        balls = res.types.rods[i].balls
+        kinds = res.types.rods[i].ball_kinds
         count = int(np.asarray(b.ball_centers).reshape(-1, 3).shape[0])
+        # the kind recorded in design.json (by diameter and name), else the catalog's first
+        balls = next((k for k in kinds if b.ball_diameter is not None and abs(k.diameter - b.ball_diameter) < 1e-9
+                      and (not b.ball_kind or k.name == b.ball_kind)), kinds[0] if kinds else None)
         out.append(SimpleNamespace(
             index=i, file_stem=stems[i], solid=r.solid, print_matrix=np.asarray(b.print_matrix, float),
             plastic_volume=float(r.volume), ball_count=count,
             ball_diameter=None if balls is None or not count else balls.diameter,
+            ball_name="" if balls is None or not count else balls.name,
             socket_centers=np.asarray(b.ball_centers, float).reshape(-1, 3),
             socket_radius=0.0 if balls is None else balls.socket_diameter / 2, pause_zs=(),
             print_note="", fill_mass=float(b.fill_mass), fill_name=""))

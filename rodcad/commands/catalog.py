@@ -34,6 +34,7 @@ from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.model import Catalog
 from rodcad.catalog.spec import catalog_schema
 from rodcad.errors import InputError, Problem
+from rodcad.outputs.design_json import ball_text
 from rodcad.outdir import write_atomic
 
 __all__ = ["SEED_KINDS", "check_report", "precompute", "register", "schema_text"]
@@ -143,8 +144,7 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
             "mass_range": [round(m.m_min, 4), round(m.m_max, 4)],
             "com": [round(m.com[0], 4), round(m.com[1], 4)],
             "cavities": {"radius": round(m.cavity_radius, 4), "count": m.cavity_count},
-            "balls": ({"count": m.ball_count, "diameter": t.balls.diameter, "mass_each": round(t.balls.mass, 4)}
-                      if t.balls is not None and t.fill is None else None),
+            "balls": (_balls_json(t, m) if t.balls is not None and t.fill is None else None),
             "fill": ({"name": t.fill.name, "max_g": round(m.m_max - m.m_min, 4),
                       "lightest": "the largest chamber, empty", "heaviest": "the largest chamber, filled"}
                      if t.fill is not None else None),
@@ -179,6 +179,17 @@ def check_report(catalog: Catalog, *, jobs: int | None = None, cache: DiskCache 
     }
 
 
+def _balls_json(t: Any, m: Any) -> dict[str, Any]:
+    """The balls behind a type's heaviest mass (count, diameter, mass each, kind) and, per
+    ball kind the catalog lists, how many fit and the heaviest mass they give."""
+    heavy = t.ball_kinds[m.ball_kind]
+    kinds = [{"kind": b.name or None, "diameter": b.diameter, "density": b.density, "mass_each": round(b.mass, 4),
+              "count": n, "m_max": round(mk, 4)}
+             for b, (n, mk) in zip(t.ball_kinds, m.kind_max or [(m.ball_count, m.m_max)])]
+    return {"count": m.ball_count, "diameter": heavy.diameter, "mass_each": round(heavy.mass, 4),
+            "kind": heavy.name or None, "kinds": kinds}
+
+
 def _family_json(f: Any, catalog: Catalog) -> dict[str, Any]:
     """A family's parameters: ranges for rods printed to order, else its fixed menu."""
     if f.ranges is not None:
@@ -188,10 +199,18 @@ def _family_json(f: Any, catalog: Catalog) -> dict[str, Any]:
                 "curvature": list(r.curvature), "stops_deg": list(r.stops) if r.stops else None,
                 "fill": None if fill is None else {"name": fill.name, "density": fill.density,
                                                    "packing": fill.packing},
-                "types": list(f.type_names)}
+                "balls": _kinds_json(f.template), "types": list(f.type_names)}
     ts = [catalog[n] for n in f.type_names]
     return {"name": f.name, "printed_to_order": False, "length": sorted({t.length for t in ts}),
-            "curvature": sorted({t.curvature for t in ts}), "stops_deg": None, "types": list(f.type_names)}
+            "curvature": sorted({t.curvature for t in ts}), "stops_deg": None, "balls": _kinds_json(ts[0]),
+            "types": list(f.type_names)}
+
+
+def _kinds_json(t: Any) -> list[dict[str, Any]]:
+    """The ball kinds a family's rods may hold, in the catalog's order of preference."""
+    if t is None or t.fill is not None:
+        return []
+    return [{"kind": b.name or None, "diameter": b.diameter, "density": b.density} for b in t.ball_kinds]
 
 
 def _family_lines(families: list[dict[str, Any]]) -> list[str]:
@@ -211,6 +230,9 @@ def _family_lines(families: list[dict[str, Any]]) -> list[str]:
         if f.get("fill"):
             text += (f"; masses from one chamber per rod, empty or filled with {f['fill']['name']} "
                      f"({f['fill']['density']:g} g/cm^3 at {f['fill']['packing']:g} packing)")
+        if len(f.get("balls") or []) > 1:
+            text += "; balls: " + ", then ".join(f"{ball_text(b['diameter'], b['kind'] or '')} ({b['density']:g} g/cm^3)"
+                                                 for b in f["balls"])
         lines.append(text + f" (reference types {', '.join(f['types'])})")
     return lines + [""]
 
@@ -345,7 +367,7 @@ def _format_report(report: dict[str, Any]) -> str:
             _fmt_limits(t["self_limits_deg"]) + " deg" if t["self_limits_deg"] else "-",
             (f"{t['cavities']['count']} x r{t['cavities']['radius']:.2f}" if t["cavities"]["count"] else
              "1 chamber, empty" if t.get("fill") else "none"),
-            (f"{balls['count']} x {balls['diameter']:g} mm" if balls else
+            (f"{balls['count']} x {ball_text(balls['diameter'], balls.get('kind') or '')}" if balls else
              f"chamber full: {t['fill']['max_g']:.1f} g of {t['fill']['name']}" if t.get("fill") else "none"),
         ])
     widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]

@@ -71,26 +71,30 @@ def _merge(pieces: Sequence[tuple[float, float]], gap: float = 0.0) -> list[tupl
     return [(float(a), float(b)) for a, b in out]
 
 
-def _ball_options(rod: RodType) -> list[tuple[float, np.ndarray, float]]:
-    """(mass without cavities, socket centres, socket radius) per symmetric ball
-    subset, the plain solid first, sorted by mass then ball count."""
+def _ball_options(rod: RodType) -> list[tuple[float, np.ndarray, float, int]]:
+    """(mass without cavities, socket centres, socket radius, ball kind) per symmetric ball
+    subset, the plain solid first, sorted by mass then ball count. Every subset of the
+    first ball kind; of each further kind (:attr:`RodType.ball_kinds`) only the subsets
+    heavier than every option of the kinds before (a kind is used where those cannot reach)."""
     info = mass_info(rod)
     rho = rod.material.density / 1000.0
     ms = info.volume * rho
-    options: list[tuple[float, np.ndarray, float]] = [(ms, np.zeros((0, 3)), 0.0)]
-    if rod.balls is None:
-        return options
-    balls = socket_layout(rod)
-    if not balls.count:
-        return options
-    rs = balls.radius
-    net = rod.balls.mass - void_volume("silo", rs) * rho
-    sites = balls.centers - UP * (balls.centers[0] @ UP - info.com[1])
-    orbs = orbits(sites, (info.com[0], info.com[1], 0.0), balls.symmetry)
-    for mask in range(1, 2 ** len(orbs)):
-        idx = np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1])
-        options.append((ms + len(idx) * net, balls.centers[np.sort(idx)], rs))
-    options.sort(key=lambda o: (o[0], len(o[1])))
+    options: list[tuple[float, np.ndarray, float, int]] = [(ms, np.zeros((0, 3)), 0.0, 0)]
+    for kind, balls_k in enumerate(rod.ball_kinds):
+        balls = socket_layout(rod.with_kind(kind))
+        if not balls.count:
+            continue
+        top = max(o[0] for o in options)
+        rs = balls.radius
+        net = balls_k.mass - void_volume("silo", rs) * rho
+        sites = balls.centers - UP * (balls.centers[0] @ UP - info.com[1])
+        orbs = orbits(sites, (info.com[0], info.com[1], 0.0), balls.symmetry)
+        for mask in range(1, 2 ** len(orbs)):
+            idx = np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1])
+            mass_k = ms + len(idx) * net
+            if kind == 0 or mass_k > top:
+                options.append((mass_k, balls.centers[np.sort(idx)], rs, kind))
+    options.sort(key=lambda o: (o[0], len(o[1]), o[3]))
     return options
 
 
@@ -140,7 +144,7 @@ def intervals_key(rod: RodType, seed: int) -> str:
     return make_key("fabint", INTERVALS_VERSION, FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION,
                     POOL_SIZE, RADIUS_FACTOR, MIN_CAVITY_RADIUS, SOLID_TOL, GAP_MERGE,
                     asdict(rod.geometry), asdict(rod.material),
-                    asdict(rod.balls) if rod.balls is not None else None, int(seed))
+                    rod.balls_json(), int(seed))
 
 
 def compute_table(rod: RodType, seed: int) -> dict[str, Any]:
@@ -151,9 +155,9 @@ def compute_table(rod: RodType, seed: int) -> dict[str, Any]:
     options = []
     pieces: list[tuple[float, float]] = []
     counts: dict[float, int] = {}
-    for mass_k, socks, rs in _ball_options(rod):  # the ball-free rod first
+    for mass_k, socks, rs, kind in _ball_options(rod):  # the ball-free rod first
         reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in _removable(rod, socks, rs, seed, counts)]
-        options.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs,
+        options.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs, "kind": kind,
                          "pieces": [list(p) for p in sorted(reach)]})
         pieces += reach + [(mass_k * (1 - SOLID_TOL), mass_k * (1 + SOLID_TOL))]
     intervals = []

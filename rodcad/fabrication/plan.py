@@ -61,6 +61,7 @@ class RodPlan:
         layout: how the cavities were laid out ('poisson/mirror-xyz', 'lattice/...', '').
         message: why the built mass differs from the target, or ''.
         measured: the B-rep's measurements, once built.
+        ball_kind: which of the rod's ball kinds the sockets hold (:attr:`RodType.ball_kinds`).
     """
 
     mass: float
@@ -73,13 +74,14 @@ class RodPlan:
     layout: str
     message: str
     measured: Measurement | None = None
+    ball_kind: int = 0
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {
             "mass": self.mass, "build_mass": self.build_mass, "sockets": self.sockets.tolist(),
             "socket_radius": self.socket_radius, "cavities": self.cavities.tolist(),
             "cavity_radius": self.cavity_radius, "cavity_bound": self.cavity_bound, "layout": self.layout,
-            "message": self.message,
+            "message": self.message, "ball_kind": self.ball_kind,
         }
         if self.measured is not None:
             out["measured"] = {**asdict(self.measured), "com": list(self.measured.com)}
@@ -97,7 +99,8 @@ class RodPlan:
             layout=str(data["layout"]), message=str(data["message"]),
             measured=None if meas is None else Measurement(
                 float(meas["volume"]), float(meas["mass"]), (float(meas["com"][0]), float(meas["com"][1])),
-                float(meas["min_wall"]), int(meas["booleans"])))
+                float(meas["min_wall"]), int(meas["booleans"])),
+            ball_kind=int(data.get("ball_kind", 0)))
 
 
 def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> RodPlan:
@@ -123,9 +126,11 @@ def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | Non
     elif m > m_hi * (1 + 1e-12):
         extra = m - m_hi
         if rod.balls is not None:
-            rs = rod.balls.socket_diameter / 2
-            net = rod.balls.mass - void_volume("silo", rs) * rho
-            need = f"about {math.ceil(extra / net)} more {rod.balls.diameter:g} mm balls than fit ({info.ball_count})"
+            heavy = rod.ball_kinds[info.ball_kind]
+            rs = heavy.socket_diameter / 2
+            net = heavy.mass - void_volume("silo", rs) * rho
+            need = (f"about {math.ceil(extra / net)} more {heavy.diameter:g} mm {heavy.name or 'balls'} than fit "
+                    f"({info.ball_count})")
         else:
             need = "metal balls, which this catalog does not give it"
         message = (f"target {fmt_mass(target)} g is {fmt_mass(extra)} g ({extra / m_hi:.1%}) above the heaviest printable "
@@ -174,4 +179,4 @@ def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | Non
         mass=m, build_mass=build, sockets=socks, socket_radius=rs if len(socks) else 0.0,
         cavities=np.zeros((0, 3)) if cav is None else np.asarray(cav.centers, dtype=float).reshape(-1, 3),
         cavity_radius=0.0 if cav is None else cav.radius, cavity_bound=0.0 if cav is None else cav.bound,
-        layout="" if cav is None else cav.layout, message=message)
+        layout="" if cav is None else cav.layout, message=message, ball_kind=int(opt.get("kind", 0)))

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,7 @@ from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
 
-__all__ = ['design_json', 'fabrication_json', 'bill_of_materials', 'write_json', 'chandelier_json']
+__all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
 
 
 def _f(x: float) -> float | None:
@@ -91,17 +92,29 @@ def _as_built_json(ab) -> dict[str, Any]:
 
 
 def _filament_and_balls(rods) -> dict[str, Any]:
-    """Filament (g), metal balls by diameter and shot by kind (g) over fabricated rods."""
-    balls: Counter[float] = Counter()
+    """Filament (g), metal balls by kind and diameter and shot by kind (g) over fabricated rods."""
+    balls: Counter[tuple[float, str]] = Counter()
     shot: dict[str, float] = {}
     for f in rods:
         if f.ball_count:
-            balls[float(f.ball_diameter)] += int(f.ball_count)
+            balls[(float(f.ball_diameter), str(getattr(f, "ball_name", "")))] += int(f.ball_count)
         if f.fill_mass > 0:
             shot[f.fill_name] = shot.get(f.fill_name, 0.0) + float(f.fill_mass)
     return {"filament_g": float(sum(f.filament_mass for f in rods)),
-            "metal_balls": [{"diameter_mm": k, "count": v} for k, v in sorted(balls.items())],
+            "metal_balls": metal_balls(balls),
             "fill": [{"name": k, "grams": v} for k, v in sorted(shot.items())]}
+
+
+def ball_text(diameter: float, name: str = "") -> str:
+    """How a ball kind is named in reports and pause messages: its catalog name when it
+    has one ('steel bearing ball 6 mm'), else '6 mm ball'."""
+    return name or f"{diameter:g} mm ball"
+
+
+def metal_balls(counts: Mapping[tuple[float, str], int]) -> list[dict[str, Any]]:
+    """The bill of materials' ``metal_balls``: one entry per ball kind, ``{diameter_mm, kind,
+    count}`` by diameter then kind, from counts keyed by (diameter, kind name)."""
+    return [{"diameter_mm": d, "kind": name or None, "count": int(n)} for (d, name), n in sorted(counts.items())]
 
 
 def _header(d, method: str | None, seed: int, time_s: float) -> dict[str, Any]:
@@ -122,6 +135,7 @@ def fabrication_json(f) -> dict[str, Any]:
         "pause_zs_mm": [float(z) for z in f.pause_zs],
         "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
         "ball_mass_g": float(f.mass - f.filament_mass - f.fill_mass),
+        "ball_kind": (getattr(f, "ball_name", "") or None) if f.ball_count else None,
         "fill": {"name": f.fill_name, "grams": float(f.fill_mass),
                  "chamber_volume_mm3": float(f.chamber_volume),
                  "pause_z_mm": None if f.pause_z is None else float(f.pause_z)} if f.fill_name else None,

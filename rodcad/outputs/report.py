@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from rodcad import __version__
-from rodcad.outputs.design_json import bill_of_materials, curve_error
+from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
 
 __all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
 
@@ -113,7 +113,7 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         if fab is not None:
             f = fab.rods[i]
             cav = f"{f.cavity_count} x r {f.cavity_radius:.2f}" if f.cavity_count else "-"
-            balls = f"{f.ball_count} x {f.ball_diameter:g} mm" if f.ball_count else "-"
+            balls = f"{f.ball_count} x {ball_text(f.ball_diameter, f.ball_name)}" if f.ball_count else "-"
             if f.fill_mass > 0:
                 balls = f"pour {f.fill_mass:.2f} g of {f.fill_name} at z = {f.pause_z:.2f} mm"
             elif f.chamber_volume > 0:
@@ -134,7 +134,7 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     if "filament_g" in bom:
         add(f"- Filament: {bom['filament_g']:.1f} g in all ({d.catalog[r.type_names[0]].material.name})")
         for ball in bom["metal_balls"]:
-            add(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
+            add(f"- {ball['count']} x {ball_text(ball['diameter_mm'], ball.get('kind') or '')}")
         for fill in bom.get("fill", []):
             add(f"- {fill['grams']:.1f} g of {fill['name']} in all (per rod in the table)")
     else:
@@ -227,7 +227,8 @@ def summary_text(r, outdir: Path | None) -> str:
     rods = ", ".join(f"{v} x {k}" for k, v in bom["rods"].items())
     L.append(f"  rods          {rods}")
     if "filament_g" in bom:
-        balls = ", ".join(f"{b['count']} x {b['diameter_mm']:g} mm" for b in bom["metal_balls"]) or "none"
+        balls = ", ".join(f"{b['count']} x {ball_text(b['diameter_mm'], b.get('kind') or '')}"
+                          for b in bom["metal_balls"]) or "none"
         balls += "".join(f"; {b['grams']:.1f} g of {b['name']}" for b in bom.get("fill", []))
         L.append(f"  filament      {bom['filament_g']:.1f} g; metal balls: {balls}; "
                  f"pins: {bom['pins']['count']} x {bom['pins']['diameter_mm']:g} mm")
@@ -298,7 +299,7 @@ def chandelier_markdown(b, data: dict[str, Any]) -> str:
     if "filament_g" in bom:
         L.append(f"- Filament for the rods: {bom['filament_g']:.1f} g")
         for ball in bom["metal_balls"]:
-            L.append(f"- {ball['count']} metal balls of {ball['diameter_mm']:g} mm")
+            L.append(f"- {ball['count']} x {ball_text(ball['diameter_mm'], ball.get('kind') or '')}")
     L.append(f"- Total rod mass: {bom['total_mass_g']:.1f} g")
     L += ["", "## Assembly", "",
           "1. Print the frame and every chain's rods (`<chain>/rods/`, already in print orientation); "

@@ -5,7 +5,13 @@ iterations, KKT residual. Targets: N = 1000 free joints under 5 ms; N = 100
 with about a third of the limits active under 20 ms; growth for free joints no
 worse than N log N.
 
-Run:  python benchmarks/bench_equilibrium.py [--repeat 7]
+The "compressed" case (issue 15): K random limited chains of 6-15 rods with offset
+centres of mass, stops on one or both sides, fused joints and often close anchors, so
+that in some of them a rigid piece pushes. It prints the median and largest time per
+solve over all K and over those the dual exchange alone cannot solve, and how many of
+the K took which path (exchange, active-set descent, SLSQP fallback).
+
+Run:  python benchmarks/bench_equilibrium.py [--repeat 7] [--compressed 400]
 """
 
 from __future__ import annotations
@@ -42,6 +48,48 @@ def limited(n: int, seed: int = 0, fraction: float = 1 / 3):
     return lengths, masses, com, a, b, limits
 
 
+def compressed_chain(seed: int):
+    """A random limited chain around a known configuration (tests/test_compression.py)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(6, 16))
+    lengths = rng.uniform(0.5, 1.5, n)
+    masses = rng.uniform(0.1, 5.0, n)
+    com = np.column_stack([rng.uniform(0.2, 0.8, n) * lengths, rng.uniform(-0.3, 0.3, n) * lengths])
+    spread = rng.choice([0.3, 0.6, 1.0])
+    phi = rng.uniform(-spread, spread, n - 1) + rng.uniform(0, 0.4)
+    theta = rng.uniform(-1.5, 0.0) + np.concatenate([[0.0], np.cumsum(phi)])
+    b = np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)])
+    kind = rng.choice(5, n - 1, p=[0.3, 0.2, 0.2, 0.2, 0.1])  # free, lo, hi, both, fused
+    lo = np.where(np.isin(kind, (1, 3)), phi - rng.uniform(0, 0.5, n - 1), -np.inf)
+    hi = np.where(np.isin(kind, (2, 3)), phi + rng.uniform(0, 0.5, n - 1), np.inf)
+    lo = np.where(kind == 4, phi, lo)
+    hi = np.where(kind == 4, phi, hi)
+    return lengths, masses, com, np.column_stack([lo, hi]), np.zeros(2), b
+
+
+def compressed(k: int) -> None:
+    times, hard, paths, failed = [], [], {}, 0
+    for seed in range(k):
+        l, m, c, lim, a, b = compressed_chain(seed)
+        t0 = time.perf_counter()
+        r = solve_equilibrium(l, m, a, b, com=c, limits=lim)
+        t = time.perf_counter() - t0
+        path = r.info.get("path", "slsqp" if r.info.get("used_nlp") else "exchange")
+        paths[path] = paths.get(path, 0) + 1
+        times.append(t)
+        if path != "exchange":
+            hard.append(t)
+        failed += not (r.success and r.stable)
+    times, hard = 1e3 * np.array(times), 1e3 * np.array(hard)
+    print(f"\ncompressed: {k} random limited chains (6-15 rods; stops, fused joints, close anchors)")
+    print(f"  all:               median {np.median(times):7.2f} ms   max {times.max():7.1f} ms")
+    if hard.size:
+        print(f"  not the exchange:  median {np.median(hard):7.2f} ms   max {hard.max():7.1f} ms   "
+              f"({hard.size} chains)")
+    print("  paths: " + ", ".join(f"{p} {n}" for p, n in sorted(paths.items()))
+          + f";  needed SLSQP: {paths.get('slsqp', 0)} of {k};  not solved (success and stable): {failed}")
+
+
 def timed(fn, repeat: int) -> tuple[float, object]:
     times, res = [], None
     for _ in range(repeat):
@@ -54,6 +102,7 @@ def timed(fn, repeat: int) -> tuple[float, object]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--compressed", type=int, default=400, help="random chains in the compressed case")
     args = ap.parse_args()
     print(f"# {platform.processor() or platform.machine()}, python {platform.python_version()}, "
           f"numpy {np.__version__}")
@@ -80,6 +129,8 @@ def main() -> None:
         ratio = free_times[hi_n] / free_times[lo_n]
         nlogn = hi_n * np.log(hi_n) / (lo_n * np.log(lo_n))
         print(f"  {lo_n:>5} -> {hi_n:<6} x{ratio:6.2f}   (N log N: x{nlogn:5.2f})")
+    if args.compressed:
+        compressed(args.compressed)
 
 
 if __name__ == "__main__":

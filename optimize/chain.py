@@ -33,6 +33,7 @@ __all__ = [
     "kkt_residual",
     "multipliers",
     "sag_guess",
+    "violations",
 ]
 
 #: Status codes and their messages (one table, as in scipy.optimize).
@@ -304,3 +305,19 @@ def sag_guess(chain: Chain) -> np.ndarray:
     drop = np.arccos(min(1.0, chain.span / chain.total_length))
     half = np.arange(chain.n) < chain.n / 2
     return np.angle(chain.d) + np.where(half, -drop, drop)
+
+
+def violations(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray):
+    """Primal (free joints outside limits) and dual (wrong-sign moments) violations."""
+    phi = np.diff(theta)
+    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
+    free = side == 0
+    over = free & (phi > hi + ANGLE_TOL)
+    under = free & (phi < lo - ANGLE_TOL)
+    primal = np.where(over, phi - hi, np.where(under, lo - phi, 0.0))
+    mu, _, _ = multipliers(chain, theta, lam)
+    movable = ~chain.fixed
+    tol = MOMENT_TOL * chain.moment_scale
+    wrong = np.where((side < 0) & movable & (mu < -tol), -mu, 0.0)
+    wrong = np.where((side > 0) & movable & (mu > tol), mu, wrong)
+    return primal, np.where(over, 1, np.where(under, -1, 0)), wrong / chain.moment_scale

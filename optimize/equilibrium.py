@@ -26,10 +26,13 @@ residual. Damped Newton on ``Psi`` therefore converges from any start, each
 iteration costing O(number of groups), and the minimiser is the global minimum
 of the potential energy for that set of locked joints (Lagrangian sufficiency).
 The set of joints held at a limit is found by an active-set iteration (primal
-and dual violations exchanged all at once, then one at a time if that cycles,
-then an SLSQP fallback that only proposes an active set to restart from), so
-the final point satisfies the KKT conditions exactly: closure to round-off,
-limits as hard inequalities, and joint moments of the right sign.
+and dual violations exchanged all at once, then one at a time if that cycles).
+When that fails (a rigid group must push: its angle on the other branch of
+``|P_G lambda - Q_G|``, or the exchange cycles) the active-set descent over
+(side, branch) of :mod:`optimize.branches` takes over, and SLSQP from several
+starts only after that. Either way the final point satisfies the KKT conditions
+exactly: closure to round-off, limits as hard inequalities, and joint moments of
+the right sign. ``info['path']`` says which ("exchange", "descent", "slsqp").
 """
 
 from __future__ import annotations
@@ -37,9 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from optimize.chain import (
-    ANGLE_TOL,
     MESSAGES,
-    MOMENT_TOL,
     Chain,
     EquilibriumResult,
     Groups,
@@ -47,7 +48,9 @@ from optimize.chain import (
     kkt_residual,
     multipliers,
     sag_guess,
+    violations,
 )
+from optimize.branches import descend, polish_nlp
 from optimize.endlimits import as_end_limits, solve_with_end_limits
 from optimize.penalty import solve_penalty
 
@@ -87,6 +90,7 @@ def _dual_newton(P, Q, d, lam, length_scale, max_iter=200):
     W, r, u, grad, psi = evaluate(lam)
     best_gn = abs(grad)
     stall = 0
+    load_scale = float(np.max(np.abs(Q) / safeP)) if Q.size else 0.0
     for it in range(1, max_iter + 1):
         gn = abs(grad)
         if gn <= tol:
@@ -120,6 +124,16 @@ def _dual_newton(P, Q, d, lam, length_scale, max_iter=200):
                 break
             t *= 0.5
         lam, W, r, u, grad, psi = trial, W1, r1, u1, g1, psi1
+        k = int(np.argmin(r / safeP))
+        if r[k] <= 1e-6 * load_scale * safeP[k]:
+            # near a group's kink (W_k = 0): is lam_k = Q_k / P_k the minimum? It is when
+            # the rest's gradient lies within the subdifferential |P_k| of that term.
+            lam_k = Q[k] / P[k]
+            W_k = P * lam_k - Q
+            W_k[k] = 0.0
+            u_k = W_k / np.maximum(np.abs(W_k), tiny)
+            if abs(np.sum(np.conj(P) * u_k) - d) <= absP[k] * (1 + 1e-12):
+                return lam_k, W_k, it, False
         if abs(grad) < best_gn * 0.999:
             best_gn = abs(grad)
             stall = 0
@@ -129,6 +143,9 @@ def _dual_newton(P, Q, d, lam, length_scale, max_iter=200):
                 return lam, W, it, True  # at the floor of round-off
             if stall >= 20:
                 break
+            if stall >= 5 and r[k] <= 1e-10 * load_scale * safeP[k]:
+                lam = Q[k] / P[k]  # no load left on group k: the minimum sits on its kink
+                return lam, P * lam - Q, it, False
     return lam, W, max_iter, abs(grad) <= 1e-9 * length_scale
 
 
@@ -153,22 +170,6 @@ def _close_at_kink(chain: Chain, groups: Groups, W: np.ndarray, theta: np.ndarra
     out = theta.copy()
     out[in_g] += turn
     return np.unwrap(out)
-
-
-def _violations(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray):
-    """Primal (free joints outside limits) and dual (wrong-sign moments) violations."""
-    phi = np.diff(theta)
-    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    free = side == 0
-    over = free & (phi > hi + ANGLE_TOL)
-    under = free & (phi < lo - ANGLE_TOL)
-    primal = np.where(over, phi - hi, np.where(under, lo - phi, 0.0))
-    mu, _, _ = multipliers(chain, theta, lam)
-    movable = ~chain.fixed
-    tol = MOMENT_TOL * chain.moment_scale
-    wrong = np.where((side < 0) & movable & (mu < -tol), -mu, 0.0)
-    wrong = np.where((side > 0) & movable & (mu > tol), mu, wrong)
-    return primal, np.where(over, 1, np.where(under, -1, 0)), wrong / chain.moment_scale
 
 
 def _taut(chain: Chain) -> EquilibriumResult:
@@ -213,148 +214,6 @@ def _check_reach(chain: Chain) -> None:
         )
 
 
-def _nlp_point(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
-    """SLSQP on the angles: a feasible local minimum to restart from when exchanges fail."""
-    from scipy.optimize import minimize
-
-    l = chain.lengths
-    c_sin, c_cos = chain.c_sin, chain.c_cos
-    dx, dy = chain.d.real, chain.d.imag
-    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    n = chain.n
-    D = np.zeros((n - 1, n))
-    D[np.arange(n - 1), np.arange(n - 1)] = -1.0
-    D[np.arange(n - 1), np.arange(1, n)] = 1.0
-    has_lo, has_hi = np.isfinite(lo), np.isfinite(hi)
-    A = np.vstack([D[has_lo], -D[has_hi]])
-    b = np.concatenate([lo[has_lo], -hi[has_hi]])
-    cons = [
-        {
-            "type": "eq",
-            "fun": lambda t: np.array([l @ np.cos(t) - dx, l @ np.sin(t) - dy]),
-            "jac": lambda t: np.vstack([-l * np.sin(t), l * np.cos(t)]),
-        }
-    ]
-    if A.shape[0]:
-        cons.append({"type": "ineq", "fun": lambda t: A @ t - b, "jac": lambda t: A})
-    res = minimize(
-        lambda t: float(c_sin @ np.sin(t) + c_cos @ np.cos(t)),
-        theta0,
-        jac=lambda t: c_sin * np.cos(t) - c_cos * np.sin(t),
-        constraints=cons,
-        method="SLSQP",
-        options={"maxiter": 1000, "ftol": 1e-15},
-    )
-    return res.x if np.all(np.isfinite(res.x)) else None
-
-
-def _branch_newton(P, Q, d, signs, lam, length_scale, max_iter=100):
-    """Solve sum_G s_G conj(P_G) W_G/|W_G| = d for lam, each group on branch s_G = +-1.
-
-    With every s_G = +1 this is the convex dual problem; a group with s_G = -1 points
-    against its load (a compressed arch held by limits). Newton on the 2 x 2 residual
-    with step halving on its norm. Returns (lam, W, iterations, converged).
-    """
-    absP = np.abs(P)
-    safeP = np.where(absP > 0, absP, 1.0)
-
-    def residual(lam):
-        W = P * lam - Q
-        r = np.maximum(np.abs(W), 1e-300)
-        return W, r, np.sum(signs * np.conj(P) * W / r) - d
-
-    W, r, F = residual(lam)
-    tol = 64 * np.finfo(float).eps * length_scale
-    for it in range(1, max_iter + 1):
-        if abs(F) <= tol:
-            return lam, W, it - 1, True
-        a = signs * absP * absP / r
-        v = (W / r) * np.conj(P) / safeP
-        vx, vy = v.real, v.imag
-        jxx, jyy, jxy = np.sum(a * vy * vy), np.sum(a * vx * vx), -np.sum(a * vx * vy)
-        det = jxx * jyy - jxy * jxy
-        if not np.isfinite(det) or abs(det) < 1e-300:
-            break
-        step = complex(-(jyy * F.real - jxy * F.imag) / det, -(jxx * F.imag - jxy * F.real) / det)
-        t = 1.0
-        while t > 1e-10:
-            W1, r1, F1 = residual(lam + t * step)
-            if abs(F1) < abs(F):
-                break
-            t *= 0.5
-        else:
-            return lam, W, it, abs(F) <= 1e-9 * length_scale
-        lam, W, r, F = lam + t * step, W1, r1, F1
-    return lam, W, max_iter, abs(F) <= 1e-9 * length_scale
-
-
-def _fallback_starts(chain: Chain, theta: np.ndarray, count: int = 6):
-    """Starting angles for the SLSQP fallback: the last iterate, its bends clipped to the
-    limits (and mirrored), then seeded random bends within the limits."""
-    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    phi = np.diff(theta)
-    rng = np.random.default_rng(12345)
-    yield theta
-    for bends in (phi, -phi):
-        clipped = np.clip(bends, lo, hi)
-        yield theta[0] + np.concatenate([[0.0], np.cumsum(clipped)])
-    box_lo, box_hi = np.maximum(lo, -np.pi / 2), np.minimum(hi, np.pi / 2)
-    box_lo, box_hi = np.minimum(box_lo, box_hi), np.maximum(box_lo, box_hi)
-    for _ in range(count):
-        bends = rng.uniform(box_lo, box_hi)
-        t = np.concatenate([[0.0], np.cumsum(bends)])
-        yield t - np.average(t, weights=chain.lengths) + np.angle(chain.d)
-
-
-def _polish_nlp(chain: Chain, theta0: np.ndarray):
-    """The lowest exact KKT point found through SLSQP local minima from a few starts.
-
-    Each SLSQP result fixes an active set and a branch per rigid group; a Newton
-    solve then makes it exact. Returns (theta, lam, side, newton iterations) or None.
-    """
-    best, best_energy = None, np.inf
-    for start in _fallback_starts(chain, theta0):
-        x = _nlp_point(chain, start)
-        if x is None:
-            continue
-        polished = _polish_point(chain, x)
-        if polished is not None:
-            theta, lam, side, _ = polished
-            primal, _, dual = _violations(chain, theta, lam, side)
-            energy = chain.energy(theta)
-            if not primal.any() and not dual.any() and energy < best_energy - 1e-12 * abs(energy):
-                best, best_energy = polished, energy
-    return best
-
-
-def _polish_point(chain: Chain, x: np.ndarray):
-    """Exact KKT point on the active set and branches of a near-solution x."""
-    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    phi = np.diff(x)
-    side = np.where(phi <= lo + 1e-7, -1, np.where(phi >= hi - 1e-7, 1, 0))
-    side = np.where(chain.fixed, -1, side)
-    groups = Groups(chain, side)
-    if not groups.reachable(chain.span):
-        return None
-    # group angles, then the reaction by least squares on the group stationarity,
-    # which is linear in lam: Im(conj(P lam - Q) e^{i psi}) = 0
-    psi = np.angle(np.add.reduceat(np.exp(1j * (x - groups.offsets)), groups.starts))
-    e = np.exp(1j * psi)
-    Pe, Qe = np.conj(groups.P) * e, np.conj(groups.Q) * e
-    # Im(conj(P) conj(lam) e) = Im(Pe) H - Re(Pe) V ... written out for (H, V):
-    M = np.column_stack([Pe.imag, -Pe.real])
-    rhs = Qe.imag
-    sol, *_ = np.linalg.lstsq(M, rhs, rcond=None)
-    lam = complex(sol[0], sol[1])
-    W = groups.P * lam - groups.Q
-    signs = np.where((np.conj(W) * e).real >= 0, 1.0, -1.0)
-    lam, W, k, ok = _branch_newton(groups.P, groups.Q, chain.d, signs, lam, chain.total_length)
-    if not ok:
-        return None
-    theta = groups.angles(W, signs)
-    return theta, lam, side, k
-
-
 def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
     n = chain.n
     lo, hi = chain.limits[:, 0], chain.limits[:, 1]
@@ -380,6 +239,7 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
     used_nlp = False
     theta = None
     last = None
+    hanging = None
     it = 0
     for it in range(1, max_iter + 1):
         groups = Groups(chain, side)
@@ -387,6 +247,8 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
             groups.P, groups.Q, chain.d, lam, chain.total_length
         )
         nnewton += k
+        if it == 1 and not np.any(side[~chain.fixed]):
+            hanging = (groups, W)  # the chain hanging freely: a start for the descent
         if not converged:
             # a kink where the unloaded group just fits the gap: closure decides its angle
             theta_k = _close_at_kink(chain, groups, W, groups.angles(W))
@@ -408,7 +270,7 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
             continue
         lam = lam_try
         theta = _close_at_kink(chain, groups, W, groups.angles(W))
-        primal, pside, dual = _violations(chain, theta, lam, side)
+        primal, pside, dual = violations(chain, theta, lam, side)
         last = (side, theta, lam, primal, pside, dual)
         if not primal.any() and not dual.any():
             status = 0
@@ -427,18 +289,65 @@ def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
             break
         side = new
 
+    path = "exchange"
     if status != 0:
-        if theta is None:  # not even the first dual solve converged
-            theta = sag_guess(chain)
-        polished = _polish_nlp(chain, theta)
-        used_nlp = True
-        if polished is not None:
-            theta, lam, side, k = polished
+        # a compressed rigid group or an exchange that cycles: descend over (side, branch)
+        found = _descend_from_starts(chain, hanging, theta)
+        if found is not None:
+            theta, lam, side, k = found
             nnewton += k
             status = 0
+            path = "descent"
         else:
-            status = 3
-    return _assemble(chain, theta, lam, side, status, it, nnewton, used_nlp)
+            if theta is None:  # not even the first dual solve converged
+                theta = sag_guess(chain)
+            polished = polish_nlp(chain, theta)
+            used_nlp = True
+            path = "slsqp"
+            if polished is not None:
+                theta, lam, side, k = polished
+                nnewton += k
+                status = 0
+            else:
+                status = 3
+    return _assemble(chain, theta, lam, side, status, it, nnewton, used_nlp, path)
+
+
+def _descend_from_starts(chain: Chain, hanging, last):
+    """The first stable KKT point :func:`optimize.branches.descend` reaches, or None.
+
+    Starts: the chain hanging freely at its joints that are not fused (``hanging``:
+    its groups and loads W from the dual solve, or None), the same shape turned upside
+    down (an arch: pieces that push), the exchange's last iterate; the symmetric sag
+    when there are not two of those.
+    """
+    starts = []
+    if hanging is None:
+        groups = Groups(chain, np.where(chain.fixed, -1, 0))
+        if groups.reachable(chain.span):
+            _, W, _, _ = _dual_newton(groups.P, groups.Q, chain.d, _initial_reaction(chain),
+                                      chain.total_length)
+            hanging = (groups, W)
+    if hanging is not None and np.all(np.isfinite(hanging[1])):
+        groups, W = hanging
+        psi = np.angle(W)
+        load = np.abs(W) / groups.chords
+        k = int(np.argmin(load))
+        if load[k] <= 1e-8 * np.max(load):
+            # an unloaded group (the dual's kink): point it along the gap it leaves
+            chords = np.conj(groups.P) * np.exp(1j * psi)
+            psi[k] += np.angle((chain.d - chords.sum() + chords[k]) / chords[k])
+        theta = np.unwrap(psi[groups.gid] + groups.offsets)
+        starts += [theta, theta[0] - np.concatenate([[0.0], np.cumsum(np.diff(theta))])]
+    if last is not None:
+        starts.append(last)
+    if len(starts) < 2:
+        starts.append(sag_guess(chain))
+    for start in starts:
+        found = descend(chain, start, max_iter=60 + 5 * chain.n)
+        if found is not None and is_stable(chain, found[0], found[1], found[2]):
+            return found
+    return None
 
 
 def _next_active_set(chain, side, primal, pside, dual, mode):
@@ -482,7 +391,7 @@ def _reach_hint(chain: Chain) -> str:
     )
 
 
-def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp) -> EquilibriumResult:
+def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp, path="exchange") -> EquilibriumResult:
     mult = multipliers(chain, theta, lam)
     moments = np.where(side != 0, mult[0], 0.0)
     pts = chain.points(theta)
@@ -497,6 +406,8 @@ def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp) -> Equili
         message += _reach_hint(chain)
     if used_nlp and status == 0:
         message += " (active set found through the SLSQP fallback)"
+    elif path == "descent" and status == 0:
+        message += " (active set and branches found by the active-set descent)"
     reaction = np.array([lam.real, lam.imag])
     weight = chain.g * chain.total_mass
     return EquilibriumResult(
@@ -516,7 +427,7 @@ def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp) -> Equili
         nit=nit,
         nnewton=nnewton,
         model="exact",
-        info={"used_nlp": used_nlp},
+        info={"used_nlp": used_nlp, "path": path},
     )
 
 

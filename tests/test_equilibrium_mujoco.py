@@ -66,3 +66,29 @@ def test_agrees_with_mujoco_free_offset_com():
     start = solve_equilibrium(lengths, np.ones(n), a, b)
     sim = mujoco_chain.settle_chain(lengths, masses, a, b, com=com, angles0=start.angles)
     assert np.max(np.hypot(*(sim["points"] - ours.points).T)) < 1e-5 * np.hypot(*b)
+
+
+@pytest.mark.parametrize("seed", [47, 74, 185, 316, 375])
+def test_agrees_with_mujoco_when_a_rigid_piece_pushes(seed):
+    # chains whose equilibrium has a rigid group on the compressed branch (pushing against
+    # its load), found by the active-set descent, not SLSQP; some with fused joints
+    from test_compression import branches, compressed_chain
+
+    lengths, masses, com, limits, a, b = compressed_chain(seed)
+    ours = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits)
+    assert ours.success and ours.stable and ours.kkt_residual < 1e-9, ours.message
+    assert ours.info["path"] == "descent" and not ours.info["used_nlp"]
+    assert np.any(branches(ours, lengths, masses, com, limits, a, b) < 0)
+    # MuJoCo cannot hold a joint range of zero width: a fused joint gets +-1e-8 rad
+    mj_limits = limits.copy()
+    fused = limits[:, 0] == limits[:, 1]
+    mj_limits[fused] += np.array([-1e-8, 1e-8])
+    # start MuJoCo near our equilibrium, disturbed: it must come back (a stable rest)
+    rng = np.random.default_rng(seed)
+    start = ours.angles + rng.normal(0.0, 0.03, lengths.size)
+    sim = mujoco_chain.settle_chain(lengths, masses, a, b, com=com, limits=mj_limits, angles0=start)
+    span = np.hypot(*(b - a))
+    assert sim["converged"] and sim["end_error"] < 1e-6 * span
+    assert sim["limit_violation"] < 1e-6
+    err = np.max(np.hypot(*(sim["points"] - ours.points).T))
+    assert err < 1e-5 * span, f"max joint distance {err / span:.2e} of the span"

@@ -59,8 +59,19 @@ def _cross(u, v) -> float:
     return float(u[0] * v[1] - u[1] * v[0])
 
 
+def _near(theta: float, lim: np.ndarray) -> float:
+    """``theta`` on the turn (mod 2 pi) nearest the limit's finite bounds: within half a turn
+    of their middle (a one-sided limit [lo, inf) allows the half turn above lo)."""
+    finite = lim[np.isfinite(lim)]
+    if not finite.size:
+        return float(theta)
+    c = float(finite.mean())
+    return float(theta - 2 * math.pi * round((theta - c) / (2 * math.pi)))
+
+
 def _inside(theta: float, lim: np.ndarray) -> bool:
-    return lim[0] - ANGLE_TOL <= theta <= lim[1] + ANGLE_TOL
+    t = _near(theta, lim)
+    return lim[0] - ANGLE_TOL <= t <= lim[1] + ANGLE_TOL
 
 
 def solve_with_end_limits(solve, lengths, masses, a, b, com, limits, end_limits, g) -> EquilibriumResult:
@@ -96,6 +107,7 @@ def solve_with_end_limits(solve, lengths, masses, a, b, com, limits, end_limits,
 
 def _bound(theta: float, lim: np.ndarray) -> tuple[float, int]:
     """The violated bound and its side (-1 lo, +1 hi)."""
+    theta = _near(theta, lim)
     return (float(lim[1]), 1) if theta > lim[1] else (float(lim[0]), -1)
 
 

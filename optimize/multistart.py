@@ -49,13 +49,16 @@ def find_equilibria(
     limits=None,
     g: float = 9.81,
     n_starts: int = 16,
+    end_limits=None,
     seed: int | np.random.Generator | None = 0,
     tol: float = 1e-7,
 ) -> MultiStartResult:
     """Solve from the default start and from random initial active sets.
 
     Args:
-        lengths, masses, anchor_a, anchor_b, com, limits, g: as :func:`solve_equilibrium`.
+        lengths, masses, anchor_a, anchor_b, com, limits, g, end_limits: as
+            :func:`solve_equilibrium` (with end limits the solver clamps the ends itself and
+            does not take a starting active set: every start then finds the same equilibrium).
         n_starts: number of starts (the first is the default start).
         seed: seed or generator for the random active sets (same seed, same result).
         tol: two equilibria are the same when no joint differs by more than
@@ -65,7 +68,7 @@ def find_equilibria(
         MultiStartResult.
     """
     rng = np.random.default_rng(seed)
-    first = solve_equilibrium(lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g)
+    first = solve_equilibrium(lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, end_limits=end_limits)
     n = first.angles.size
     lim = np.asarray(limits, dtype=float) if limits is not None else None
     span = max(float(np.hypot(*(np.asarray(anchor_b, float) - np.asarray(anchor_a, float)))), 1e-300)
@@ -93,7 +96,8 @@ def find_equilibria(
         active0 = np.where(limited, active0, 0)
         try:
             res = solve_equilibrium(
-                lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0
+                lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0,
+                end_limits=end_limits,
             )
         except ValueError:
             out.n_failed += 1

@@ -14,6 +14,7 @@ import numpy as np
 
 from optimize import validate as val
 from optimize.chain import Chain, EquilibriumResult
+from optimize.endlimits import as_end_limits
 from optimize.equilibrium import solve_equilibrium
 
 __all__ = ["InverseProblem"]
@@ -30,6 +31,9 @@ class InverseProblem:
         com: (N, 2) centres of mass (along, perp) per rod, or None for mid-chord.
         limits: (N-1, 2) bend limits in radians, or None for free joints.
         g: gravitational acceleration.
+        end_limits: (2, 2) bounds on the absolute angles of the first and last rods (the
+            anchor fixtures' stops), radians, or None for bare pins (see
+            :func:`optimize.solve_equilibrium`).
     """
 
     target: np.ndarray
@@ -38,6 +42,7 @@ class InverseProblem:
     com: np.ndarray | None = None
     limits: np.ndarray | None = None
     g: float = 9.81
+    end_limits: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.lengths = val.as_positive_vector("lengths", self.lengths)
@@ -64,6 +69,7 @@ class InverseProblem:
         self.com = val.as_com(self.com, self.lengths)
         self.limits = val.as_limits(self.limits, n)
         self.g = val.as_gravity(self.g)
+        self.end_limits = as_end_limits(self.end_limits)
 
     @property
     def n(self) -> int:
@@ -85,7 +91,8 @@ class InverseProblem:
     def simulate(self, masses, **kw) -> EquilibriumResult:
         a, b = self.anchors
         return solve_equilibrium(
-            self.lengths, masses, a, b, com=self.com, limits=self.limits, g=self.g, **kw
+            self.lengths, masses, a, b, com=self.com, limits=self.limits, g=self.g,
+            end_limits=self.end_limits, **kw
         )
 
     def chain(self, masses) -> Chain:

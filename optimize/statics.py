@@ -19,6 +19,7 @@ from optimize.problem import InverseProblem
 __all__ = [
     "LIMIT_TOL",
     "exact_masses",
+    "extended_bends",
     "moment_signs",
     "scaled_statics",
     "statics_matrix",
@@ -29,32 +30,62 @@ __all__ = [
 LIMIT_TOL = 1e-6
 
 
+def extended_bends(problem: InverseProblem) -> tuple[np.ndarray, np.ndarray]:
+    """The target's bends with the anchors as two more joints, and their limits.
+
+    An anchor fixture that stops the first rod acts like a joint between a fixed bar along
+    +x and rod 0 (bend theta_0, limit the end limit); at B like a joint between rod N-1 and
+    a fixed bar along +x (bend -theta_{N-1}, limit [-hi, -lo]). Entry e of the result is
+    joint e - 1: -1 for anchor A, 0..N-2 the joints, N-1 anchor B.
+
+    Returns:
+        (bends, limits): (N+1,) radians and (N+1, 2); free anchors have (-inf, inf). An
+        end limit is compared with the target's end angle on the same branch (mod 2 pi).
+    """
+    theta = problem.angles
+    lim = np.full((problem.n + 1, 2), [-np.inf, np.inf])
+    lim[1:-1] = problem.limits
+    bends = np.concatenate([[theta[0]], np.diff(theta), [-theta[-1]]])
+    e = problem.end_limits
+    if e is not None:
+        for k, (rod, sgn) in enumerate(((0, 1.0), (-1, -1.0))):
+            if np.all(np.isinf(e[k])):
+                continue
+            centre = np.mean(e[k]) if np.all(np.isfinite(e[k])) else e[k][np.isfinite(e[k])][0]
+            turn = 2 * np.pi * np.round((theta[rod] - centre) / (2 * np.pi))  # same branch as the limit
+            lo, hi = e[k] + turn
+            lim[0 if k == 0 else -1] = (lo, hi) if sgn > 0 else (-hi, -lo)
+    return bends, lim
+
+
 def statics_matrix(problem: InverseProblem):
     """Linear statics at the target: rows = rods, columns = [masses, H, V, stop moments].
 
     Rod k balances when l_k((H - s_k) sin t_k - (V - c_k) cos t_k) = mu_{k-1} - mu_k with
-    s_k = g m_k perp_k / l_k and c_k = g (sum_{i>k} m_i + m_k along_k / l_k).
+    s_k = g m_k perp_k / l_k and c_k = g (sum_{i>k} m_i + m_k along_k / l_k); mu_{-1} and
+    mu_{N-1} are the anchor fixtures' moments (zero at a bare pin).
 
     Args:
-        problem: the target joints, rod lengths, centres of mass, limits and ``g``. A
-            joint rests on a limit when its target bend is within :data:`LIMIT_TOL`
-            radians of it.
+        problem: the target joints, rod lengths, centres of mass, limits, end limits and
+            ``g``. A joint (or an end rod) rests on a limit when its target bend (angle) is
+            within :data:`LIMIT_TOL` radians of it.
 
     Returns:
         (A, stops, signs): A of shape (N, N + 2 + len(stops)), each row a rod's moment
         balance (force x length) as a linear map of the unknowns [masses (mass unit),
         H, V (force: mass x the unit of ``g``), stop moments (force x length)]; stops
-        are the joints whose target bend rests on a limit; signs +1 (lo: moment >= 0),
-        -1 (hi: <= 0), 0 (rigid).
+        are the joints whose target bend rests on a limit, -1 and N-1 for an anchor
+        fixture stopping the first or last rod (:func:`extended_bends`); signs +1 (lo:
+        moment >= 0), -1 (hi: <= 0), 0 (rigid).
     """
     n, l, g = problem.n, problem.lengths, problem.g
     theta = problem.angles
-    phi = np.diff(theta)
-    lo, hi = problem.limits[:, 0], problem.limits[:, 1]
+    phi, lim = extended_bends(problem)
+    lo, hi = lim[:, 0], lim[:, 1]
     on_hi = np.abs(phi - hi) <= LIMIT_TOL
     on_lo = np.abs(phi - lo) <= LIMIT_TOL
-    stops = np.flatnonzero(on_hi | on_lo)
-    signs = np.where(on_hi & on_lo, 0, np.where(on_lo, 1, -1))[stops]
+    stops = np.flatnonzero(on_hi | on_lo) - 1
+    signs = np.where(on_hi & on_lo, 0, np.where(on_lo, 1, -1))[stops + 1]
     s, c = np.sin(theta), np.cos(theta)
     along, perp = problem.com[:, 0], problem.com[:, 1]
     A = np.zeros((n, n + 2 + stops.size))
@@ -67,8 +98,10 @@ def statics_matrix(problem: InverseProblem):
     A[:, n + 1] = -l * c
     for col, j in enumerate(stops):
         # f_k = mu_{k-1} - mu_k: moved left, rod j gets +mu_j, rod j+1 gets -mu_j
-        A[j, n + 2 + col] += 1.0
-        A[j + 1, n + 2 + col] -= 1.0
+        if j >= 0:
+            A[j, n + 2 + col] += 1.0
+        if j + 1 < n:
+            A[j + 1, n + 2 + col] -= 1.0
     return A, stops, signs
 
 

@@ -77,7 +77,7 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
 REWEIGHT_ROUNDS = 4
 
 
-def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1e-7):
+def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1e-7, ends=()):
     """Like :func:`needed_stops`, for stops printed to order on either side: a candidate
     joint may rest on a stop that keeps it from bending further (hi, moment <= 0) or from
     straightening (lo, moment >= 0), each placed exactly at its target bend.
@@ -86,18 +86,31 @@ def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1
         problem: the target, rods and mass bounds; joints already on a limit keep it.
         candidates: joints that may get a stop (either side).
         rel_tol: a moment counts as needed above this fraction of the largest.
+        ends: anchors whose fixture may stop the end rod at its target angle: 0 (A, the
+            first rod) and/or 1 (B, the last rod).
 
     Returns:
         (joints, sides): sorted joint indices and, per joint, -1 for a stop on the sagging
         side (hi) or +1 on the other side (lo); empty arrays when the masses alone can hold
-        the target; None when no set of stops can.
+        the target; None when no set of stops can. An anchor stop is joint -1 (A) or N-1
+        (B), its side that of the anchor's bend (:func:`optimize.statics.extended_bends`):
+        at A, -1 keeps theta_0 from growing and +1 from shrinking; at B, -1 keeps
+        theta_{N-1} from shrinking and +1 from growing.
     """
+    n = problem.n
     phi = np.diff(problem.angles)
     on_limit = set(statics_matrix(problem)[1].tolist())
     cand = np.array(sorted(set(int(j) for j in candidates) - on_limit), dtype=int)
     lim = problem.limits.copy()
     lim[cand] = phi[cand, None]  # held both ways: the moment may take either sign
-    trial = replace(problem, limits=lim)
+    end_lim = (np.full((2, 2), [-np.inf, np.inf]) if problem.end_limits is None
+               else problem.end_limits.copy())
+    theta = problem.angles
+    end_cand = [k for k in sorted(set(int(k) for k in ends)) if (-1 if k == 0 else n - 1) not in on_limit]
+    for k in end_cand:
+        end_lim[k] = theta[0 if k == 0 else -1]
+    cand = np.concatenate([cand, [-1 if k == 0 else n - 1 for k in end_cand]]).astype(int)
+    trial = replace(problem, limits=lim, end_limits=end_lim if end_cand or problem.end_limits is not None else None)
     A, stops, signs = statics_matrix(trial)
     n = problem.n
     row, col = scaled_statics(trial, A)

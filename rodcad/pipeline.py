@@ -105,6 +105,8 @@ class BuildResult:
         type_names: rod type per position.
         lengths, masses, com: per rod (mm, g, mm in the rod frame).
         limits: (N-1, 2) joint limits (rad), (-inf, inf) where nothing collides.
+        end_limits: (2, 2) the anchor fixture's bounds on the first and last rods' angles
+            (rad), or None for bare pins.
         target_points: (N+1, 2) target joints (None for an explicit chain).
         equilibrium: the designed chain, solved from scratch.
         distance: simulated vs target joints (None without a target).
@@ -135,6 +137,7 @@ class BuildResult:
     as_built: AsBuilt | None = None
     notes: list[str] = field(default_factory=list)
     time_s: float = 0.0
+    end_limits: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -212,12 +215,13 @@ def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]
 
 
 def as_built(rods: Sequence[FabricatedRod], lengths: np.ndarray, limits: np.ndarray | None, anchors: np.ndarray,
-             target: np.ndarray, g: float) -> AsBuilt:
+             target: np.ndarray, g: float, end_limits: np.ndarray | None = None) -> AsBuilt:
     """Re-simulate a chain with the masses and centres of mass of its real solids."""
     masses = np.array([r.mass for r in rods], float)
     com = np.array([r.com for r in rods], float)
     a, b = anchors
-    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None, g=g)
+    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None, g=g,
+                           end_limits=end_limits)
     return AsBuilt(masses, com, eq, shape_distance(target, eq.points))
 
 
@@ -262,7 +266,7 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         com=np.asarray(pr.com, float), limits=_as_limits(pr.limits, len(p.type_names)),
         target_points=np.asarray(pr.target, float), equilibrium=chk.equilibrium,
         distance=shape_distance(pr.target, chk.equilibrium.points), n_stable=chk.n_stable, unique=chk.unique,
-        plan=p, chain_design=cd, notes=list(p.notes),
+        plan=p, chain_design=cd, notes=list(p.notes), end_limits=pr.end_limits,
     )
     result.notes += _design_notes(result)
     snap = cd.buildable
@@ -278,7 +282,7 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         result.notes += problems
         with progress.step("as-built check (masses and centres of mass from the solids)"):
             result.as_built = as_built(fab.rods, result.lengths, result.limits, design.anchors,
-                                       result.target_points, design.g)
+                                       result.target_points, design.g, result.end_limits)
     result.time_s = time.perf_counter() - t0
     return result
 
@@ -309,7 +313,7 @@ def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult
     a, b = design.anchors
     try:
         chk = check_equilibrium(lengths, masses, a, b, com=com, limits=lim, g=design.g, seed=design.seed,
-                                n_starts=N_STARTS)
+                                n_starts=N_STARTS, end_limits=design.constraints.end_limits)
     except ValueError as err:
         raise InputError([design.problem("anchors", str(err))]) from None
     target = None
@@ -319,7 +323,8 @@ def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult
         dist = shape_distance(target, chk.equilibrium.points)
     res = BuildResult(design=design, method="", seed=design.seed, type_names=names, lengths=lengths,
                       masses=masses, com=com, limits=lim, target_points=target, equilibrium=chk.equilibrium,
-                      distance=dist, n_stable=chk.n_stable, unique=chk.unique)
+                      distance=dist, n_stable=chk.n_stable, unique=chk.unique,
+                      end_limits=design.constraints.end_limits)
     res.notes += _design_notes(res)
     res.time_s = time.perf_counter() - t0
     return res

@@ -87,6 +87,7 @@ class BuiltChain:
         anchors: (2, 2); target, simulated: (N+1, 2) joints (mm).
         limits: (N-1, 2) joint limits (rad), +-inf where free.
         density: plastic density (g/mm^3).
+        end_limits: (2, 2) the anchor fixture's bounds on the end rods' angles (rad), or None.
     """
 
     outdir: Path
@@ -98,6 +99,7 @@ class BuiltChain:
     simulated: np.ndarray
     limits: np.ndarray
     density: float
+    end_limits: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -185,6 +187,33 @@ def _limits(rd: _Reader, rods: list[Any], n: int) -> np.ndarray:
                 continue
             out[i, k] = math.radians(float(v))
     return out
+
+
+def _end_limits(rd: _Reader, data: dict[str, Any]) -> np.ndarray | None:
+    """design.json's ``anchor_limits_deg`` (absent or [null, null]: bare pins) in radians."""
+    value = data.get("anchor_limits_deg")
+    if value is None:
+        return None
+    out = np.tile([-np.inf, np.inf], (2, 1))
+    if not isinstance(value, list) or len(value) != 2:
+        rd.bad("anchor_limits_deg", "expected [[lo, hi] | null, [lo, hi] | null] in degrees")
+        return None
+    for k, lim in enumerate(value):
+        if lim is None:
+            continue
+        if not isinstance(lim, list) or len(lim) != 2:
+            rd.bad(f"anchor_limits_deg[{k}]", "expected [lo, hi] in degrees (null where open)")
+            continue
+        for j, v in enumerate(lim):
+            if v is None:
+                continue
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+                rd.bad(f"anchor_limits_deg[{k}][{j}]", f"expected a number of degrees or null, got {v!r}")
+                continue
+            out[k, j] = math.radians(float(v))
+        if out[k, 0] > out[k, 1]:
+            rd.bad(f"anchor_limits_deg[{k}]", "lo is above hi")
+    return None if np.all(np.isinf(out)) else out
 
 
 def _rod(rd: _Reader, outdir: Path, i: int, r: Any) -> BuiltRod | None:
@@ -295,8 +324,9 @@ def load_built(outdir: str | Path) -> BuiltChain:
     density = rd.number(prof, "density", "print.density", positive=True) if prof is not None else None
     built = [_rod(rd, out, i, r) for i, r in enumerate(rods or [])]
     limits = _limits(rd, rods or [], n)
+    end_limits = _end_limits(rd, data)
     if rd.problems:
         raise InputError(rd.problems)
     assert anchors is not None and target is not None and simulated is not None and density is not None
     return BuiltChain(out, path, data, [r for r in built if r is not None], anchors, target, simulated, limits,
-                      density / 1000.0)
+                      density / 1000.0, end_limits)

@@ -126,7 +126,8 @@ def rebalance(res: CheckResult, *, jobs: int | None = None, progress: Progress |
             intervals.append([(r.mass, r.mass * (1 + PIN_REL))])
         else:
             intervals.append(table[types.rods[i].name])
-    problem = InverseProblem(built.target, built.lengths, bounds, com=res.com, limits=built.limits, g=types.g)
+    problem = InverseProblem(built.target, built.lengths, bounds, com=res.com, limits=built.limits, g=types.g,
+                             end_limits=built.end_limits)
     disc = Discretization(built.target, built.lengths, 0.0, 0.0, [])
     plan = ChainPlan(built.target, disc, [r.type for r in built.rods], problem, 0.0)
     method = built.data.get("method")

@@ -87,7 +87,7 @@ def simulate(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) -
     """The chain's equilibrium with these masses and centres of mass, the design's limits."""
     a, b = built.anchors
     return solve_equilibrium(built.lengths, masses, a, b, com=com, limits=built.limits if built.n > 1 else None,
-                             g=g)
+                             g=g, end_limits=built.end_limits)
 
 
 def check(outdir: str | Path, *, assembly: str | Path | None = None,

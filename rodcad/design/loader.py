@@ -171,7 +171,8 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         seen[f.index] = i
     constraints = Constraints(types, lengths, int(c["rods"]) if "rods" in c else None,
                               c.get("preferred_length"), tuple(fixed), c.get("joints", "any"),
-                              bool(c.get("same_shell", False)))
+                              bool(c.get("same_shell", False)), c.get("anchor_stops", "none"),
+                              _anchor_limits(c.get("anchor_limits_deg"), v))
 
     # target
     form, params, curve = None, {}, None
@@ -290,6 +291,32 @@ def _chandelier(c: dict[str, Any], v: Any) -> tuple[list[Any] | None, list[dict[
             return None, None
         targets.append({"form": form, **params})
     return placements, targets
+
+
+def _anchor_limits(value: Any, v: Any) -> tuple[tuple[float, float] | None, tuple[float, float] | None]:
+    """``constraints.anchor_limits_deg`` checked: two entries, each null or [lo, hi] with lo <= hi."""
+    if not isinstance(value, list):
+        return (None, None)
+    key = "constraints.anchor_limits_deg"
+    if len(value) != 2:
+        v.report_at(key, f"expected 2 entries (the first rod's and the last rod's [lo, hi] or null), got {len(value)}")
+        return (None, None)
+    out: list[tuple[float, float] | None] = []
+    for i, lim in enumerate(value):
+        if not isinstance(lim, list):
+            out.append(None)
+            continue
+        which = "first" if i == 0 else "last"
+        if len(lim) != 2:
+            v.report_at(f"{key}[{i}]", f"expected [lo, hi] (deg) for the {which} rod's angle, got {len(lim)} numbers")
+            out.append(None)
+        elif lim[0] > lim[1]:
+            v.report_at(f"{key}[{i}]", f"lo {lim[0]:g} deg is above hi {lim[1]:g} deg: give [lo, hi] for the "
+                        f"{which} rod's angle from +x")
+            out.append(None)
+        else:
+            out.append((float(lim[0]), float(lim[1])))
+    return (out[0], out[1])
 
 
 def _target(t: dict[str, Any], anchors: np.ndarray, v: Any, *,

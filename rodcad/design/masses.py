@@ -97,19 +97,22 @@ def check_chain(plan: ChainPlan, masses: np.ndarray, *, seed: int = 0, n_starts:
     p = plan.problem
     a, b = p.anchors
     return check_equilibrium(p.lengths, masses, a, b, com=p.com, limits=p.limits, g=p.g if g is None else g,
-                             seed=seed, n_starts=n_starts)
+                             seed=seed, n_starts=n_starts, end_limits=p.end_limits)
 
 
 def check_equilibrium(lengths: np.ndarray, masses: np.ndarray, a: np.ndarray, b: np.ndarray, *, com: np.ndarray,
-                      limits: np.ndarray | None, g: float, seed: int = 0, n_starts: int = 12) -> ChainCheck:
-    """A chain solved from scratch, and a multi-start for other stable equilibria.
+                      limits: np.ndarray | None, g: float, seed: int = 0, n_starts: int = 12,
+                      end_limits: np.ndarray | None = None) -> ChainCheck:
+    """A chain solved from scratch, and a multi-start for other stable equilibria (``end_limits``:
+    the anchor fixture's bounds on the end rods' angles, rad).
 
     Raises:
         ValueError: the anchors are out of the chain's reach.
     """
     limits = limits if len(lengths) > 1 else None
-    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=g)
-    multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=g, n_starts=n_starts, seed=seed)
+    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=g, end_limits=end_limits)
+    multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=g, n_starts=n_starts, seed=seed,
+                            end_limits=end_limits)
     return ChainCheck(eq, multi.n_distinct, multi.unique, n_starts)
 
 
@@ -304,4 +307,4 @@ def design_buildable(
 
 def _with_bounds(problem: InverseProblem, bounds: np.ndarray) -> InverseProblem:
     return InverseProblem(target=problem.target, lengths=problem.lengths, mass_bounds=bounds,
-                          com=problem.com, limits=problem.limits, g=problem.g)
+                          com=problem.com, limits=problem.limits, g=problem.g, end_limits=problem.end_limits)

@@ -47,7 +47,7 @@ from rodcad.catalog.model import Catalog
 from rodcad.errors import Problem
 from rodcad.yamlspec import Checked
 
-__all__ = ['DEFAULT_CATALOG', 'DESIGN_FORMAT', 'JOINT_MODES', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
+__all__ = ['ANCHOR_STOP_MODES', 'DEFAULT_CATALOG', 'DESIGN_FORMAT', 'JOINT_MODES', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
 
 
 #: Design file format this rodcad reads.
@@ -60,6 +60,10 @@ DEFAULT_CATALOG = "pla-parametric"
 
 #: ``constraints.joints``: 'any' lets joints rest on stops, 'free' forbids stops.
 JOINT_MODES = ("any", "free")
+
+#: ``constraints.anchor_stops``: 'none' (bare pins, the default) or 'auto' (the anchor
+#: fixture may stop the first and last rods where the shape needs it).
+ANCHOR_STOP_MODES = ("none", "auto")
 
 
 #: Inverse-design methods (mirrors optimize.inverse.METHODS).
@@ -96,6 +100,9 @@ class Constraints:
         same_shell: a family printed to order makes every rod of the chain with one outer
             shell (one length, one curvature, the family's own ends); masses then differ
             only inside (the paper's Fig. 7).
+        anchor_stops: 'none' or 'auto' (:data:`ANCHOR_STOP_MODES`).
+        anchor_limits_deg: bounds [lo, hi] on the absolute angles of the first and of the
+            last rod (deg from +x) that the anchor fixture imposes, or None per end.
     """
 
     types: tuple[str, ...] | None = None
@@ -105,6 +112,15 @@ class Constraints:
     fixed: tuple[FixedRod, ...] = ()
     joints: str = "any"
     same_shell: bool = False
+    anchor_stops: str = "none"
+    anchor_limits_deg: tuple[tuple[float, float] | None, tuple[float, float] | None] = (None, None)
+
+    @property
+    def end_limits(self) -> np.ndarray | None:
+        """``anchor_limits_deg`` as (2, 2) radians (None: both ends bare pins)."""
+        if self.anchor_limits_deg == (None, None):
+            return None
+        return np.radians([lim if lim is not None else (-np.inf, np.inf) for lim in self.anchor_limits_deg])
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ The masses are designed next (:mod:`rodcad.design.masses`). Numbers cross into
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -30,7 +31,13 @@ from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
 from rodcad.catalog.printed import mass_table
 from rodcad.design.model import Constraints, FixedRod
-from rodcad.design.printed import PrintedFamily, PrintedPlan, ShellError, count_for, plan_printed
+from rodcad.design.printed import (
+    PrintedFamily,
+    PrintedPlan,
+    ShellError,
+    count_for,
+    plan_printed,
+)
 from rodcad.errors import InputError, Problem
 
 __all__ = ['CatalogArrays', 'ChainPlan', 'catalog_arrays', 'plan_chain', 'plan_constrained', 'STOP_REACH']
@@ -379,6 +386,10 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
         raise InputError([problem("constraints.same_shell", f"{who}one shell for every rod needs a family printed "
                                   "to order (the default catalog pla-parametric); this catalog's rod types are a "
                                   "fixed menu")])
+    if c.anchor_stops == "auto":
+        raise InputError([problem("constraints.anchor_stops", f"{who}anchor stops chosen by the planner need a family "
+                                  "printed to order (the default catalog pla-parametric); with this catalog's fixed "
+                                  "menu give the fixture's bounds as anchor_limits_deg")])
     candidates: list[float | None] = [c.preferred_length]
     if c.rods is not None and c.preferred_length is None:
         allowed = {float(x) for x, t in zip(arrays.lengths, arrays.types) if c.types is None or t.name in c.types}
@@ -403,6 +414,8 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
     p = counts[c.rods] if c.rods is not None else next(iter(counts.values()))
     if c.fixed:
         _apply_fixed(p, c.fixed, arrays, problem, who)
+    if c.end_limits is not None:
+        p.problem = dataclasses.replace(p.problem, end_limits=c.end_limits)
     return p
 
 
@@ -435,15 +448,16 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     if problems:
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
+    ends = {"anchor_stops": c.anchor_stops == "auto", "end_limits": c.end_limits}
     try:
         if c.rods is not None:
-            lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same)
+            lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)
             if lp is None:
                 raise InputError([problem("constraints.rods", f"{who}{c.rods} rods of {span} do not lay on this "
                                           "target with every corner a joint; change the rod count")])
         else:
             lp = plan_printed(curve, arrays.catalog, pf, preferred_length=c.preferred_length, stops_allowed=not free,
-                              same_shell=same)
+                              same_shell=same, **ends)
     except ShellError as err:
         raise InputError([problem("constraints.same_shell", f"{who}{err}")]) from None
     except ValueError as err:

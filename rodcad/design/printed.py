@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
@@ -107,6 +107,8 @@ class PrintedPlan:
         notes: what the plan could not do, in words.
         unmet: joints whose bend these rods cannot hold.
         stops: joints resting on stops printed at their bends.
+        anchor_stops: anchors whose fixture stops the end rod at its target angle: 0 (A,
+            the first rod), 1 (B, the last rod); the bounds are ``problem.end_limits``.
     """
 
     discretization: object
@@ -115,6 +117,7 @@ class PrintedPlan:
     notes: list[str]
     unmet: list[int]
     stops: list[int]
+    anchor_stops: list[int] = field(default_factory=list)
 
 
 @dataclass
@@ -130,11 +133,30 @@ class _Laid:
 HI, LO = -1, 1
 
 
+def end_limits_for(points: np.ndarray, ends: dict[int, int], given: np.ndarray | None = None) -> np.ndarray | None:
+    """Bounds on the end rods' angles (rad) for anchor stops at their target angles: ``ends``
+    maps 0 (A) / 1 (B) to the side of :func:`optimize.stops.needed_stop_sides` (HI or LO,
+    in the anchor's bend, :func:`optimize.statics.extended_bends`); ``given`` (2, 2): the
+    design's own bounds, kept where no stop is added."""
+    out = np.full((2, 2), [-np.inf, np.inf]) if given is None else np.array(given, float)
+    d = np.diff(points, axis=0)
+    theta = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+    for k, side in ends.items():
+        t = float(theta[0] if k == 0 else theta[-1])
+        t = math.atan2(math.sin(t), math.cos(t))  # the angle from +x in (-180, 180] deg
+        # A: bend = theta_0 (HI keeps it from growing); B: bend = -theta_{N-1}
+        upper = (side == HI) == (k == 0)  # the stop bounds the angle from above
+        out[k] = (-np.inf, t) if upper else (t, np.inf)
+    return None if np.all(np.isinf(out)) else out
+
+
 def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
-         phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True, same: bool = False) -> _Laid:
+         phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True, same: bool = False,
+         end_limits: np.ndarray | None = None) -> _Laid:
     """The rods for given stops (joint -> (bend deg, side)) and their inverse problem; with
     ``limits`` False, only the stops' designed sides are limits (enough for the statics at
-    the target, which only sees joints resting on a limit)."""
+    the target, which only sees joints resting on a limit); ``end_limits``: the anchor
+    fixtures' bounds on the end rods' angles (rad)."""
     fam = pf.family
     r = fam.ranges
     assert fam.template is not None and r is not None
@@ -187,7 +209,7 @@ def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.nd
         rows[j] = np.radians([lo, hi])
     problem = InverseProblem(target=points, lengths=lengths,
                              mass_bounds=np.array([x.mass_range for x in nums], float),
-                             com=np.array([x.com for x in nums], float), limits=rows)
+                             com=np.array([x.com for x in nums], float), limits=rows, end_limits=end_limits)
     return _Laid(rods, problem, notes, unmet)
 
 
@@ -270,7 +292,8 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
 
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
-                 stops_allowed: bool = True, same_shell: bool = False):
+                 stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = False,
+                 end_limits: np.ndarray | None = None):
     """Lay rods printed to order on a target (see the module's docstring).
 
     Args:
@@ -281,6 +304,9 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             within the family's range).
         stops_allowed: False forbids stops (``constraints: {joints: free}``).
         same_shell: one outer shell for every rod (``constraints: {same_shell: true}``).
+        anchor_stops: the anchor fixtures may stop the first and last rods at their target
+            angles where the masses need it (``constraints: {anchor_stops: auto}``).
+        end_limits: (2, 2) bounds on the end rods' angles the design gives (rad), or None.
 
     Returns:
         The :class:`PrintedPlan`.
@@ -312,29 +338,46 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             stops[int(j)] = (float(deg[j]), HI)
         else:
             beyond.append(int(j))
-    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False, same=same_shell)
+    ends: dict[int, int] = {}  # anchor (0: A, 1: B) -> side of its stop
+
+    def lay(own_limits: bool = False) -> _Laid:
+        return _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=own_limits, same=same_shell,
+                    end_limits=end_limits_for(points, ends, end_limits))
+
+    laid = lay()
     needed_more = False
-    if stops_allowed and r.stops is not None:
+    if (stops_allowed and r.stops is not None) or anchor_stops:
         for _ in range(STOP_ROUNDS):
             if exact_masses(laid.problem)[2]:
                 break
-            cand = [j for j in range(n - 1) if j not in stops and printable(j)]
-            need = needed_stop_sides(laid.problem, cand)
+            cand = [j for j in range(n - 1) if j not in stops and printable(j)] if stops_allowed else []
+            need = needed_stop_sides(laid.problem, cand, ends=[k for k in (0, 1) if k not in ends] if anchor_stops
+                                     else ())
             if need is None or need[0].size == 0:
                 needed_more = need is None
                 break
             for j, side in zip(*need):
+                if j < 0 or j >= n - 1:  # an anchor stop: -1 is A, n-1 is B
+                    ends[0 if j < 0 else 1] = int(side)
+                    if mirrored:
+                        ends.setdefault(1 if j < 0 else 0, int(side))
+                    continue
                 stops[int(j)] = (float(deg[j]), int(side))
                 if mirrored and printable(n - 2 - int(j)):  # a symmetric target keeps its symmetry
                     stops.setdefault(n - 2 - int(j), (float(deg[n - 2 - int(j)]), int(side)))
-            laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=False, same=same_shell)
-    laid = _lay(catalog, pf, points, lengths, kappa, phi, stops, same=same_shell)  # the rods' own limits, checked
+            laid = lay()
+    laid = lay(own_limits=True)  # the rods' own limits, checked
     if beyond:
         why = ("stops are forbidden (constraints.joints: free)" if not stops_allowed else
                "the family prints no stops" if r.stops is None else
                f"the family prints stops from {r.stops[0]:g} to {r.stops[1]:g} deg")
         notes.append(f"joint(s) {beyond} bend {', '.join(f'{deg[j]:.1f}' for j in beyond)} deg, which only a stop "
                      f"can hold, but {why}; the masses fit the target as well as they can")
+    if ends:
+        d = np.degrees(np.arctan2(*np.diff(points, axis=0)[[0, -1]].T[::-1]))
+        notes.append("the anchor fixture stops " + " and ".join(
+            f"the {'first' if k == 0 else 'last'} rod at {d[k]:.2f} deg" for k in sorted(ends))
+            + " (its angle from +x): the fixture carries a moment there")
     if stops:
         notes.append(f"{len(stops)} joint(s) rest on stops printed at the bend they hold: "
                      + ", ".join(f"{j} ({stops[j][0]:.2f} deg{'' if stops[j][1] == HI else ', kept from straightening'})"
@@ -348,13 +391,14 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             "; the stops make the ends of the rods beside them differ, so same_shell keeps the length and the "
             "curvature only" if stops else ", the family's own ends; the masses differ only inside"))
     notes += laid.notes
-    return PrintedPlan(disc, laid.rods, laid.problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops))
+    return PrintedPlan(disc, laid.rods, laid.problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops),
+                       sorted(ends))
 
 
 def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int, *, stops_allowed: bool = True,
-              same_shell: bool = False):
+              same_shell: bool = False, **kw):
     """A plan with exactly ``rods`` rods, or None: the preferred length is set so that the
-    curve takes that many (then nudged)."""
+    curve takes that many (then nudged); ``kw`` as :func:`plan_printed`'s."""
     from optimize.discretize import resample
 
     c = resample(np.asarray(curve, float), 2000)
@@ -366,7 +410,7 @@ def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int,
         pref = float(np.clip(total / (rods + k), *r.length))
         try:
             p = plan_printed(curve, catalog, pf, preferred_length=pref, stops_allowed=stops_allowed,
-                             same_shell=same_shell)
+                             same_shell=same_shell, **kw)
         except ShellError as err:
             shell_error = err
             continue

@@ -19,7 +19,7 @@ import numpy as np
 from optimize.discretize import centerline, curve_distance, discretize, find_corners, fit_curvatures
 from rodcad.catalog.model import max_curvature
 
-__all__ = ["CORNER_TOL", "FOLLOW_REL", "TRIES", "ShellError", "most_faithful", "one_shell"]
+__all__ = ["CORNER_TOL", "FOLLOW_REL", "TRIES", "ShellError", "curve_size", "most_faithful", "one_shell"]
 
 #: A corner of the curve is a joint when one lies within this fraction of the span of it.
 CORNER_TOL = 1e-6
@@ -32,15 +32,24 @@ CORNER_DEG = 25.0
 TRIES = 10
 
 #: Without a preferred length, the longest rods whose centrelines follow the curve within
-#: this fraction of the span (else the closest fit of the lengths tried).
+#: this fraction of its size (else the closest fit of the lengths tried).
 FOLLOW_REL = 1e-3
+
+
+def curve_size(curve: np.ndarray) -> float:
+    """The size a curve's fit is measured against (mm): the anchors' distance, or the curve's
+    width or height where larger (a heart hung from its cusp, its anchors a short fixture
+    apart, is as large as its outline)."""
+    curve = np.asarray(curve, float)
+    extent = np.ptp(curve, axis=0)
+    return max(float(np.hypot(*(curve[-1] - curve[0]))), float(extent.max()), 1e-9)
 
 
 def most_faithful(curve: np.ndarray, layouts):
     """Of (discretisation, curvatures) layouts in the order tried (None: none at that aim),
-    the first whose rods' centrelines follow the curve within :data:`FOLLOW_REL` of the
-    span, else the closest; None when there is none."""
-    span = max(float(np.hypot(*(curve[-1] - curve[0]))), 1e-9)
+    the first whose rods' centrelines follow the curve within :data:`FOLLOW_REL` of its
+    size (:func:`curve_size`), else the closest; None when there is none."""
+    span = curve_size(curve)
     best = None
     for laid in layouts:
         if laid is None:

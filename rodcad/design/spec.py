@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from rodcad.design.model import DEFAULT_CATALOG, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
-from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, Str
+from rodcad.design.model import ANCHOR_STOP_MODES, DEFAULT_CATALOG, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
+from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, Str
 
 #: Longest design, catalog or family name (it names folders and files).
 MAX_NAME = 100
@@ -43,6 +43,12 @@ def target_spec() -> Obj:
                            "hangs from the anchors."),
             "length": Field(Num(exclusive_minimum=0, unit="mm"),
                             description="catenary: length of the hanging curve (mm)."),
+            "width": Field(Num(exclusive_minimum=0, unit="mm"),
+                           description="closed-heart: the heart's full width (mm); the anchors sit beside "
+                           "its cusp."),
+            "bulge": Field(Num(minimum=0, maximum=0.25),
+                           description="closed-heart: how far the lower sides bulge outward (sagitta over "
+                           "side length, 0 to 0.25; default 0, straight)."),
             "y": Field(Str(), description="function: y as an expression in x (mm), e.g. "
                        "'-0.004 * x * (200 - x)'."),
             "d": Field(Str(), description="svg: an SVG path 'd' string; it is scaled and rotated so "
@@ -182,6 +188,16 @@ def design_spec() -> Obj:
                                             description="Rods printed to order: every rod of the chain gets "
                                             "one outer shell (one length, one curvature, the family's own "
                                             "ends); the masses differ only inside (the paper's Fig. 7)."),
+                        "anchor_stops": Field(Str(choices=ANCHOR_STOP_MODES), default="none",
+                                              description="'auto': the piece the chain hangs from (a printed "
+                                              "fixture) may stop the first and last rods at their target "
+                                              "angles where the masses need it (a shape that rises above its "
+                                              "anchors); 'none' (default): bare pins."),
+                        "anchor_limits_deg": Field(ListOf(Nullable(ListOf(Num(unit="deg"), min_items=2)),
+                                                          min_items=2),
+                                                   description="Bounds [lo, hi] on the angle (deg from +x) of "
+                                                   "the first and of the last rod that the anchor fixture "
+                                                   "imposes: [[lo, hi] | null, [lo, hi] | null]."),
                     },
                     description="Optional restrictions on the designed chain.",
                 )

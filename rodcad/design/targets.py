@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-__all__ = ['polyline', 'arc', 'semicircle', 'triangle', 'polygon', 'heart', 'catenary', 'function', 'svg_path', 'TARGET_FORMS', 'make_target']
+__all__ = ['polyline', 'arc', 'semicircle', 'triangle', 'polygon', 'heart', 'closed_heart', 'catenary', 'function', 'svg_path', 'TARGET_FORMS', 'make_target']
 
 
 def _frame(a, b):
@@ -128,6 +128,64 @@ def heart(a, b, samples: int = 600) -> np.ndarray:
     side_l = arc_l[-1] + np.linspace(0, 1, m)[1:, None] * (tip - arc_l[-1])
     side_r = tip + np.linspace(0, 1, m)[1:, None] * (arc_r[0] - tip)
     local = np.vstack([arc_l, side_l, side_r[:-1], arc_r])
+    return _place(a, b, local)
+
+
+def closed_heart(a, b, width: float, bulge: float = 0.0, samples: int = 800) -> np.ndarray:
+    """The whole outline of a heart hung from its cusp (the paper's Fig. 9): A and B sit on
+    the two lobes' inner arcs just beside the cusp, ``width`` mm is the heart's full width.
+
+    The classic heart: a square of side s standing on a corner (the tip), with a half circle
+    on each of its upper sides (the lobes); width = s (1 + 1/sqrt 2). From A the outline
+    rises over the left lobe (above the anchors), comes down its outside to the square's
+    left corner, runs straight to the tip, back up to the right corner and over the right
+    lobe down to B. The lobes turn back on themselves: held from the anchor fixture by
+    stops (``constraints: {anchor_stops: auto}``), while the lower part can hang.
+    ``bulge`` (0 to 0.25) rounds the lower sides outward: an arc whose sagitta is that
+    fraction of the side (0: straight sides, which only stops can hold).
+    """
+    _, _, _, gap = _frame(a, b)
+    w = float(width) / gap  # in units of the anchors' distance
+    c = np.sqrt(0.5)
+    s = w / (1.0 + c)
+    r = s / 2
+    if w < 3.0:
+        raise ValueError(f"width {float(width):g} mm is less than 3 times the anchors' distance ({gap:g} mm): "
+                         "the anchors sit beside the cusp, a short fixture apart")
+    # cusp at (0.5, ycusp); left lobe centre M_l, the lobe spans the side cusp -> left corner
+    ml = np.array([0.5 - s * c / 2, 0.0])
+    # A lies on the left lobe's circle at x = 0 (|A - M_l| = r): its height fixes the frame
+    dy = math.sqrt(max(r * r - (ml[0] - 0.0) ** 2, 0.0))
+    cusp_to_centre = s * c / 2
+    ml[1] = -dy  # A at (0, 0) on the circle, above the centre
+    cusp = np.array([0.5, ml[1] + cusp_to_centre])
+    left = cusp + s * np.array([-c, -c])
+    tip = cusp + s * np.array([0.0, -2 * c])
+    a0 = math.atan2(0.0 - ml[1], 0.0 - ml[0])  # A's angle on the lobe circle
+    a1 = math.atan2(left[1] - ml[1], left[0] - ml[0]) + 2 * math.pi  # round over the top
+    k = max(16, samples // 3)
+    t = np.linspace(a0, a1, k)
+    lobe = ml + r * np.column_stack([np.cos(t), np.sin(t)])
+    m = max(4, samples // 6)
+    if not 0.0 <= float(bulge) <= 0.25:
+        raise ValueError(f"bulge {float(bulge):g} must be between 0 (straight sides) and 0.25")
+    u = np.linspace(0, 1, m)[1:, None]
+    side = left + u * (tip - left)
+    if bulge:  # a circular arc through left and tip, bulging away from the heart's axis
+        chord = tip - left
+        length = float(np.hypot(*chord))
+        out = np.array([chord[1], -chord[0]]) / length  # outward (left-down) normal
+        h = float(bulge) * length
+        radius = (length * length / 4 + h * h) / (2 * h)
+        centre = left + chord / 2 - out * (radius - h)
+        t0 = math.atan2(*(left - centre)[::-1])
+        t1 = math.atan2(*(tip - centre)[::-1])
+        dt = (t1 - t0 + math.pi) % (2 * math.pi) - math.pi
+        ts = t0 + u[:, 0] * dt
+        side = centre + radius * np.column_stack([np.cos(ts), np.sin(ts)])
+    half = np.vstack([lobe, side])
+    other = np.column_stack([1.0 - half[::-1, 0], half[::-1, 1]])  # mirror about x = 0.5
+    local = np.vstack([half, other[1:]])
     return _place(a, b, local)
 
 
@@ -285,6 +343,7 @@ TARGET_FORMS = {
     "triangle": (triangle, ("depth",), ("apex",)),
     "polygon": (polygon, ("sides",), ()),
     "heart": (heart, (), ("samples",)),
+    "closed-heart": (closed_heart, ("width",), ("bulge", "samples")),
     "catenary": (catenary, ("length",), ("samples",)),
     "function": (function, ("y",), ("samples",)),
     "svg": (svg_path, ("d",), ("samples",)),

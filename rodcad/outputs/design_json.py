@@ -33,6 +33,14 @@ def _limits_deg(lim: np.ndarray) -> list[float | None]:
     return [_f(math.degrees(v)) for v in lim]
 
 
+def anchor_limits_deg(end_limits) -> list[list[float | None] | None]:
+    """design.json's ``anchor_limits_deg``: per anchor [lo, hi] in degrees (null for an open
+    side), or null for a bare pin."""
+    if end_limits is None:
+        return [None, None]
+    return [None if np.all(np.isinf(row)) else _limits_deg(row) for row in np.asarray(end_limits, float)]
+
+
 def _rod_json(i: int, rod: RodType, length: float, mass: float, com, limits, n: int) -> dict[str, Any]:
     """One rod of design.json's ``rods`` (limits: the joint after it, None for the last rod)."""
     return {"index": i, "type": rod.name, "length": float(length), "mass": float(mass),
@@ -63,9 +71,15 @@ def print_profile(catalog: Catalog) -> dict[str, Any]:
 
 def curve_error(curve: np.ndarray, points: np.ndarray, curvature: np.ndarray, span: float) -> dict[str, Any]:
     """How far the rods' centrelines (arcs for curved rods) are from the target curve
-    (symmetric Hausdorff distance), in mm and as a fraction of the span."""
+    (symmetric Hausdorff distance), in mm and as a fraction of the span and of the target's
+    size (:func:`rodcad.design.shell.curve_size`: the span, or the curve's width or height
+    where larger, e.g. a heart hung from its cusp)."""
+    from rodcad.design.shell import curve_size
+
     d = curve_distance(curve, centerline(points, curvature))
-    return {"max_mm": _f(d), "rel_span": _f(d / span) if span > 0 else None}
+    size = curve_size(curve)
+    return {"max_mm": _f(d), "rel_span": _f(d / span) if span > 0 else None, "size_mm": _f(size),
+            "rel_size": _f(d / size)}
 
 
 def _stop_json(problem, j: int) -> dict[str, Any]:
@@ -171,7 +185,7 @@ def design_json(r) -> dict[str, Any]:
         "rods": rods,
         "simulated": {**_simulated_json(eq, r.unique), "stable_equilibria_found": int(r.n_stable)},
         "error": r.distance.as_dict() if r.distance is not None else None,
-        "anchor_limits_deg": [None, None],
+        "anchor_limits_deg": anchor_limits_deg(r.end_limits),
         "tolerance": d.tolerance,
         "meets_tolerance": r.meets_tolerance,
         "notes": list(r.notes),

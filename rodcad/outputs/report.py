@@ -68,8 +68,9 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         if "curve" in data:
             cv = data["curve"]
             add(f"- The hanging rods' centrelines (curved bodies as printed) are within {cv['max_mm']:.3g} mm of "
-                f"the target curve, {100 * cv['rel_span']:.3g} % of the span (both errors together, everywhere "
-                "along the rods)")
+                f"the target curve, {100 * cv['rel_span']:.3g} % of the span{_of_size(cv)} (both errors together, "
+                "everywhere along the rods)")
+        add(f"- Joints: {_joints_text(r)}")
     if "as_built" in data:
         add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
     if "inverse" in data:
@@ -205,6 +206,36 @@ def _end_text(e: dict[str, float]) -> str:
     return f"top {e['top_chamfer']:.4g}, bottom {e['bottom_chamfer']:.4g}"
 
 
+def _of_size(cv: dict[str, Any]) -> str:
+    """', 0.68 % of the target's 200 mm size' where the target is larger than its span."""
+    size, rel = cv.get("size_mm"), cv.get("rel_size")
+    if size is None or rel is None or cv.get("rel_span") is None or rel >= 0.67 * cv["rel_span"]:
+        return ""
+    return f", {100 * rel:.3g} % of the target's {size:.4g} mm size"
+
+
+def _joints_text(r) -> str:
+    """Which joints hang freely, which rest on stops, what the anchor fixture holds."""
+    n = r.n
+    on = set(int(j) for j in (r.plan.added_stops if r.plan is not None else []))
+    lim = np.asarray(r.limits, float).reshape(-1, 2)
+    bends = np.diff(r.equilibrium.angles)
+    on |= {j for j in range(n - 1) if np.any(np.abs(lim[j] - bends[j]) < 1e-9)}
+    free = [j for j in range(n - 1) if j not in on]
+    text = (f"{len(free)} of {n - 1} hang freely ({', '.join(map(str, free)) or 'none'}), "
+            f"{len(on)} rest on stops ({', '.join(map(str, sorted(on))) or 'none'})")
+    info = getattr(r.equilibrium, "info", {}) or {}
+    held = np.asarray(info.get("end_active", np.zeros(2)), int)
+    moments = np.asarray(info.get("end_moments", np.zeros(2)), float)
+    ends = [f"{'A' if k == 0 else 'B'} holds the {'first' if k == 0 else 'last'} rod "
+            f"({abs(moments[k]) * 1e-6:.3g} N m)" for k in range(2) if held[k]]
+    if ends:
+        text += "; the anchor fixture: " + ", ".join(ends)
+    elif r.end_limits is not None:
+        text += "; the anchor fixture's stops carry nothing"
+    return text
+
+
 def summary_text(r, outdir: Path | None) -> str:
     """The one-screen summary printed at the end of ``rodcad build`` (from the result itself)."""
     L = [f"rodcad: {r.design.name}: {r.n} rods from catalog {r.design.catalog.name}, "
@@ -215,8 +246,10 @@ def summary_text(r, outdir: Path | None) -> str:
         curvature = np.array([r.design.catalog[n].curvature for n in r.type_names])
         cv = curve_error(r.plan.curve, r.equilibrium.points, curvature, r.design.span)
         L.append(f"  vs the curve  the rods' centrelines hang within {cv['max_mm']:.3g} mm of the target curve "
-                 f"({100 * cv['rel_span']:.3g} % of the span)"
+                 f"({100 * cv['rel_span']:.3g} % of the span{_of_size(cv)})"
                  + (f"; {len(r.plan.added_stops)} joint(s) on stops" if r.plan.added_stops else ""))
+        if r.end_limits is not None or r.plan.added_stops:
+            L.append(f"  joints        {_joints_text(r)}")
     if r.as_built is not None:
         L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
     eq = r.equilibrium

@@ -1,0 +1,165 @@
+"""Anchor stops in the design (issue 15): the linear statics with the fixtures' moments, the
+planner choosing which anchors the fixture must hold, and the paper's heart hung from its cusp
+(examples/heart.yaml) against MuJoCo."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from optimize import solve_equilibrium
+from optimize.inverse import InverseProblem
+from optimize.statics import exact_masses, statics_matrix
+from optimize.stops import needed_stop_sides
+from rodcad import pipeline
+from rodcad.cli import main
+from rodcad.design.loader import load_design
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _random_held(seed: int):
+    """A random chain whose first (and often last) rod rests on an anchor stop."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(4, 9))
+    lengths, masses = rng.uniform(0.8, 1.2, n), rng.uniform(1.0, 3.0, n)
+    com = np.column_stack([lengths * rng.uniform(0.4, 0.6, n), rng.uniform(-0.05, 0.05, n)])
+    a = np.zeros(2)
+    span = rng.uniform(0.3, 0.8) * lengths.sum()
+    b = np.array([span, rng.uniform(-0.2, 0.2) * span])
+    free = solve_equilibrium(lengths, masses, a, b, com=com)
+    e = np.array([[free.angles[0] + rng.uniform(0.1, 0.5), np.inf],
+                  [-np.inf, free.angles[-1] - rng.uniform(0.1, 0.5)]])
+    if seed % 3 == 0:
+        e[1] = [-np.inf, np.inf]
+    return lengths, masses, com, a, b, e
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_statics_with_anchor_moments_give_masses_that_hang_on_the_target(seed):
+    """The target is a chain held by anchor stops; the statics (the fixtures' moments as two
+    more stop columns) give masses whose equilibrium, solved from scratch with the same end
+    limits, is the target again."""
+    lengths, masses, com, a, b, e = _random_held(seed)
+    held = solve_equilibrium(lengths, masses, a, b, com=com, end_limits=e)
+    if "cannot be met" in held.message:  # random bounds no configuration of the chain meets
+        pytest.skip(held.message)
+    assert held.success, held.message
+    if not held.info["end_active"].any():
+        pytest.skip("the end limits do not bind for this chain")
+    prob = InverseProblem(held.points, lengths, np.tile([0.2, 20.0], (len(lengths), 1)), com=com, end_limits=e)
+    _, stops, signs = statics_matrix(prob)
+    n = len(lengths)
+    assert {-1, n - 1} & set(stops.tolist())  # an anchor stop is a column of the statics
+    m, resid, reachable, _ = exact_masses(prob)
+    assert reachable and resid < 1e-9
+    sim = prob.simulate(m)
+    assert sim.success
+    assert np.abs(sim.points - held.points).max() < 1e-8 * np.hypot(*(b - a))
+
+
+def test_the_planner_asks_for_an_anchor_stop_where_the_masses_cannot_hold():
+    """A chain whose first rod is held up, as a target with narrow mass bounds: no joint stop
+    alone balances it, the anchor stop at A on the right side does."""
+    lengths, masses, com, a, b, e = _random_held(1)
+    e[1] = [-np.inf, np.inf]
+    held = solve_equilibrium(lengths, masses, a, b, com=com, end_limits=e)
+    assert held.success and held.info["end_active"][0]
+    bounds = np.column_stack([masses * 0.98, masses * 1.02])
+    bare = InverseProblem(held.points, lengths, bounds, com=com)
+    assert not exact_masses(bare)[2]
+    joints, sides = needed_stop_sides(bare, [], ends=(0, 1))
+    assert joints.tolist() == [-1] and sides.tolist() == [1]  # A keeps theta_0 from shrinking
+    fixed = InverseProblem(held.points, lengths, bounds, com=com, end_limits=[[held.angles[0], np.inf],
+                                                                              [-np.inf, np.inf]])
+    m, _, reachable, _ = exact_masses(fixed)
+    assert reachable
+    sim = fixed.simulate(m)
+    assert sim.success and np.abs(sim.points - held.points).max() < 1e-8 * np.hypot(*(b - a))
+
+
+@pytest.fixture(scope="module")
+def heart():
+    return pipeline.build(load_design(ROOT / "examples" / "heart.yaml"), cad=False)
+
+
+def test_the_heart_hangs_from_its_cusp(heart):
+    """The paper's Fig. 9: both lobes above the anchors, the tip below, within 1 % of the
+    heart's width of its outline, at least a third of the joints hanging freely."""
+    r = heart
+    pts = r.equilibrium.points
+    a, b = r.design.anchors
+    assert r.equilibrium.success and r.equilibrium.stable
+    assert pts[:, 1].max() > a[1] + 5.0  # lobes above the anchors
+    assert pts[:, 1].min() < a[1] - 150.0  # the tip far below
+    curve = r.plan.curve
+    width = float(np.ptp(curve[:, 0]))
+    from rodcad.outputs.design_json import curve_error, design_json
+    cv = curve_error(curve, pts, np.array([r.design.catalog[nm].curvature for nm in r.type_names]), r.design.span)
+    assert cv["max_mm"] <= 0.01 * width and cv["rel_size"] <= 0.01
+    bends = np.diff(r.equilibrium.angles)
+    on = [j for j in range(r.n - 1) if np.any(np.abs(r.limits[j] - bends[j]) < 1e-9)]
+    assert len(on) <= (r.n - 1) * 2 / 3, on
+    assert r.equilibrium.info["end_active"].all()  # the fixture holds both lobes
+    data = design_json(r)
+    lim = data["anchor_limits_deg"]
+    assert lim[0] is not None and lim[1] is not None
+    assert lim[0][1] == pytest.approx(math.degrees(r.equilibrium.angles[0]), abs=1e-6)
+
+
+def test_the_heart_agrees_with_mujoco(heart):
+    """Released a little off its shape in MuJoCo (hinge limits, the fixture as limits on the
+    end rods), the heart settles where the exact solver says, within 1e-5 of the span."""
+    pytest.importorskip("mujoco")
+    from mujoco_chain import settle_chain
+
+    r = heart
+    p = r.plan.problem
+    a, b = r.design.anchors
+    # MuJoCo's angles are continuous along the chain (the last rod's is the sum of the hinge
+    # angles: the heart turns more than once), so the end limits go on that branch
+    theta = np.unwrap(r.equilibrium.angles)
+    e = r.end_limits.copy()
+    for k, t in ((0, theta[0]), (1, theta[-1])):
+        e[k] += 2 * np.pi * np.round((t - e[k][np.isfinite(e[k])].mean()) / (2 * np.pi))
+    rng = np.random.default_rng(0)
+    angles0 = theta + rng.normal(0.0, 0.01, r.n)
+    mj = settle_chain(p.lengths, r.masses, a, b, com=p.com, limits=p.limits, angles0=angles0, g=r.design.g,
+                      end_limits=e)
+    assert mj["converged"]
+    span = float(np.hypot(*(b - a)))
+    assert np.max(np.hypot(*(mj["points"] - r.equilibrium.points).T)) < 1e-5 * span
+
+
+def _write(tmp_path: Path, extra: str, catalog: str = "") -> Path:
+    path = tmp_path / "d.yaml"
+    path.write_text("design: 1\nname: d\n" + catalog + "anchors: [[0, 0], [200, 0]]\n"
+                    "target: {form: semicircle}\n" + extra, encoding="utf-8")
+    return path
+
+
+def test_explicit_anchor_limits_reach_design_json(tmp_path, capsys):
+    path = _write(tmp_path, "constraints:\n  anchor_limits_deg: [[-100, -60], null]\n")
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 0
+    data = json.loads((tmp_path / "out" / "design.json").read_text())
+    lim = data["anchor_limits_deg"]
+    assert lim[1] is None and lim[0] == pytest.approx([-100.0, -60.0], abs=1e-9)
+    first = data["simulated"]["angles_deg"][0]
+    assert -100 - 1e-9 <= first <= -60 + 1e-9
+
+
+def test_bad_anchor_limits(tmp_path, capsys):
+    path = _write(tmp_path, "constraints:\n  anchor_limits_deg: [[10, -10], [1, 2, 3]]\n")
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:6:" in err and "anchor_limits_deg[0]: lo 10 deg is above hi -10 deg" in err
+    assert "anchor_limits_deg[1]: expected [lo, hi]" in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+    path = _write(tmp_path, "constraints: {anchor_stops: auto}\n", catalog="catalog: pla-weighted\n")
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 2
+    err = capsys.readouterr().err
+    assert "constraints.anchor_stops" in err and "printed to order" in err

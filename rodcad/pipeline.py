@@ -34,11 +34,12 @@ from optimize import (
 from optimize.discretize import MAX_RODS
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
-from rodcad.cad.export import export_assembly, export_step, export_stl
+from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
 from rodcad.cad.printfile import write_print_files
 from rodcad.cad.rods import (
     ChainFabrication,
     FabricatedRod,
+    check_files,
     fabricate_chain,
     write_assembly,
     write_rod_files,
@@ -107,6 +108,8 @@ class BuildResult:
         limits: (N-1, 2) joint limits (rad), (-inf, inf) where nothing collides.
         end_limits: (2, 2) the anchor fixture's bounds on the first and last rods' angles
             (rad), or None for bare pins.
+        fixture: the anchor fixture's solid (with CAD, when the design stops an end rod).
+        fixture_problems: what is wrong with it (it collides with a rod at rest, ...).
         target_points: (N+1, 2) target joints (None for an explicit chain).
         equilibrium: the designed chain, solved from scratch.
         distance: simulated vs target joints (None without a target).
@@ -138,6 +141,13 @@ class BuildResult:
     notes: list[str] = field(default_factory=list)
     time_s: float = 0.0
     end_limits: np.ndarray | None = None
+    fixture: Any = None
+    fixture_problems: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """Meets its tolerance, and its fixture (if any) is fit to print."""
+        return self.meets_tolerance and not self.fixture_problems
 
     @property
     def n(self) -> int:
@@ -283,8 +293,28 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         with progress.step("as-built check (masses and centres of mass from the solids)"):
             result.as_built = as_built(fab.rods, result.lengths, result.limits, design.anchors,
                                        result.target_points, design.g, result.end_limits)
+        if result.end_limits is not None:
+            with progress.step("the anchor fixture (stops for the end rods), checked against the rods at rest"):
+                result.fixture, result.fixture_problems = build_fixture_for(result)
+            result.notes += [f"fixture: {p}" for p in result.fixture_problems]
     result.time_s = time.perf_counter() - t0
     return result
+
+
+def build_fixture_for(result: BuildResult) -> tuple[Any, list[str]]:
+    """The printed piece both anchor pins sit in, with a stop for each end rod the design
+    holds at its bound (:mod:`rodcad.cad.fixture`), and its problems against the rods at rest."""
+    from rodcad.cad.fixture import check_fixture, fixture_solid, placed_rods
+
+    d = result.design
+    rods = [d.catalog[name] for name in result.type_names]
+    angles = result.equilibrium.angles
+    solid = fixture_solid(d.anchors, rods[0], rods[-1], result.end_limits, rest_angles=(angles[0], angles[-1]))
+    printer = d.catalog.printer
+    problems = check_fixture(solid, placed_rods(result.equilibrium.points, rods), anchors=d.anchors,
+                             end_limits=result.end_limits,
+                             build_volume=printer.build_volume if printer is not None else None)
+    return solid, problems
 
 
 def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult:
@@ -376,9 +406,16 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
         if result.fabrication is not None:
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
                 write_rod_files(result.fabrication, tmp)
+            extra = []
+            if result.fixture is not None:
+                with progress.step("writing and checking fixture.step, fixture.stl"):
+                    export_step(result.fixture, tmp / "fixture.step", name="fixture")
+                    export_stl(result.fixture, tmp / "fixture.stl")
+                    check_files(tmp / "fixture.step", tmp / "fixture.stl", result.fixture.volume)
+                extra = [AssemblyPart("fixture", result.fixture, np.eye(4), (0.55, 0.55, 0.6))]
             with progress.step("writing assembly.step"):
                 write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
-                               name=result.design.name)
+                               name=result.design.name, extra=extra)
             with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
                 write_print_files(result.fabrication.rods, tmp, printer=result.design.catalog.printer,
                                   profile=print_profile(result.design.catalog))

@@ -163,3 +163,40 @@ def test_bad_anchor_limits(tmp_path, capsys):
     assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 2
     err = capsys.readouterr().err
     assert "constraints.anchor_stops" in err and "printed to order" in err
+
+
+def test_a_held_chain_is_built_with_its_fixture(tmp_path, capsys):
+    """With CAD: fixture.step/.stl written and checked (valid, same volume, watertight),
+    in the assembly, in design.json and report.md, and no problem against the rods at rest."""
+    from rodcad.cad.export import assembly_leaves
+
+    path = tmp_path / "d.yaml"
+    path.write_text("design: 1\nname: held\nanchors: [[0, 0], [150, 0]]\ntarget: {form: arc, sag: 50}\n"
+                    "constraints:\n  rods: 4\n  anchor_limits_deg: [[-35, 90], null]\n", encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["build", str(path), "-o", str(out), "-q", "--jobs", "1"]) == 0, capsys.readouterr().err
+    data = json.loads((out / "design.json").read_text())
+    assert data["simulated"]["angles_deg"][0] == pytest.approx(-35.0, abs=1e-6)  # the fixture holds rod 0
+    fx = data["fixture"]
+    assert fx["problems"] == [] and fx["stops"] == [0] and fx["volume_mm3"] > 0
+    assert (out / "fixture.step").is_file() and (out / "fixture.stl").is_file()
+    assert "fixture" in [name for name, _ in assembly_leaves(out / "assembly.step")]
+    assert "anchor fixture" in (out / "report.md").read_text()
+
+
+def test_fused_pieces_replace_runs_of_stops(tmp_path, capsys):
+    """constraints: {fuse: stops}: the heart's lobes and tip become rigid pieces (joints with
+    lo == hi), solved exactly, reported as fused; the free joints stay free."""
+    text = (ROOT / "examples" / "heart.yaml").read_text().replace("  preferred_length: 45",
+                                                                  "  preferred_length: 45\n  fuse: stops")
+    path = tmp_path / "heart.yaml"
+    path.write_text(text, encoding="utf-8")
+    r = pipeline.build(load_design(path), cad=False)
+    assert r.plan.fused and all(b > a for a, b in r.plan.fused)
+    fused_joints = [j for a, b in r.plan.fused for j in range(a, b)]
+    assert all(r.limits[j, 0] == r.limits[j, 1] for j in fused_joints)
+    bends = np.diff(r.equilibrium.angles)
+    assert np.allclose(bends[fused_joints], r.limits[fused_joints, 0], atol=1e-12)
+    assert r.distance.max < 1e-6 and r.equilibrium.stable
+    from rodcad.outputs.report import summary_text
+    assert "fused (" in summary_text(r, None)

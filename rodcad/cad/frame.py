@@ -12,7 +12,7 @@ from build123d import Plane, Solid
 from rodcad.cad.export import placed
 from rodcad.cad.solids import GeometryError, cylinder_solid, one_solid, prism_solid
 
-__all__ = ['pin_solid', 'lug_parts', 'frame_solid']
+__all__ = ['bar_parts', 'frame_solid', 'lug_parts', 'one_part', 'pin_solid']
 
 
 def pin_solid(diameter: float, length: float) -> Solid:
@@ -20,15 +20,18 @@ def pin_solid(diameter: float, length: float) -> Solid:
     return cylinder_solid((0.0, 0.0), diameter / 2, 0.0, length)
 
 
-def _frame_piece(shape: object, step: str) -> Solid:
+def one_part(shape: object, step: str, part: str = "frame") -> Solid:
+    """:func:`rodcad.cad.solids.one_solid` for a printed part other than a rod (its
+    messages name the ``part``)."""
     try:
         return one_solid(shape, step)
     except GeometryError as err:
-        raise GeometryError(str(err).replace("one rod", "one frame")) from None
+        raise GeometryError(str(err).replace("one rod", f"one {part}")) from None
 
 
-def _arm(points: np.ndarray, radius: float, z0: float, z1: float) -> list[Solid]:
-    """A round-ended bar of half-width ``radius`` along an xy polyline, from z0 to z1."""
+def bar_parts(points: np.ndarray, radius: float, z0: float, z1: float) -> list[Solid]:
+    """A round-ended bar of half-width ``radius`` along an xy polyline, from z0 to z1
+    (separate solids; no round end at the last point)."""
     parts = [cylinder_solid(points[0], radius, z0, z1)]
     for p, q in zip(points[:-1], points[1:]):
         d = q - p
@@ -57,7 +60,7 @@ def lug_parts(lug: object) -> list[Solid]:
     gap = h.layer_gap
     pts = np.asarray(lug.arm_points(), dtype=float)  # type: ignore[attr-defined]
     if lug.knuckle == "tongue":  # type: ignore[attr-defined]
-        return _arm(pts, kr, -a, a)
+        return bar_parts(pts, kr, -a, a)
     if lug.knuckle != "fork":  # type: ignore[attr-defined]
         raise GeometryError(f"lug knuckle must be 'fork' or 'tongue', not {lug.knuckle!r}")  # type: ignore[attr-defined]
     c = float(lug.cheek)  # type: ignore[attr-defined]
@@ -65,7 +68,7 @@ def lug_parts(lug: object) -> list[Solid]:
         raise GeometryError("the hinge leaves no room for fork prongs")
     zo = t / 2 + gap
     parts = [cylinder_solid((0, 0), kr, a + gap, zo + c), cylinder_solid((0, 0), kr, -zo - c, -a - gap)]
-    return parts + _arm(pts, kr, zo, zo + c) + _arm(pts, kr, -zo - c, -zo)
+    return parts + bar_parts(pts, kr, zo, zo + c) + bar_parts(pts, kr, -zo - c, -zo)
 
 
 def _members(kind: str, p: dict) -> list[Solid]:
@@ -76,16 +79,16 @@ def _members(kind: str, p: dict) -> list[Solid]:
         outer = cylinder_solid((cx, cy), r + w / 2, p["z"], p["z"] + t)
         if r - w / 2 <= 0:
             return [outer]
-        return [_frame_piece(outer.cut(cylinder_solid((cx, cy), r - w / 2, p["z"] - 1, p["z"] + t + 1)),
-                             "cutting the ring's hole")]
+        return [one_part(outer.cut(cylinder_solid((cx, cy), r - w / 2, p["z"] - 1, p["z"] + t + 1)),
+                         "cutting the ring's hole")]
     if kind == "two_rings":
         c = np.asarray(p["center"], dtype=float)
         hub = cylinder_solid(c, p["hub_radius"], p["hub_z"], p["hub_z"] + t)
         rr = float(p["ring_radius"])
         ring = cylinder_solid(c, rr + w / 2, p["ring_z"], p["ring_z"] + t)
         if rr - w / 2 > 0:
-            ring = _frame_piece(ring.cut(cylinder_solid(c, rr - w / 2, p["ring_z"] - 1, p["ring_z"] + t + 1)),
-                                "cutting the bottom ring's hole")
+            ring = one_part(ring.cut(cylinder_solid(c, rr - w / 2, p["ring_z"] - 1, p["ring_z"] + t + 1)),
+                            "cutting the bottom ring's hole")
         out = [hub, ring]
         sd = float(p["strut_diameter"])
         for k in range(int(p["struts"])):
@@ -143,10 +146,10 @@ def frame_solid(kind: str, params: dict, lugs: Sequence[object]) -> Solid:
     members = _members(kind, params)
     body = members[0]
     if len(members) > 1:
-        body = _frame_piece(body.fuse(*members[1:]).clean(), f"joining the {kind} frame's members")
+        body = one_part(body.fuse(*members[1:]).clean(), f"joining the {kind} frame's members")
     for lug in lugs:
         parts = [placed(s, lug.location) for s in lug_parts(lug)]  # type: ignore[attr-defined]
-        body = _frame_piece(body.fuse(*parts).clean(),
+        body = one_part(body.fuse(*parts).clean(),
                             f"joining lug {lug.name} to the frame (does its arm reach a member?)")  # type: ignore[attr-defined]
     holes = []
     for lug in lugs:
@@ -154,6 +157,6 @@ def frame_solid(kind: str, params: dict, lugs: Sequence[object]) -> Solid:
         hole = cylinder_solid((0.0, 0.0), lug.hinge.hole_diameter / 2, -half, half)  # type: ignore[attr-defined]
         holes.append(placed(hole, lug.location))  # type: ignore[attr-defined]
     if holes:
-        body = _frame_piece(body.cut(*holes).clean(), "drilling the lugs' pin holes")
+        body = one_part(body.cut(*holes).clean(), "drilling the lugs' pin holes")
     body.label = "frame"
     return body

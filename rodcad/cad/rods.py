@@ -85,6 +85,7 @@ from rodcad.fabrication.plan import Measurement, RodPlan, plan_rod
 
 __all__ = [
     "ChainFabrication",
+    "check_files",
     "fabricate_chain",
     "fabricate_rod",
     "FabricatedRod",
@@ -470,7 +471,14 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
 WELD_DIGITS = 4
 
 
-def _check_files(step: Path, stl: Path, volume: float) -> None:
+def check_files(step: Path, stl: Path, volume: float) -> None:
+    """A written solid checked: the STEP re-imports as one valid solid of the same volume
+    and the STL is watertight with that volume (welded and rewritten where OCCT's mesh
+    leaves near-coincident vertices).
+
+    Raises:
+        FabricationError: what is wrong.
+    """
     import trimesh
 
     from rodcad.cad.export import import_step
@@ -531,7 +539,7 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
             on_bed = transformed(r.solid, r.print_matrix)
             export_step(on_bed, step, r.file_stem)
             export_stl(on_bed, stl)
-            _check_files(step, stl, r.plastic_volume)
+            check_files(step, stl, r.plastic_volume)
             first[id(r.solid)] = (step, stl)
         else:
             shutil.copyfile(src[0], step)
@@ -544,7 +552,8 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
 
 
 
-def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain") -> Path:
+def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",
+                   extra: Sequence[AssemblyPart] = ()) -> Path:
     """Write the chain in its simulated pose as a STEP assembly.
 
     Each rod is a solid named 'NN_TYPE' (its rods/ file stem), placed with its
@@ -558,6 +567,7 @@ def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, nam
         points: (N+1, 2) joint positions (mm).
         path: destination file.
         name: root assembly name.
+        extra: further parts (the anchor fixture), placed in the chain plane.
     """
     pts = np.asarray(points, dtype=float)
     if pts.shape != (len(fab.rods) + 1, 2):
@@ -566,7 +576,7 @@ def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, nam
             for j in range(len(pts))]
     nodes = chain_parts([r.file_stem for r in fab.rods], [r.solid for r in fab.rods], pts,
                         [r.mass for r in fab.rods], pins)
-    return export_assembly(path, nodes, name)
+    return export_assembly(path, [*nodes, *extra], name)
 
 
 def chain_parts(names: Sequence[str], solids: Sequence[Any], points: np.ndarray, masses: Sequence[float],

@@ -67,15 +67,18 @@ def run(args: argparse.Namespace) -> int:
                             cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
     code = 0
     target = outdir
-    if not result.meets_tolerance:
+    if not result.ok:
         target = outdir.with_name(outdir.name + ".best-fit")
         code = 1
     pipeline.write_outputs(result, target, progress=progress)
     print(summary_text(result, target))
-    if code:
+    if not result.meets_tolerance:
         err = result.distance.max_rel_span
         print(f"rodcad: the design misses its tolerance ({err:.3g} of the span > {design.tolerance:g}); "
               f"{outdir} left as it was, the best achievable design is in {target}", file=sys.stderr)
+    elif code:
+        print("rodcad: the anchor fixture is not fit to print: " + "; ".join(result.fixture_problems)
+              + f"; {outdir} left as it was, the design and its fixture are in {target}", file=sys.stderr)
     return code
 
 

@@ -47,7 +47,7 @@ from rodcad.catalog.model import Catalog
 from rodcad.errors import Problem
 from rodcad.yamlspec import Checked
 
-__all__ = ['ANCHOR_STOP_MODES', 'DEFAULT_CATALOG', 'DESIGN_FORMAT', 'JOINT_MODES', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
+__all__ = ['ANCHOR_STOP_MODES', 'DEFAULT_CATALOG', 'FUSE_MODES', 'DESIGN_FORMAT', 'JOINT_MODES', 'METHOD_NAMES', 'FixedRod', 'Constraints', 'ChainRod', 'ChandelierSpec', 'Design']
 
 
 #: Design file format this rodcad reads.
@@ -64,6 +64,10 @@ JOINT_MODES = ("any", "free")
 #: ``constraints.anchor_stops``: 'none' (bare pins, the default) or 'auto' (the anchor
 #: fixture may stop the first and last rods where the shape needs it).
 ANCHOR_STOP_MODES = ("none", "auto")
+
+#: ``constraints.fuse``: 'none' (the default) or 'stops' (every run of joints resting on
+#: stops is printed as one rigid piece instead, where it fits the printer).
+FUSE_MODES = ("none", "stops")
 
 
 #: Inverse-design methods (mirrors optimize.inverse.METHODS).
@@ -103,6 +107,7 @@ class Constraints:
         anchor_stops: 'none' or 'auto' (:data:`ANCHOR_STOP_MODES`).
         anchor_limits_deg: bounds [lo, hi] on the absolute angles of the first and of the
             last rod (deg from +x) that the anchor fixture imposes, or None per end.
+        fuse: 'none' or 'stops' (:data:`FUSE_MODES`).
     """
 
     types: tuple[str, ...] | None = None
@@ -114,6 +119,7 @@ class Constraints:
     same_shell: bool = False
     anchor_stops: str = "none"
     anchor_limits_deg: tuple[tuple[float, float] | None, tuple[float, float] | None] = (None, None)
+    fuse: str = "none"
 
     @property
     def end_limits(self) -> np.ndarray | None:

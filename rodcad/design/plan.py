@@ -66,6 +66,7 @@ class ChainPlan:
             every joint resting on a stop printed at its bend.
         rods: the rods made to order (rods printed to order), in chain order; empty for a
             catalog's fixed menu.
+        fused: rods printed as one rigid piece, (first, last) rod indices.
     """
 
     curve: np.ndarray
@@ -78,6 +79,7 @@ class ChainPlan:
     unmet_joints: list[int] = field(default_factory=list)
     added_stops: list[int] = field(default_factory=list)
     rods: list[RodType] = field(default_factory=list)
+    fused: list[tuple[int, int]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -386,6 +388,9 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
         raise InputError([problem("constraints.same_shell", f"{who}one shell for every rod needs a family printed "
                                   "to order (the default catalog pla-parametric); this catalog's rod types are a "
                                   "fixed menu")])
+    if c.fuse != "none":
+        raise InputError([problem("constraints.fuse", f"{who}fused pieces are printed to order: they need a family "
+                                  "printed to order (the default catalog pla-parametric)")])
     if c.anchor_stops == "auto":
         raise InputError([problem("constraints.anchor_stops", f"{who}anchor stops chosen by the planner need a family "
                                   "printed to order (the default catalog pla-parametric); with this catalog's fixed "
@@ -448,7 +453,7 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     if problems:
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
-    ends = {"anchor_stops": c.anchor_stops == "auto", "end_limits": c.end_limits}
+    ends = {"anchor_stops": c.anchor_stops == "auto", "end_limits": c.end_limits, "fuse": c.fuse == "stops"}
     try:
         if c.rods is not None:
             lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)
@@ -470,7 +475,7 @@ def _from_printed(curve: np.ndarray, lp: PrintedPlan) -> ChainPlan:
     mismatch = np.zeros(max(n - 1, 0))
     mismatch[lp.unmet] = np.inf
     return ChainPlan(np.asarray(curve, float), lp.discretization, [t.name for t in lp.rods], lp.problem, 0.0,
-                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods))
+                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods), list(lp.fused))
 
 
 def _apply_fixed(p: ChainPlan, fixed: Sequence[FixedRod], arrays: CatalogArrays,

@@ -38,7 +38,8 @@ from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curv
 from rodcad.catalog.printed import MassTable, rod_numbers
 from rodcad.design.shell import TRIES, ShellError, most_faithful, one_shell
 
-__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "plan_printed", "rods_of"]
+__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "fused_pieces", "plan_printed",
+           "rods_of"]
 
 #: A stop printed to order must stop, by the rods' outlines, within this of the bend it is
 #: made for (deg); it is designed exactly at the bend.
@@ -109,6 +110,8 @@ class PrintedPlan:
         stops: joints resting on stops printed at their bends.
         anchor_stops: anchors whose fixture stops the end rod at its target angle: 0 (A,
             the first rod), 1 (B, the last rod); the bounds are ``problem.end_limits``.
+        fused: rods printed as one rigid piece, as (first, last) rod indices: the joints
+            between them are fused (a limits row with lo == hi at the bend).
     """
 
     discretization: object
@@ -118,6 +121,7 @@ class PrintedPlan:
     unmet: list[int]
     stops: list[int]
     anchor_stops: list[int] = field(default_factory=list)
+    fused: list[tuple[int, int]] = field(default_factory=list)
 
 
 @dataclass
@@ -293,7 +297,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = False,
-                 end_limits: np.ndarray | None = None):
+                 end_limits: np.ndarray | None = None, fuse: bool = False):
     """Lay rods printed to order on a target (see the module's docstring).
 
     Args:
@@ -307,6 +311,8 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
         anchor_stops: the anchor fixtures may stop the first and last rods at their target
             angles where the masses need it (``constraints: {anchor_stops: auto}``).
         end_limits: (2, 2) bounds on the end rods' angles the design gives (rad), or None.
+        fuse: every run of joints resting on stops is printed as one rigid piece instead
+            (``constraints: {fuse: stops}``), where the piece fits the catalog's printer.
 
     Returns:
         The :class:`PrintedPlan`.
@@ -391,8 +397,69 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             "; the stops make the ends of the rods beside them differ, so same_shell keeps the length and the "
             "curvature only" if stops else ", the family's own ends; the masses differ only inside"))
     notes += laid.notes
-    return PrintedPlan(disc, laid.rods, laid.problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops),
-                       sorted(ends))
+    fused: list[tuple[int, int]] = []
+    problem = laid.problem
+    if fuse and stops:
+        fused, too_big = fused_pieces(sorted(stops), points, np.array([t.curvature for t in laid.rods]),
+                                      fam.template.geometry.height, catalog.printer)
+        lim = problem.limits.copy()
+        for first, last in fused:
+            lim[first:last] = phi[first:last, None]  # lo == hi: the rods are one rigid body
+        problem = replace(problem, limits=lim)
+        if fused:
+            notes.append("printed as one rigid piece each (their joints fused at the bend): rods "
+                         + ", ".join(f"{a} to {b}" for a, b in fused))
+        for a, b in too_big:
+            notes.append(f"rods {a} to {b} rest on stops instead of being fused: as one piece they do not fit "
+                         "the printer's build volume")
+    return PrintedPlan(disc, laid.rods, problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops),
+                       sorted(ends), fused)
+
+
+def fused_pieces(joints: Sequence[int], points: np.ndarray, curvature: np.ndarray, height: float,
+                 printer) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """Runs of consecutive joints as rigid pieces (first rod, last rod), split where a piece
+    would not fit the printer lying on its side (the chain plane on the bed's x and the
+    build height, turned in that plane as it fits best; ``printer`` None: any size).
+
+    Returns:
+        (pieces, too_big): the pieces that fit, and the runs left on stops because even two
+        rods of them do not fit.
+    """
+    from optimize.discretize import centerline
+
+    runs: list[list[int]] = []
+    for j in joints:
+        if runs and j == runs[-1][-1] + 1:
+            runs[-1].append(j)
+        else:
+            runs.append([j])
+    pieces, too_big = [], []
+
+    def fits(first: int, last: int) -> bool:
+        if printer is None:
+            return True
+        c = centerline(points[first:last + 2], curvature[first:last + 1])
+        room = sorted(printer.build_volume)[-2:]  # the two largest sides of the build volume
+        for a in np.radians(np.arange(0.0, 180.0, 2.0)):
+            u = c @ np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+            w, h = np.ptp(u, axis=0) + height
+            if (w <= room[0] and h <= room[1]) or (w <= room[1] and h <= room[0]):
+                return True
+        return False
+
+    for run in runs:
+        first = run[0]
+        while first <= run[-1]:
+            last = first  # joints first..last fuse rods first..last + 1
+            while last + 1 <= run[-1] and fits(first, last + 2):
+                last += 1
+            if fits(first, last + 1):
+                pieces.append((first, last + 1))
+            else:
+                too_big.append((first, last + 1))
+            first = last + 1
+    return pieces, too_big
 
 
 def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int, *, stops_allowed: bool = True,

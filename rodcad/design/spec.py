@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rodcad.design.model import ANCHOR_STOP_MODES, DEFAULT_CATALOG, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
+from rodcad.design.model import ANCHOR_STOP_MODES, DEFAULT_CATALOG, FUSE_MODES, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
 from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, Str
 
 #: Longest design, catalog or family name (it names folders and files).
@@ -193,6 +193,10 @@ def design_spec() -> Obj:
                                               "fixture) may stop the first and last rods at their target "
                                               "angles where the masses need it (a shape that rises above its "
                                               "anchors); 'none' (default): bare pins."),
+                        "fuse": Field(Str(choices=FUSE_MODES), default="none",
+                                      description="'stops': every run of joints the planner rests on stops "
+                                      "is printed as one rigid piece instead (rods printed to order; a piece "
+                                      "that does not fit the printer stays on stops); 'none' (default)."),
                         "anchor_limits_deg": Field(ListOf(Nullable(ListOf(Num(unit="deg"), min_items=2)),
                                                           min_items=2),
                                                    description="Bounds [lo, hi] on the angle (deg from +x) of "

@@ -186,6 +186,7 @@ def design_json(r) -> dict[str, Any]:
         "simulated": {**_simulated_json(eq, r.unique), "stable_equilibria_found": int(r.n_stable)},
         "error": r.distance.as_dict() if r.distance is not None else None,
         "anchor_limits_deg": anchor_limits_deg(r.end_limits),
+        "fused": [[int(a), int(b)] for a, b in (r.plan.fused if r.plan is not None else [])],
         "tolerance": d.tolerance,
         "meets_tolerance": r.meets_tolerance,
         "notes": list(r.notes),
@@ -209,7 +210,27 @@ def design_json(r) -> dict[str, Any]:
             out["as_built"]["curve"] = curve_error(r.plan.curve, r.as_built.equilibrium.points, curvature, d.span)
     out["print"] = print_profile(d.catalog)
     out["bill_of_materials"] = bill_of_materials(r)
+    if getattr(r, "fixture", None) is not None:
+        out["fixture"] = fixture_json(r)
     return out
+
+
+def fixture_json(r) -> dict[str, Any]:
+    """design.json's ``fixture``: the printed piece the anchor pins sit in (with its stops)."""
+    from rodcad.cad.fixture import fixture_width
+
+    d = r.design
+    rods = [d.catalog[name] for name in r.type_names]
+    volume = float(r.fixture.volume)
+    mat = rods[0].material
+    return {"file": "fixture.step", "stl": "fixture.stl", "volume_mm3": volume,
+            "filament_g": volume * mat.density / 1000.0,
+            "anchor_pins": {"count": 2, "diameter_mm": rods[0].geometry.hinge.pin_diameter,
+                            "length_mm": round(fixture_width(rods[0], rods[-1]), 2)},
+            "stops": [k for k in (0, 1) if np.any(np.isfinite(np.asarray(r.end_limits)[k]))],
+            "mount": "a 5 mm hanging hole above the anchors' midpoint",
+            "print": "lying on its back face, with supports under the front cheek's slots",
+            "problems": list(r.fixture_problems)}
 
 
 def bill_of_materials(r) -> dict[str, Any]:

@@ -138,6 +138,13 @@ def report_markdown(r, data: dict[str, Any]) -> str:
             add(f"- {ball['count']} x {ball_text(ball['diameter_mm'], ball.get('kind') or '')}")
         for fill in bom.get("fill", []):
             add(f"- {fill['grams']:.1f} g of {fill['name']} in all (per rod in the table)")
+        fx = data.get("fixture")
+        if fx is not None:
+            pins = fx["anchor_pins"]
+            add(f"- 1 anchor fixture (`{fx['file']}`, `{fx['stl']}`): {fx['filament_g']:.1f} g of filament, "
+                f"{fx['mount']}; it stops the {' and the '.join('first' if k == 0 else 'last' for k in fx['stops'])} "
+                f"rod. Print it {fx['print']}. Its anchor pins: {pins['count']} x {pins['diameter_mm']:g} mm, "
+                f"{pins['length_mm']:g} mm long" + (f". PROBLEMS: {'; '.join(fx['problems'])}" if fx["problems"] else ""))
     else:
         add("- Filament and metal balls: run with CAD (without --no-cad) for exact figures")
     add(f"- Total chain mass: {bom['total_mass_g']:.1f} g")
@@ -221,9 +228,15 @@ def _joints_text(r) -> str:
     lim = np.asarray(r.limits, float).reshape(-1, 2)
     bends = np.diff(r.equilibrium.angles)
     on |= {j for j in range(n - 1) if np.any(np.abs(lim[j] - bends[j]) < 1e-9)}
-    free = [j for j in range(n - 1) if j not in on]
+    fused = {j for j in range(n - 1) if lim[j, 0] == lim[j, 1]}
+    on -= fused
+    free = [j for j in range(n - 1) if j not in on and j not in fused]
     text = (f"{len(free)} of {n - 1} hang freely ({', '.join(map(str, free)) or 'none'}), "
             f"{len(on)} rest on stops ({', '.join(map(str, sorted(on))) or 'none'})")
+    if fused:
+        pieces = r.plan.fused if r.plan is not None else []
+        text += (f", {len(fused)} fused ({', '.join(map(str, sorted(fused)))}; one piece each: rods "
+                 + ", ".join(f"{a}-{b}" for a, b in pieces) + ")")
     info = getattr(r.equilibrium, "info", {}) or {}
     held = np.asarray(info.get("end_active", np.zeros(2)), int)
     moments = np.asarray(info.get("end_moments", np.zeros(2)), float)
@@ -247,7 +260,8 @@ def summary_text(r, outdir: Path | None) -> str:
         cv = curve_error(r.plan.curve, r.equilibrium.points, curvature, r.design.span)
         L.append(f"  vs the curve  the rods' centrelines hang within {cv['max_mm']:.3g} mm of the target curve "
                  f"({100 * cv['rel_span']:.3g} % of the span{_of_size(cv)})"
-                 + (f"; {len(r.plan.added_stops)} joint(s) on stops" if r.plan.added_stops else ""))
+                 + (f"; {len(r.plan.added_stops)} joint(s) on stops{' or fused' if r.plan.fused else ''}"
+                    if r.plan.added_stops else ""))
         if r.end_limits is not None or r.plan.added_stops:
             L.append(f"  joints        {_joints_text(r)}")
     if r.as_built is not None:
@@ -271,6 +285,8 @@ def summary_text(r, outdir: Path | None) -> str:
         files = "design.json, report.md, preview.png"
         if r.fabrication is not None:
             files += ", assembly.step, print.3mf, rods/*.step|stl|3mf"
+        if getattr(r, "fixture", None) is not None:
+            files += ", fixture.step|stl"
         L.append(f"  files         {outdir}/ ({files})")
     return "\n".join(L)
 

@@ -74,17 +74,21 @@ def _inside(theta: float, lim: np.ndarray) -> bool:
     return lim[0] - ANGLE_TOL <= t <= lim[1] + ANGLE_TOL
 
 
-def solve_with_end_limits(solve, lengths, masses, a, b, com, limits, end_limits, g) -> EquilibriumResult:
+def solve_with_end_limits(solve, lengths, masses, a, b, com, limits, end_limits, g,
+                          first_joint: int = 0) -> EquilibriumResult:
     """The equilibrium with anchor stops.
 
     Args:
-        solve: the solver without end limits, ``solve(lengths, masses, a, b, com, limits)``.
+        solve: the solver without end limits, ``solve(lengths, masses, a, b, com, limits,
+            first_joint)``; ``first_joint`` is the index, in the whole chain, of the first
+            joint of the (shorter) chain it is given (to start from a given active set).
         lengths, masses, a, b, com, limits: as for :func:`optimize.solve_equilibrium`
             (validated arrays; ``limits`` (N-1, 2)).
         end_limits: (2, 2) bounds on theta_0 and theta_{N-1} (radians).
         g: gravitational acceleration.
+        first_joint: the index of this chain's first joint in the whole chain.
     """
-    free = solve(lengths, masses, a, b, com, limits)
+    free = solve(lengths, masses, a, b, com, limits, first_joint)
     ok0, ok1 = _inside(free.angles[0], end_limits[0]), _inside(free.angles[-1], end_limits[1])
     if ok0 and ok1:
         return _with_ends(free, np.zeros(2), np.zeros(2, dtype=int))
@@ -93,7 +97,8 @@ def solve_with_end_limits(solve, lengths, masses, a, b, com, limits, end_limits,
     trials = [set(violated)] + ([{end} for end in violated] if len(violated) == 2 else [])
     best = None
     for held in trials:
-        r = _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, 0 in held, 1 in held)
+        r = _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, 0 in held, 1 in held,
+                     first_joint)
         if r is None:
             continue
         if r.success and r.info.get("fixtures_hold", False):
@@ -111,7 +116,8 @@ def _bound(theta: float, lim: np.ndarray) -> tuple[float, int]:
     return (float(lim[1]), 1) if theta > lim[1] else (float(lim[0]), -1)
 
 
-def _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, first: bool, last: bool):
+def _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, first: bool, last: bool,
+             first_joint: int = 0):
     n = len(lengths)
     lo_i, hi_i = (1 if first else 0), (n - 1 if last else n)
     if hi_i - lo_i < 1:
@@ -144,11 +150,12 @@ def _clamped(solve, lengths, masses, a, b, com, limits, end_limits, g, free, fir
         sub_e = e if np.any(np.isfinite(e)) else None
         try:
             if sub_e is None:
-                sub_res = _with_ends(solve(sub_lengths, sub_masses, a2, b2, sub_com, sub_limits), np.zeros(2),
+                sub_res = _with_ends(solve(sub_lengths, sub_masses, a2, b2, sub_com, sub_limits,
+                                           first_joint + lo_i), np.zeros(2),
                                      np.zeros(2, dtype=int))
             else:
                 sub_res = solve_with_end_limits(solve, sub_lengths, sub_masses, a2, b2, sub_com, sub_limits,
-                                                sub_e, g)
+                                                sub_e, g, first_joint + lo_i)
         except ValueError:  # the fixed rods leave anchors the rest cannot reach
             return None
     return _assemble(lengths, masses, a, b, com, g, sub_res, first, last, th0, th1, side)

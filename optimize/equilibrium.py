@@ -490,9 +490,12 @@ def solve_equilibrium(
         if model != "exact":
             raise ValueError("end_limits are handled by the exact model only")
 
-        def solve(ls, ms, a, b, c, lim):
+        def solve(ls, ms, a, b, c, lim, first_joint=0):
+            # a starting active set applies to the joints of the shorter chains too
+            sub0 = None if active0 is None or len(ls) < 2 else \
+                np.asarray(active0, dtype=int)[first_joint:first_joint + len(ls) - 1]
             return solve_equilibrium(ls, ms, a, b, com=c, limits=lim if len(ls) > 1 else None, g=chain.g,
-                                     max_iter=max_iter)
+                                     max_iter=max_iter, active0=sub0)
 
         return solve_with_end_limits(solve, chain.lengths, chain.masses, chain.anchor_a, chain.anchor_b, chain.com,
                                      chain.limits, ends, chain.g)

@@ -57,8 +57,8 @@ def find_equilibria(
 
     Args:
         lengths, masses, anchor_a, anchor_b, com, limits, g, end_limits: as
-            :func:`solve_equilibrium` (with end limits the solver clamps the ends itself and
-            does not take a starting active set: every start then finds the same equilibrium).
+            :func:`solve_equilibrium` (with end limits, each start's active set applies to
+            the joints of the chain between the clamped end rods).
         n_starts: number of starts (the first is the default start).
         seed: seed or generator for the random active sets (same seed, same result).
         tol: two equilibria are the same when no joint differs by more than

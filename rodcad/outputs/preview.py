@@ -34,10 +34,18 @@ def plot_chain(r, *paths: Path) -> None:
         ax.plot(*r.target_points.T, "o", mfc="none", mec="0.35", ms=6, label="target joints")
     curvature = [getattr(d.catalog[n], "curvature", 0.0) if n in d.catalog else 0.0 for n in r.type_names]
     lc, _ = draw_rods(ax, pts, curvature, r.masses)
-    stops = list(r.plan.added_stops) if r.plan is not None else []
+    fused = [j for a, b in (r.plan.fused if r.plan is not None else []) for j in range(a, b)]
+    stops = [j for j in (r.plan.added_stops if r.plan is not None else []) if j not in fused]
     if stops:
         ax.plot(*pts[[j + 1 for j in stops]].T, "^", mfc="gold", mec="k", ms=7, zorder=5,
                 label="joint on a stop")
+    if fused:
+        ax.plot(*pts[[j + 1 for j in fused]].T, "D", mfc="darkorange", mec="k", ms=6, zorder=5,
+                label="fused joint (one printed piece)")
+    held = np.asarray((eq.info or {}).get("end_active", np.zeros(2)), int)
+    if held.any():
+        ax.plot(*np.asarray(d.anchors)[held != 0].T, "s", mfc="none", mec="gold", mew=2.5, ms=15, zorder=7,
+                label="anchor fixture stops the end rod")
     if r.as_built is not None:
         ax.plot(*r.as_built.equilibrium.points.T, ":", color="k", lw=1, zorder=5, label="as built")
     title = f"{d.name}: {r.n} rods"
@@ -46,8 +54,12 @@ def plot_chain(r, *paths: Path) -> None:
     if r.distance is not None:
         title += f"\njoints {100 * r.distance.max_rel_span:.3g} % of span off the target"
         if r.plan is not None and d.target_curve is not None:
+            from rodcad.design.shell import curve_size
+
             hang = curve_distance(d.target_curve, centerline(pts, curvature))
-            title += f", rods within {100 * hang / d.span:.3g} %"
+            size = curve_size(d.target_curve)
+            title += (f", rods within {100 * hang / d.span:.3g} %" if size < 1.5 * d.span else
+                      f", rods within {100 * hang / size:.3g} % of its {size:.4g} mm size")
         if r.as_built is not None:
             title += f" (as built {100 * r.as_built.distance.max_rel_span:.3g} %)"
     if not eq.stable:

@@ -155,13 +155,22 @@ def polish_point(chain: Chain, x: np.ndarray):
     rhs = Qe.imag
     sol, *_ = np.linalg.lstsq(M, rhs, rcond=None)
     lam = complex(sol[0], sol[1])
+    got = _on_branches(chain, groups, lam, e)
+    if got is None:
+        return None
+    theta, lam, k = got
+    return theta, lam, side, k
+
+
+def _on_branches(chain: Chain, groups: Groups, lam: complex, e: np.ndarray):
+    """Newton on the closure with each group kept on the branch it has at angles ``e``
+    (e^{i psi} per group): (angles, reaction, iterations), or None when it fails."""
     W = groups.P * lam - groups.Q
     signs = np.where((np.conj(W) * e).real >= 0, 1.0, -1.0)
     lam, W, k, ok = branch_newton(groups.P, groups.Q, chain.d, signs, lam, chain.total_length)
     if not ok:
         return None
-    theta = groups.angles(W, signs)
-    return theta, lam, side, k
+    return groups.angles(W, signs), lam, k
 
 
 
@@ -395,13 +404,10 @@ def _correct(chain, groups, theta, side, lo, hi):
 def _exact(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray, it: int):
     """The exact KKT point on the side and branches of a converged descent."""
     groups = Groups(chain, side)
-    e = np.exp(1j * theta[groups.starts])
-    W = groups.P * lam - groups.Q
-    signs = np.where((np.conj(W) * e).real >= 0, 1.0, -1.0)
-    lam, W, k, ok = branch_newton(groups.P, groups.Q, chain.d, signs, lam, chain.total_length)
-    if not ok:
+    got = _on_branches(chain, groups, lam, np.exp(1j * theta[groups.starts]))
+    if got is None:
         return None
-    out = groups.angles(W, signs)
+    out, lam, k = got
     out += 2 * np.pi * np.round((theta[0] - out[0]) / (2 * np.pi))
     if np.max(np.abs(np.angle(np.exp(1j * (out - theta))))) > 1e-3:
         return None  # Newton went to another branch point: not this one

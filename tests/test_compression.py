@@ -10,6 +10,9 @@ with MuJoCo is in ``test_equilibrium_mujoco.py``.
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from test_equilibrium import balance_residual
@@ -18,26 +21,10 @@ from optimize import solve_equilibrium
 from optimize.branches import descend
 from optimize.chain import Chain, Groups, is_stable, kkt_residual, sag_guess, violations
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from bench_equilibrium import compressed_chain  # noqa: E402  (the benchmark's random chains)
 
-def compressed_chain(seed: int):
-    """A random limited chain around a known configuration: 6-15 rods, offset centres of
-    mass, stops on one side, on both, fused joints (lo == hi), anchors often close."""
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(6, 16))
-    lengths = rng.uniform(0.5, 1.5, n)
-    masses = rng.uniform(0.1, 5.0, n)
-    com = np.column_stack([rng.uniform(0.2, 0.8, n) * lengths, rng.uniform(-0.3, 0.3, n) * lengths])
-    spread = rng.choice([0.3, 0.6, 1.0])
-    phi = rng.uniform(-spread, spread, n - 1) + rng.uniform(0, 0.4)
-    theta = rng.uniform(-1.5, 0.0) + np.concatenate([[0.0], np.cumsum(phi)])
-    a = np.zeros(2)
-    b = np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)])
-    kind = rng.choice(5, n - 1, p=[0.3, 0.2, 0.2, 0.2, 0.1])  # free, lo, hi, both, fused
-    lo = np.where(np.isin(kind, (1, 3)), phi - rng.uniform(0, 0.5, n - 1), -np.inf)
-    hi = np.where(np.isin(kind, (2, 3)), phi + rng.uniform(0, 0.5, n - 1), np.inf)
-    lo = np.where(kind == 4, phi, lo)
-    hi = np.where(kind == 4, phi, hi)
-    return lengths, masses, com, np.column_stack([lo, hi]), a, b
+__all__ = ["branches", "compressed_chain"]
 
 
 def branches(res, lengths, masses, com, limits, a, b):

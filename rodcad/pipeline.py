@@ -9,6 +9,7 @@ chandelier take the same path::
        intervals with CAD), one equilibrium + multi-start check
     -> a chandelier's frame                                   rodcad.design.frame, rodcad.cad.chandelier
     -> cavities, sockets, exact B-rep of every rod            rodcad.cad.rods.fabricate_chain
+    -> fused runs of rods as one solid each                   rodcad.cad.pieces.fuse_pieces
     -> as-built re-simulation per chain                       as_built()
     -> design.json, report.md, previews, STEP/STL             rodcad.outputs, write_outputs()
 
@@ -34,6 +35,7 @@ from optimize import (
 from optimize.discretize import MAX_RODS
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
+from rodcad.cad.pieces import PieceRefused, fuse_pieces
 from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
 from rodcad.cad.printfile import write_print_files
 from rodcad.cad.rods import (
@@ -290,6 +292,13 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
                                       label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)")
         result.fabrication = fab
         result.notes += problems
+        if p.fused:
+            with progress.step(f"uniting {len(p.fused)} fused piece(s) into one solid each"):
+                try:
+                    fuse_pieces(fab, p.fused, result.equilibrium.points,
+                                [design.catalog[name] for name in result.type_names])
+                except PieceRefused as err:
+                    raise InputError([design.problem("constraints.fuse", str(err))]) from None
         with progress.step("as-built check (masses and centres of mass from the solids)"):
             result.as_built = as_built(fab.rods, result.lengths, result.limits, design.anchors,
                                        result.target_points, design.g, result.end_limits)
@@ -375,9 +384,10 @@ def _design_notes(r: BuildResult) -> list[str]:
         notes.append("the designed shape is an equilibrium but NOT a stable one: the printed chain "
                      "would fall into another shape")
     if not r.unique:
+        advice = r.chain_design.check.hang_advice() if r.chain_design is not None else ""
         notes.append(f"{r.n_stable} distinct stable equilibria were found from {N_STARTS} starts: the "
-                     "chain may settle in another shape if hung carelessly (hang it from A, guide it "
-                     "into shape, then attach B)")
+                     "chain may settle in another shape if hung carelessly; "
+                     + (advice or "hang it from A, guide it into shape, then attach B"))
     cd = r.chain_design
     if cd is not None:
         res = cd.result
@@ -417,7 +427,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                 write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
                                name=result.design.name, extra=extra)
             with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
-                write_print_files(result.fabrication.rods, tmp, printer=result.design.catalog.printer,
+                write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,
                                   profile=print_profile(result.design.catalog))
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
@@ -465,6 +475,9 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
             out.notes.append(f"{ch.name}: the designed shape is not a stable equilibrium")
         if not ch.design.unique:
             out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
+    if cad and any(ch.design.plan.fused for ch in res.chains):
+        raise InputError([design.problem("constraints.fuse", "a chandelier's chains are built rod by rod: fused "
+                                         "pieces (fuse: stops) are built for a single chain only; use 'none'")])
     if cad:
         with progress.step("frame solid and clearance checks"):
             out.frame = build_frame(frame_plan, design.catalog, res.chains)

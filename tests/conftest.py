@@ -16,7 +16,11 @@ fast joint-limit function (test_jointlimits.py).
 
 from __future__ import annotations
 
+import json
+
 import pytest
+
+from rodcad.cli import main
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -26,3 +30,17 @@ def session_cache(tmp_path_factory):
         mp.setenv("RODCAD_CACHE_DIR", str(folder))
         mp.setenv("RODCAD_SEED_CACHE", "1")
         yield folder
+
+
+@pytest.fixture(scope="session")
+def build_design(tmp_path_factory):
+    """``rodcad build -q`` of a design given as text, into a fresh folder: call it with
+    (text, name, *options); it returns (OUTDIR, design.json as read)."""
+    def build(text: str, name: str, *options: str):
+        root = tmp_path_factory.mktemp(name)
+        design = root / f"{name}.yaml"
+        design.write_text(text, encoding="utf-8")
+        out = root / "built"
+        assert main(["build", str(design), "-o", str(out), "-q", *options]) == 0
+        return out, json.loads((out / "design.json").read_text())
+    return build

@@ -200,3 +200,15 @@ def test_fused_pieces_replace_runs_of_stops(tmp_path, capsys):
     assert r.distance.max < 1e-6 and r.equilibrium.stable
     from rodcad.outputs.report import summary_text
     assert "fused (" in summary_text(r, None)
+
+
+def test_the_report_says_how_to_hang_the_heart(heart):
+    """Other stable shapes exist (a lobe folds, the lower part swings): the note names the
+    joints that differ and how to hang the chain as designed."""
+    r = heart
+    assert not r.unique and r.n_stable >= 2
+    advice = r.chain_design.check.hang_advice()
+    assert "another stable shape differs at joint(s)" in advice and "To hang it as designed" in advice
+    assert any(advice in note for note in r.notes)
+    others = r.chain_design.check.others
+    assert all(o.energy >= r.equilibrium.energy for o in others)  # the designed shape is the lowest

@@ -101,13 +101,8 @@ def _check(args: list[str], capsys) -> tuple[int, dict | None, str]:
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    root = tmp_path_factory.mktemp("check")
-    design = root / "roundtrip.yaml"
-    design.write_text(DESIGN, encoding="utf-8")
-    out = root / "built"
-    assert main(["build", str(design), "-o", str(out), "--jobs", "2", "-q"]) == 0
-    return out, json.loads((out / "design.json").read_text())
+def built(build_design):
+    return build_design(DESIGN, "roundtrip", "--jobs", "2")
 
 
 @pytest.fixture(scope="module")

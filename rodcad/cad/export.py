@@ -19,7 +19,7 @@ from OCP.TopLoc import TopLoc_Location
 
 from rodcad.cad.solids import GeometryError
 
-__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed']
+__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed', 'check_files']
 
 
 def export_step(solid: Solid, path: str | os.PathLike[str], name: str | None = None) -> Path:
@@ -242,3 +242,45 @@ def rod_matrices(points: np.ndarray) -> list[np.ndarray]:
     p = np.asarray(points, dtype=float)
     d = np.diff(p, axis=0)
     return [rod_matrix(p[i], math.atan2(d[i, 1], d[i, 0])) for i in range(len(d))]
+
+
+#: STL vertices closer than 10^-WELD_DIGITS mm are welded when a mesh comes out open.
+WELD_DIGITS = 4
+
+
+def check_files(step: Path, stl: Path, volume: float) -> None:
+    """A written solid checked: the STEP re-imports as one valid solid of the same volume
+    and the STL is watertight with that volume (welded and rewritten where OCCT's mesh
+    leaves near-coincident vertices).
+
+    Raises:
+        FabricationError: what is wrong.
+    """
+    import trimesh
+
+    from rodcad.cad.solids import is_valid_solid
+    from rodcad.fabrication.cavities import MASS_TOL, FabricationError
+
+    back = import_step(step)
+    if not is_valid_solid(back):
+        raise FabricationError(f"{step} does not re-import as a valid solid")
+    if abs(back.volume - volume) > 1e-6 * volume:
+        raise FabricationError(f"{step} re-imports with volume {back.volume:.4f} instead of {volume:.4f} mm^3")
+    mesh = trimesh.load(str(stl), force="mesh")
+    for digits in (None, WELD_DIGITS):
+        if mesh.is_watertight:
+            break
+        # OCCT's sphere poles give zero-area triangles, and faces meshed apart can leave their
+        # shared edge's vertices a few nanometres apart: weld (to 10^-WELD_DIGITS mm), drop
+        # the zero-area triangles and rewrite
+        mesh.merge_vertices(digits_vertex=digits)
+        mesh.update_faces(mesh.nondegenerate_faces())
+        mesh.remove_unreferenced_vertices()
+        if mesh.is_watertight:
+            mesh.export(str(stl), file_type="stl")
+            mesh = trimesh.load(str(stl), force="mesh")
+    if not mesh.is_watertight:
+        raise FabricationError(f"{stl} is not watertight")
+    if abs(mesh.volume - volume) > MASS_TOL * volume:
+        raise FabricationError(f"{stl} encloses {mesh.volume:.3f} mm^3, the solid {volume:.3f} mm^3 "
+                               f"({(mesh.volume - volume) / volume:+.2%})")

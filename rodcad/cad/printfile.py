@@ -244,6 +244,8 @@ def _mesh(rod: FabricatedRod) -> _Mesh:
 def _roofs(rod: FabricatedRod) -> list[float]:
     """Every socket's roof height on the bed (mm, print matrix), one per ball."""
     socks = np.asarray(rod.socket_centers, dtype=float).reshape(-1, 3)
+    if getattr(rod, "socket_roofs", ()):  # a fused piece: its rods' roofs lean (rodcad.cad.pieces)
+        return [float(z) for z in rod.socket_roofs]
     if not len(socks):
         return [float(z) for z in rod.pause_zs][:rod.ball_count] if rod.ball_count else []
     m = np.asarray(rod.print_matrix, dtype=float)
@@ -272,6 +274,11 @@ def rod_pauses(rod: FabricatedRod, profile: Mapping[str, Any] | PrintProfile | N
     return dict(sorted(out.items()))
 
 
+def _rod_tag(tag: str) -> str:
+    """'rod 03' for a rod's file tag, 'piece 01-04' for a fused piece's."""
+    return f"piece {tag}" if "-" in tag else f"rod {tag}"
+
+
 def _message(placements: Sequence[Placement], z: float) -> str:
     """What to do at the pause at ``z``: e.g. 'insert 4 balls of 6 mm (2 in each of rods
     00, 03)', 'pour 12.5 g of tungsten shot into rod 04'."""
@@ -285,16 +292,16 @@ def _message(placements: Sequence[Placement], z: float) -> str:
             by_d.setdefault(kind, []).append((tag, n))
         grams, name = _fill(p.rod)
         if z in p.pauses and grams > 0 and not n:
-            pours.append(f"pour {grams:.2f} g of {name} into rod {tag}")
+            pours.append(f"pour {grams:.2f} g of {name} into {_rod_tag(tag)}")
     for (d, name), rods in sorted(by_d.items()):
         total = sum(n for _, n in rods)
         counts = {n for _, n in rods}
         if len(rods) == 1:
-            who = f"rod {rods[0][0]}"
+            who = _rod_tag(rods[0][0])
         elif len(counts) == 1:
             who = f"{counts.pop()} in each of rods {', '.join(s for s, _ in rods)}"
         else:
-            who = ", ".join(f"{n} in rod {s}" for s, n in rods)
+            who = ", ".join(f"{n} in {_rod_tag(s)}" for s, n in rods)
         what = f" [{name}]" if name else ""
         parts.append(f"insert {total} ball{'s' if total != 1 else ''} of {d:g} mm ({who}){what}")
     return "; ".join(parts + pours)

@@ -67,7 +67,7 @@ from rodcad.parallel import default_jobs, worker_pool
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
-from rodcad.cad.export import AssemblyPart, export_assembly, print_matrix, rod_matrices
+from rodcad.cad.export import AssemblyPart, check_files, export_assembly, print_matrix, rod_matrices
 from rodcad.cad.frame import pin_solid
 from rodcad.cad.solids import mass_properties, type_solid, with_voids
 from rodcad.colors import mass_colors
@@ -181,6 +181,7 @@ class ChainFabrication:
 
     Attributes:
         rods: one per chain position (identical rods share their solid).
+        pieces: runs of fused rods printed as one solid each (``FabricatedPiece``).
         problems: one sentence per out-of-range rod.
         distinct: how many distinct rods were built.
         time_s: wall time (s).
@@ -190,8 +191,14 @@ class ChainFabrication:
     problems: list[str]
     distinct: int = 0
     time_s: float = 0.0
+    pieces: list[Any] = field(default_factory=list)  # fused runs as one solid (rodcad.cad.pieces)
 
-
+    @property
+    def parts(self) -> list[FabricatedRod]:
+        """What is printed, by first rod: every piece (fused rods, see :mod:`rodcad.cad.pieces`)
+        and every rod in none."""
+        inside = {i for p in self.pieces for i in range(p.first, p.last + 1)}
+        return sorted([*self.pieces, *(r for r in self.rods if r.index not in inside)], key=lambda r: r.index)
 
 
 def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
@@ -467,50 +474,9 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     return ChainFabrication(rods, problems, len(distinct), time.perf_counter() - t0)
 
 
-#: STL vertices closer than 10^-WELD_DIGITS mm are welded when a mesh comes out open.
-WELD_DIGITS = 4
-
-
-def check_files(step: Path, stl: Path, volume: float) -> None:
-    """A written solid checked: the STEP re-imports as one valid solid of the same volume
-    and the STL is watertight with that volume (welded and rewritten where OCCT's mesh
-    leaves near-coincident vertices).
-
-    Raises:
-        FabricationError: what is wrong.
-    """
-    import trimesh
-
-    from rodcad.cad.export import import_step
-    from rodcad.cad.solids import is_valid_solid
-
-    back = import_step(step)
-    if not is_valid_solid(back):
-        raise FabricationError(f"{step} does not re-import as a valid solid")
-    if abs(back.volume - volume) > 1e-6 * volume:
-        raise FabricationError(f"{step} re-imports with volume {back.volume:.4f} instead of {volume:.4f} mm^3")
-    mesh = trimesh.load(str(stl), force="mesh")
-    for digits in (None, WELD_DIGITS):
-        if mesh.is_watertight:
-            break
-        # OCCT's sphere poles give zero-area triangles, and faces meshed apart can leave their
-        # shared edge's vertices a few nanometres apart: weld (to 10^-WELD_DIGITS mm), drop
-        # the zero-area triangles and rewrite
-        mesh.merge_vertices(digits_vertex=digits)
-        mesh.update_faces(mesh.nondegenerate_faces())
-        mesh.remove_unreferenced_vertices()
-        if mesh.is_watertight:
-            mesh.export(str(stl), file_type="stl")
-            mesh = trimesh.load(str(stl), force="mesh")
-    if not mesh.is_watertight:
-        raise FabricationError(f"{stl} is not watertight")
-    if abs(mesh.volume - volume) > MASS_TOL * volume:
-        raise FabricationError(f"{stl} encloses {mesh.volume:.3f} mm^3, the solid {volume:.3f} mm^3 "
-                               f"({(mesh.volume - volume) / volume:+.2%})")
-
-
 def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
-    """Write outdir/rods/NN_TYPE.step and .stl for every chain position.
+    """Write outdir/rods/NN_TYPE.step and .stl for every chain position (one NN-MM_piece
+    file for the rods of a fused piece, :attr:`ChainFabrication.parts`).
 
     NN is the rod's 0-based index (as in design.json), two digits or more.
     The solids are in print orientation on the bed (rod frame +y up, the -y
@@ -531,7 +497,7 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     rods_dir.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     first: dict[int, tuple[Path, Path]] = {}
-    for r in fab.rods:
+    for r in fab.parts:
         step = rods_dir / f"{r.file_stem}.step"
         stl = rods_dir / f"{r.file_stem}.stl"
         src = first.get(id(r.solid))
@@ -548,10 +514,6 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     return written
 
 
-
-
-
-
 def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",
                    extra: Sequence[AssemblyPart] = ()) -> Path:
     """Write the chain in its simulated pose as a STEP assembly.
@@ -560,7 +522,8 @@ def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, nam
     frame origin at ``points[i]`` and x along points[i] -> points[i+1] (chain
     plane xy, y up, hinge axes along z), coloured by mass from blue (lightest)
     to red (heaviest); every joint gets a pin 'pin_NN' (pin diameter, through
-    the rod thickness).
+    the rod thickness), but a fused piece is one solid 'NN-MM_piece' at its first rod, with
+    no pins at its fused joints.
 
     Args:
         fab: the fabricated chain.
@@ -572,27 +535,35 @@ def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, nam
     pts = np.asarray(points, dtype=float)
     if pts.shape != (len(fab.rods) + 1, 2):
         raise ValueError(f"points must have shape ({len(fab.rods) + 1}, 2), not {pts.shape}")
-    pins = [(fab.rods[min(j, len(fab.rods) - 1)].pin_diameter, fab.rods[min(j, len(fab.rods) - 1)].thickness)
-            for j in range(len(pts))]
-    nodes = chain_parts([r.file_stem for r in fab.rods], [r.solid for r in fab.rods], pts,
-                        [r.mass for r in fab.rods], pins)
+    fused = {j + 1 for p in fab.pieces for j in range(p.first, p.last)}
+    pins = [None if j in fused else (fab.rods[min(j, len(fab.rods) - 1)].pin_diameter,
+                                     fab.rods[min(j, len(fab.rods) - 1)].thickness) for j in range(len(pts))]
+    parts = fab.parts
+    nodes = chain_parts([r.file_stem for r in parts], [r.solid for r in parts], pts,
+                        [r.mass / (getattr(r, "last", r.index) - r.index + 1) for r in parts], pins,
+                        at=[r.index for r in parts])
     return export_assembly(path, [*nodes, *extra], name)
 
 
 def chain_parts(names: Sequence[str], solids: Sequence[Any], points: np.ndarray, masses: Sequence[float],
-                pins: Sequence[tuple[float, float]], mass_scale: tuple[float, float] | None = None
-                ) -> list[AssemblyPart]:
+                pins: Sequence[tuple[float, float] | None], mass_scale: tuple[float, float] | None = None,
+                at: Sequence[int] | None = None) -> list[AssemblyPart]:
     """The parts of one chain in its pose: rod i named ``names[i]`` with its rod frame at
-    joint p_i and x along p_i -> p_{i+1}, coloured by mass (blue light, red heavy; on
-    ``mass_scale`` (lo, hi) when given, for one scale over several chains), and a pin
-    'pin_NN' through every joint, ``pins[j] = (diameter, length)`` (mm), centred on the
-    chain plane.
+    joint p_i and x along p_i -> p_{i+1} (part k at rod ``at[k]`` when given: a fused piece
+    at its first rod), coloured by mass (blue light, red heavy; on ``mass_scale`` (lo, hi)
+    when given, for one scale over several chains), and a pin 'pin_NN' through every joint,
+    ``pins[j] = (diameter, length)`` (mm; None: no pin), centred on the chain plane.
     """
     lo, hi = mass_scale if mass_scale is not None else (None, None)
     colors = mass_colors(masses, lo, hi)
-    parts = [AssemblyPart(name, solid, m, tuple(float(c) for c in col[:3]))
-             for name, solid, m, col in zip(names, solids, rod_matrices(points), colors)]
-    for j, (p, (diameter, length)) in enumerate(zip(np.asarray(points, dtype=float), pins)):
+    mats = rod_matrices(points)
+    where = range(len(names)) if at is None else at
+    parts = [AssemblyPart(name, solid, mats[i], tuple(float(c) for c in col[:3]))
+             for name, solid, i, col in zip(names, solids, where, colors)]
+    for j, (p, pin) in enumerate(zip(np.asarray(points, dtype=float), pins)):
+        if pin is None:
+            continue
+        diameter, length = pin
         m = np.eye(4)
         m[:2, 3] = p
         m[2, 3] = -length / 2

@@ -48,6 +48,8 @@ class BuiltRod:
         params: the family parameters it was printed with.
         mass_range: [min, max] the design allowed (g).
         pin_diameter: mm; thickness: along the hinge axes (mm).
+        piece: (first, last) of the fused piece the rod is printed in (its ``file`` holds the
+            whole piece; ``print_matrix`` places this rod's frame in it), or None.
     """
 
     index: int
@@ -69,6 +71,7 @@ class BuiltRod:
     fill_center: np.ndarray | None = None
     ball_diameter: float | None = None
     ball_kind: str = ""
+    piece: tuple[int, int] | None = None
 
     @property
     def stem(self) -> str:
@@ -265,10 +268,15 @@ def _rod(rd: _Reader, outdir: Path, i: int, r: Any) -> BuiltRod | None:
         if grams is None or center is None:
             return None
         fill_mass, fill_center = max(grams, 0.0), center
+    piece = fab.get("piece")
+    if piece is not None and not (isinstance(piece, list) and len(piece) == 2 and all(
+            isinstance(v, int) and not isinstance(v, bool) for v in piece) and piece[0] <= i <= piece[1]):
+        rd.bad(f"{kf}.piece", f"expected [first, last] rod indices around {i}, got {piece!r}")
+        return None
     return BuiltRod(i, name, length, designed, mass, com, volume, balls, max(ball_mass, 0.0), path, matrix, params,
                     (float(lo_hi[0]), float(lo_hi[1])), pin, thick, fill_mass, fill_center,
                     float(fab["ball_diameter_mm"]) if isinstance(fab.get("ball_diameter_mm"), (int, float)) else None,
-                    str(fab.get("ball_kind") or ""))
+                    str(fab.get("ball_kind") or ""), None if piece is None else (piece[0], piece[1]))
 
 
 def _folder_problems(outdir: Path) -> list[Problem]:

@@ -126,23 +126,34 @@ class JointOverlap:
                 f"{side} limit ({self.bend_deg:.2f} deg): the edit narrowed how far the joint can bend")
 
 
-def _measured(rod: BuiltRod, volume: float, center: tuple[float, float, float], density: float
-              ) -> tuple[float, np.ndarray]:
-    """Mass (g) and (along, perp) centre of mass of plastic plus the recorded inserts (metal
-    balls at their centres, shot in a fill chamber at its centre)."""
-    plastic = volume * density
-    mass = plastic + rod.ball_mass + rod.fill_mass
-    first = plastic * np.array(center[:2], float)
+def _inserts(rod: BuiltRod, m: np.ndarray) -> tuple[float, np.ndarray]:
+    """Mass (g) and first moment (g mm, (along, perp)) of the inserts design.json records (metal
+    balls at their centres, the shot of a fill chamber at its centre), in the frame the 4x4
+    ``m`` takes the rod's frame to."""
+    first = np.zeros(2)
     k = len(rod.ball_centers)
     if k:
-        first = first + rod.ball_mass / k * rod.ball_centers[:, :2].sum(axis=0)
+        first += rod.ball_mass / k * (rod.ball_centers @ m[:2, :3].T + m[:2, 3]).sum(axis=0)
     if rod.fill_mass and rod.fill_center is not None:
-        first = first + rod.fill_mass * np.asarray(rod.fill_center, float)
+        first += rod.fill_mass * (m[:2, :2] @ np.asarray(rod.fill_center, float) + m[:2, 3])
+    return rod.ball_mass + rod.fill_mass, first
+
+
+def _measured(rods: list[tuple[BuiltRod, np.ndarray]], volume: float, center: tuple[float, float, float],
+              density: float) -> tuple[float, np.ndarray]:
+    """Mass (g) and (along, perp) centre of mass of plastic plus the recorded inserts of the
+    rods (each with its 4x4 rod frame -> measured frame)."""
+    mass = volume * density
+    first = mass * np.array(center[:2], float)
+    for rod, m in rods:
+        extra, moment = _inserts(rod, m)
+        mass += extra
+        first = first + moment
     return mass, first / mass
 
 
 def _label_index(label: str) -> int | None:
-    m = re.match(r"\s*(\d+)_", label)
+    m = re.match(r"\s*(\d+)(?:-\d+)?_", label)
     return int(m.group(1)) if m else None
 
 
@@ -165,7 +176,7 @@ def _assembly_solids(built: BuiltChain, path: Path) -> tuple[dict[int, Any], lis
     out: dict[int, Any] = {}
     problems = []
     for r in built.rods:
-        solids = found.get(r.index, [])
+        solids = found.get(r.index if r.piece is None else r.piece[0], [])  # a piece: at its first rod
         if len(solids) != 1:
             problems.append(Problem(str(path), 0, 0, r.stem, f"{len(solids)} solids named {r.stem!r}; the assembly "
                                     "must hold each rod once, named as rodcad named it"))
@@ -191,15 +202,24 @@ def _read_one(rod: BuiltRod, solid: Any | None, density: float,
         except GeometryError as err:
             return str(err)
     volume, center = measure(solid)
-    mass, com = _measured(rod, volume, center, density)
+    mass, com = _measured([(rod, np.eye(4))], volume, center, density)
     change = (mass - rod.mass) / rod.mass
     shift = float(np.hypot(*(com - rod.com)))
     edited = abs(change) > EDIT_MASS_REL or shift > EDIT_COM_MM
+    pins = _pins(rod, solid, rtype, reference(rtype) if edited else None)
+    if isinstance(pins, str):
+        return pins
+    return RodReading(rod.index, source or rod.file, solid, volume, mass, com, edited, change, shift, pins)
+
+
+def _pins(rod: BuiltRod, solid: Any, rtype: RodType, ref: tuple[PinHole, PinHole] | None,
+          ends: tuple[int, ...] = (0, 1)) -> tuple[PinHole, PinHole] | str:
+    """What is around the rod's pin holes at ``ends`` (``ref``: the rod type's, None for an
+    unchanged solid), or what is wrong with them."""
     g = rtype.geometry
-    ref = reference(rtype) if edited else None
     pins = []
     for k, x in enumerate((0.0, rod.length)):
-        if ref is None:  # an unchanged solid keeps its holes: skip the booleans
+        if ref is None or k not in ends:  # an unchanged solid keeps its holes: skip the booleans
             pins.append(PinHole(0.0, math.nan))
             continue
         p = pin_hole(solid, x, pin_radius=g.hinge.pin_diameter / 2, hole_radius=g.hinge.hole_diameter / 2,
@@ -215,7 +235,44 @@ def _read_one(rod: BuiltRod, solid: Any | None, density: float,
                     f"of the design's within 1 mm of the hole, along z through {which[1]} of the rod frame): the "
                     "hole moved or the knuckle was cut away")
         pins.append(p)
-    return RodReading(rod.index, source or rod.file, solid, volume, mass, com, edited, change, shift, (pins[0], pins[1]))
+    return pins[0], pins[1]
+
+
+def _read_piece(rods: list[BuiltRod], solid: Any | None, density: float,
+                reference: Callable[[RodType], tuple[PinHole, PinHole]], rtypes: list[RodType],
+                source: Path | None = None) -> list[RodReading] | str:
+    """Measure a fused piece as a whole (``solid`` in its first rod's frame, or None: read
+    the piece's STEP file once). For the re-simulation its rods keep their built mass
+    proportions, scaled to the measured total, and their centres of mass move by one common
+    offset in the chain plane, so the piece's centre of mass is the measured one: all a
+    rigid piece's equilibrium depends on. Only its outer pin holes are checked."""
+    first = rods[0]
+    to_first = np.linalg.inv(first.print_matrix)
+    if solid is None:
+        if not first.file.is_file():
+            return "is missing (every piece's STEP file must be there; restore it from the build)"
+        try:
+            solid = moved(read_rod_step(first.file), to_first)
+        except GeometryError as err:
+            return str(err)
+    mats = [to_first @ r.print_matrix for r in rods]  # rod frame -> the first rod's
+    volume, center = measure(solid)
+    mass, com = _measured(list(zip(rods, mats)), volume, center, density)
+    built = np.array([r.mass for r in rods], float)
+    c0 = sum(r.mass * (m[:2, :2] @ r.com + m[:2, 3]) for r, m in zip(rods, mats)) / built.sum()
+    scale, offset = mass / built.sum(), com - c0
+    change, shift = float(scale - 1), float(np.hypot(*offset))
+    edited = abs(change) > EDIT_MASS_REL or shift > EDIT_COM_MM
+    out = []
+    for k, (r, m, rtype) in enumerate(zip(rods, mats, rtypes)):
+        own = moved(solid, np.linalg.inv(m))  # the piece in this rod's frame
+        ends = tuple(e for e, outer in ((0, k == 0), (1, k == len(rods) - 1)) if outer)
+        pins = _pins(r, own, rtype, reference(rtype) if edited and ends else None, ends)
+        if isinstance(pins, str):
+            return f"rod {r.index}: {pins}"
+        out.append(RodReading(r.index, source or r.file, own, volume * r.mass / built.sum(), r.mass * scale,
+                              r.com + m[:2, :2].T @ offset, edited, change, shift, pins))
+    return out
 
 
 def read_rods(built: BuiltChain, types: list[RodType], *, assembly: Path | None = None) -> list[RodReading]:
@@ -246,12 +303,20 @@ def read_rods(built: BuiltChain, types: list[RodType], *, assembly: Path | None 
     for rod, rtype in zip(built.rods, types):
         if assembly is not None and rod.index not in solids:
             continue
-        got = _read_one(rod, solids.get(rod.index), built.density, ref, rtype, assembly)
+        if rod.piece is None:
+            got: RodReading | list[RodReading] | str = _read_one(rod, solids.get(rod.index), built.density, ref,
+                                                                 rtype, assembly)
+        elif rod.index == rod.piece[0]:  # a fused piece: read and measured once, as a whole
+            a, b = rod.piece
+            got = _read_piece(built.rods[a:b + 1], solids.get(rod.index), built.density, ref, types[a:b + 1],
+                              assembly)
+        else:
+            continue
         if isinstance(got, str):
             where = str(assembly) if assembly is not None else str(rod.file)
             problems.append(Problem(where, 0, 0, rod.stem if assembly is not None else "", got))
         else:
-            out.append(got)
+            out += got if isinstance(got, list) else [got]
     if problems:
         raise InputError(problems)
     return out
@@ -275,8 +340,8 @@ def joint_overlaps(built: BuiltChain, readings: list[RodReading], bends_deg: np.
     lim = np.degrees(built.limits)
     for j in range(built.n - 1):
         a, b = readings[j], readings[j + 1]
-        if not (a.edited or b.edited):
-            continue
+        if not (a.edited or b.edited) or built.rods[j].piece is not None and built.rods[j].piece == built.rods[j + 1].piece:
+            continue  # unchanged, or fused inside one piece
         for where, phi in _test_bends(lim[j, 0], lim[j, 1], float(bends_deg[j])):
             v = pair_overlap(a.solid, b.solid, built.rods[j].length, phi)
             if v > 0:

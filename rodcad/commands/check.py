@@ -121,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
     written = None
     if args.rebalance:
         code, rb, written = _rebalance(res, args, folders, progress)
+        out["notes"] = list(res.notes)  # with what the re-balance says
         out["rebalance"] = None if rb is None else _rebalance_json(rb, written)
     if preview is not None:
         from rodcad.check.write import plot_check
@@ -157,6 +158,12 @@ def _rebalance(res: Any, args: argparse.Namespace, folders: list[Path], progress
     if len(res.edited) == res.built.n:
         res.notes.append("--rebalance: every rod was edited, none is left to re-balance the chain with; OUTDIR "
                          "left as it was")
+        return 1, None, None
+    pieces = sorted({r.piece for r in res.built.rods if r.piece is not None})
+    if pieces:
+        res.notes.append("--rebalance: this chain has fused pieces (rods " + ", ".join(f"{a}-{b}" for a, b in pieces)
+                         + "), which the re-balance cannot re-design and re-fuse yet; rebuild with `rodcad build` "
+                         "instead. OUTDIR left as it was")
         return 1, None, None
     rb = rebalance(res, jobs=args.jobs, progress=progress)
     target = folders[0] if rb.ok else folders[1]

@@ -31,12 +31,38 @@ class ChainCheck:
         n_stable: distinct stable equilibria found by the multi-start.
         unique: the multi-start found no other stable shape.
         n_starts: starts of the multi-start.
+        others: the other stable shapes the multi-start found (lowest energy first).
     """
 
     equilibrium: EquilibriumResult
     n_stable: int
     unique: bool
     n_starts: int
+    others: tuple[EquilibriumResult, ...] = ()
+
+    def hang_advice(self) -> str:
+        """How to hang the chain so that it takes the designed shape, when another stable
+        shape exists ('' when none was found): which joints differ, by how much, and whether
+        the other shape lies lower (then a knock can move the chain into it)."""
+        if not self.others:
+            return ""
+        eq = self.equilibrium
+        bends = np.angle(np.exp(1j * np.diff(eq.angles)))
+        parts = []
+        for other in self.others[:2]:
+            theirs = np.angle(np.exp(1j * np.diff(other.angles)))
+            moved = np.flatnonzero(np.abs(np.angle(np.exp(1j * (theirs - bends)))) > np.radians(1.0))
+            if not moved.size:
+                continue
+            j = int(moved[np.argmax(np.abs(theirs - bends)[moved])])
+            lower = other.energy < eq.energy - 1e-9 * abs(eq.energy)
+            warn = "; it lies LOWER than the designed one, so a knock can move the chain into it" if lower else ""
+            parts.append(f"another stable shape differs at joint(s) {', '.join(map(str, moved))} (joint {j}: "
+                         f"{np.degrees(theirs[j]):.0f} deg instead of {np.degrees(bends[j]):.0f}){warn}")
+        if not parts:
+            return ""
+        return ("; ".join(parts) + ". To hang it as designed: hang it from A, hold the rods at those joints in "
+                "the designed shape (on their stops, as the preview shows) while you attach B, then let go")
 
 
 @dataclass(frozen=True)
@@ -113,7 +139,10 @@ def check_equilibrium(lengths: np.ndarray, masses: np.ndarray, a: np.ndarray, b:
     eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=g, end_limits=end_limits)
     multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=g, n_starts=n_starts, seed=seed,
                             end_limits=end_limits)
-    return ChainCheck(eq, multi.n_distinct, multi.unique, n_starts)
+    span = float(np.hypot(*(np.asarray(b, float) - np.asarray(a, float))))
+    others = tuple(e for e in multi.equilibria
+                   if np.max(np.hypot(*(e.points - eq.points).T)) > 1e-7 * max(span, 1e-300))
+    return ChainCheck(eq, multi.n_distinct, multi.unique, n_starts, others)
 
 
 def design_chain(

@@ -137,10 +137,18 @@ def _header(d, method: str | None, seed: int, time_s: float) -> dict[str, Any]:
             "method": method, "seed": int(seed), "time_s": float(time_s)}
 
 
-def fabrication_json(f) -> dict[str, Any]:
+def _piece_of(fab, i: int):
+    """The fused piece rod ``i`` is part of, or None."""
+    return next((p for p in getattr(fab, "pieces", ()) if p.first <= i <= p.last), None)
+
+
+def fabrication_json(f, piece=None) -> dict[str, Any]:
     """design.json's ``fabrication`` of one built rod (a :class:`rodcad.cad.rods.FabricatedRod`):
-    as-built mass and centre of mass, voids and inserts, pauses, its file and bed placement."""
-    return {
+    as-built mass and centre of mass, voids and inserts, pauses, its file and bed placement.
+    A rod of a fused ``piece`` (:class:`rodcad.cad.pieces.FabricatedPiece`) is in the piece's
+    file: ``file`` is that file, ``piece`` its [first, last] rods and ``print_matrix`` places
+    the rod's frame where the rod lies in the file."""
+    out = {
         "mass": float(f.mass), "com": [float(v) for v in f.com],
         "filament_g": float(f.filament_mass), "cavities": int(f.cavity_count),
         "cavity_radius_mm": float(f.cavity_radius), "balls": int(f.ball_count),
@@ -158,6 +166,14 @@ def fabrication_json(f) -> dict[str, Any]:
         "print_matrix": [[float(v) for v in row] for row in np.asarray(f.print_matrix)],
         "in_range": bool(f.in_range), "message": f.message,
     }
+    if piece is not None:
+        out["file"] = f"rods/{piece.file_stem}.step"
+        out["piece"] = [int(piece.first), int(piece.last)]
+        out["pause_z_mm"] = None if piece.pause_z is None else float(piece.pause_z)  # the piece's pauses
+        out["pause_zs_mm"] = [float(z) for z in piece.pause_zs]
+        pm = np.asarray(piece.print_matrix) @ piece.placements[f.index - piece.first]
+        out["print_matrix"] = [[float(v) for v in row] for row in pm]
+    return out
 
 
 def design_json(r) -> dict[str, Any]:
@@ -175,7 +191,7 @@ def design_json(r) -> dict[str, Any]:
         bounds = r.plan.problem.mass_bounds[i] if printed else mass_info(d.catalog[name]).mass_range
         rod["mass_range"] = [float(v) for v in bounds]
         if r.fabrication is not None:
-            rod["fabrication"] = fabrication_json(r.fabrication.rods[i])
+            rod["fabrication"] = fabrication_json(r.fabrication.rods[i], _piece_of(r.fabrication, i))
         rods.append(rod)
     out: dict[str, Any] = {
         **_header(d, r.method or None, r.seed, r.time_s),
@@ -244,6 +260,13 @@ def bill_of_materials(r) -> dict[str, Any]:
         "pins": {"count": r.n + 1, "diameter_mm": pin_d, "length_mm": round(thick + 1.0, 2),
                  "note": "one per joint plus one at each anchor"},
     }
+    fused = [(a, b) for a, b in (r.plan.fused if getattr(r, "plan", None) is not None else [])]
+    if fused:
+        bom["pins"]["count"] -= sum(b - a for a, b in fused)
+        bom["pins"]["note"] = "one per joint that is not fused plus one at each anchor"
+        bom["pieces"] = [{"rods": [int(a), int(b)]} for a, b in fused]
+        for entry, p in zip(bom["pieces"], getattr(r.fabrication, "pieces", None) or []):
+            entry["file"] = f"rods/{p.file_stem}.step"
     if r.fabrication is not None:
         bom.update(_filament_and_balls(r.fabrication.rods))
         bom["total_mass_g"] = float(sum(f.mass for f in r.fabrication.rods))

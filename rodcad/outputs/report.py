@@ -119,9 +119,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
                 balls = f"pour {f.fill_mass:.2f} g of {f.fill_name} at z = {f.pause_z:.2f} mm"
             elif f.chamber_volume > 0:
                 balls = "empty chamber"
-            pause = f"{f.pause_z:.2f}" if f.pause_z is not None else "-"
-            row += (f" {f.mass:.3f} | {f.filament_mass:.2f} | {cav} | {balls} | {pause} "
-                    f"| {_rod_file(f)} |")
+            fj = rod["fabrication"]
+            pause = f"{fj['pause_z_mm']:.2f}" if fj["pause_z_mm"] is not None else "-"
+            where = f"`{fj['file']}`" + (" (one piece: rods {}-{})".format(*fj["piece"]) if "piece" in fj else "")
+            row += f" {f.mass:.3f} | {f.filament_mass:.2f} | {cav} | {balls} | {pause} | {where} |"
         add(row)
     add("")
     add("## Bill of materials")
@@ -129,6 +130,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     bom = data["bill_of_materials"]
     for name, count in bom["rods"].items():
         add(f"- {count} x rod `{name}`")
+    for piece in bom.get("pieces", []):
+        first, last = piece["rods"]
+        add(f"- rods {first} to {last} are ONE printed piece (their joints fused at the bend, no pins between them)"
+            + (f": `{piece['file']}`" if "file" in piece else ""))
     pins = bom["pins"]
     add(f"- {pins['count']} pins, {pins['diameter_mm']:g} mm diameter, cut to {pins['length_mm']:g} mm "
         f"({pins['note']})")
@@ -198,11 +203,6 @@ def report_markdown(r, data: dict[str, Any]) -> str:
 
 def _deg(x: float | None) -> str:
     return "free" if x is None else f"{x:.1f}"
-
-
-def _rod_file(f) -> str:
-    name = getattr(f, "file_stem", None)
-    return f"`rods/{name}.step`" if name else "-"
 
 
 def _end_text(e: dict[str, float]) -> str:

@@ -212,3 +212,23 @@ def test_the_report_says_how_to_hang_the_heart(heart):
     assert any(advice in note for note in r.notes)
     others = r.chain_design.check.others
     assert all(o.energy >= r.equilibrium.energy for o in others)  # the designed shape is the lowest
+
+
+def test_a_fixture_not_fit_to_print_is_exit_1_and_leaves_outdir(tmp_path, capsys, monkeypatch):
+    """When the fixture check finds a problem (here: made to report one) the build exits 1,
+    says why, and writes the design beside OUTDIR, which stays as it was."""
+    import rodcad.cad.fixture as fixture
+
+    path = tmp_path / "d.yaml"
+    path.write_text("design: 1\nname: held\nanchors: [[0, 0], [150, 0]]\ntarget: {form: arc, sag: 50}\n"
+                    "constraints:\n  rods: 4\n  anchor_limits_deg: [[-35, 90], null]\n", encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["build", str(path), "-o", str(out), "-q", "--no-cad"]) == 0  # an earlier run
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    monkeypatch.setattr(fixture, "check_fixture", lambda *a, **k: ["rod_02 overlaps the fixture at rest by 3 mm^3"])
+    assert main(["build", str(path), "-o", str(out), "-q", "--jobs", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "not fit to print" in err and "overlaps the fixture" in err and "Traceback" not in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    data = json.loads((tmp_path / "out.best-fit" / "design.json").read_text())
+    assert data["fixture"]["problems"] == ["rod_02 overlaps the fixture at rest by 3 mm^3"]

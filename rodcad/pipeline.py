@@ -451,6 +451,11 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
     seed = design.seed if seed is None else seed
     cad = design.cad if cad is None else cad
     spec = design.chandelier
+    c = design.constraints
+    if c.anchor_stops != "none" or c.end_limits is not None:
+        key = "constraints.anchor_stops" if c.anchor_stops != "none" else "constraints.anchor_limits_deg"
+        raise InputError([design.problem(key, "a chandelier's chains hang from the frame's lugs, bare pins: anchor "
+                                         "stops are for a single chain's printed fixture")])
     arrays = _arrays(design, jobs, progress)
     try:
         res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,

@@ -232,3 +232,15 @@ def test_a_fixture_not_fit_to_print_is_exit_1_and_leaves_outdir(tmp_path, capsys
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     data = json.loads((tmp_path / "out.best-fit" / "design.json").read_text())
     assert data["fixture"]["problems"] == ["rod_02 overlaps the fixture at rest by 3 mm^3"]
+
+
+def test_a_chandelier_refuses_anchor_stops(tmp_path, capsys):
+    """A chandelier's chains hang from the frame's bare lugs: anchor stops are refused at the key."""
+    text = (ROOT / "examples" / "chandelier.yaml").read_text().replace("constraints:\n",
+                                                                      "constraints:\n  anchor_stops: auto\n")
+    path = tmp_path / "ch.yaml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 2
+    err = capsys.readouterr().err
+    assert "constraints.anchor_stops: a chandelier's chains hang from the frame's lugs" in err
+    assert not (tmp_path / "out").exists()

@@ -244,3 +244,16 @@ def test_a_chandelier_refuses_anchor_stops(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "constraints.anchor_stops: a chandelier's chains hang from the frame's lugs" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_stop_at_the_end_of_the_printable_range_is_planned(tmp_path):
+    """A closed heart with straight sides meets its tip at 90 deg, the family's last
+    printable stop, to round-off: the planner used to bend the tip's rods less for ever."""
+    path = tmp_path / "d.yaml"
+    path.write_text("design: 1\nname: h\nanchors: [[0, 0], [30, 0]]\ntarget: {form: closed-heart, width: 120}\n"
+                    "constraints: {anchor_stops: auto}\n", encoding="utf-8")
+    r = pipeline.build(load_design(path), cad=False)
+    bends = np.degrees(np.diff(r.equilibrium.angles))
+    tip = int(np.argmin(r.equilibrium.points[:, 1])) - 1
+    assert abs(np.angle(np.exp(1j * np.radians(bends[tip]))) - math.pi / 2) < 1e-6
+    assert r.distance.max < 1e-6

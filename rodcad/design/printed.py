@@ -172,12 +172,17 @@ def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.nd
         return {j: s - psi[j] - psi[j + 1] for j, (s, _) in stops.items()}
 
     turn = tangent_bends()
-    while r.stops is not None and (bent := [j for j, t in turn.items() if not r.stops[0] <= t <= r.stops[1]]):
+    tol = 1e-9  # as the planner's test of a printable stop (a bend of 90 deg to round-off)
+    while r.stops is not None and (bent := [j for j, t in turn.items()
+                                            if not r.stops[0] - tol <= t <= r.stops[1] + tol]):
         # faces the family cannot print: the rods beside such a stop are bent less, down to
         # straight (a stop between straight rods is half the bend on each end, in the range)
+        before = kappa.copy()
         for j in bent[:1] if same else bent:  # one shell: every rod bent less together
             at = slice(None) if same else [j, j + 1]
             kappa[at] = np.where(np.abs(kappa[at]) > 1e-4, kappa[at] * 0.8, 0.0)
+        if np.array_equal(kappa, before):  # straight already: the bend itself is out of range
+            break
         turn = tangent_bends()
     top = {j: turn[j] / 2 for j, (_, side) in stops.items() if side == HI}
     under = {j: -turn[j] / 2 for j, (_, side) in stops.items() if side == LO}
@@ -384,19 +389,6 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
         notes.append("the anchor fixture stops " + " and ".join(
             f"the {'first' if k == 0 else 'last'} rod at {d[k]:.2f} deg" for k in sorted(ends))
             + " (its angle from +x): the fixture carries a moment there")
-    if stops:
-        notes.append(f"{len(stops)} joint(s) rest on stops printed at the bend they hold: "
-                     + ", ".join(f"{j} ({stops[j][0]:.2f} deg{'' if stops[j][1] == HI else ', kept from straightening'})"
-                                 for j in sorted(stops)))
-    if needed_more:
-        notes.append("even with stops at every joint the family can print, the masses cannot hold this shape "
-                     "within their ranges; the masses fit it as well as they can")
-    if same_shell:
-        k = laid.problem.lengths[0], laid.rods[0].geometry.curvature
-        notes.append(f"one shell: every rod {k[0]:.4g} mm long with curvature {k[1]:.5g}/mm" + (
-            "; the stops make the ends of the rods beside them differ, so same_shell keeps the length and the "
-            "curvature only" if stops else ", the family's own ends; the masses differ only inside"))
-    notes += laid.notes
     fused: list[tuple[int, int]] = []
     problem = laid.problem
     if fuse and stops:
@@ -412,6 +404,20 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
         for a, b in too_big:
             notes.append(f"rods {a} to {b} rest on stops instead of being fused: as one piece they do not fit "
                          "the printer's build volume")
+    held = [j for j in sorted(stops) if not any(a <= j < b for a, b in fused)]
+    if held:
+        notes.append(f"{len(held)} joint(s) rest on stops printed at the bend they hold: "
+                     + ", ".join(f"{j} ({stops[j][0]:.2f} deg{'' if stops[j][1] == HI else ', kept from straightening'})"
+                                 for j in held))
+    if needed_more:
+        notes.append("even with stops at every joint the family can print, the masses cannot hold this shape "
+                     "within their ranges; the masses fit it as well as they can")
+    if same_shell:
+        k = laid.problem.lengths[0], laid.rods[0].geometry.curvature
+        notes.append(f"one shell: every rod {k[0]:.4g} mm long with curvature {k[1]:.5g}/mm" + (
+            "; the stops make the ends of the rods beside them differ, so same_shell keeps the length and the "
+            "curvature only" if stops else ", the family's own ends; the masses differ only inside"))
+    notes += laid.notes
     return PrintedPlan(disc, laid.rods, problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops),
                        sorted(ends), fused)
 

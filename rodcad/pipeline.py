@@ -54,6 +54,7 @@ from rodcad.catalog.model import RodType
 from rodcad.design.model import Design
 from rodcad.design.plan import CatalogArrays, ChainPlan, catalog_arrays
 from rodcad.design.printed import rods_of
+from rodcad.design.shell import curve_size
 from rodcad.errors import InputError
 from rodcad.fabrication.intervals import chain_intervals
 from rodcad.outdir import staged_output
@@ -389,6 +390,13 @@ def _design_notes(r: BuildResult) -> list[str]:
                      "chain may settle in another shape if hung carelessly; "
                      + (advice or "hang it from A, guide it into shape, then attach B"))
     cd = r.chain_design
+    if cd is not None and cd.result.info.get("reachable") and r.distance is not None and r.plan is not None \
+            and r.distance.max > 0.01 * curve_size(r.plan.curve):  # not a mass snapped onto a buildable one
+        hint = ("; print the runs of stopped joints as rigid pieces (constraints: {fuse: stops}), which hold it"
+                if r.plan is not None and r.plan.rods and r.design.constraints.fuse == "none" else "")
+        notes.append("the masses balance the target with every stop pushing the right way, but the chain does "
+                     "not settle there: that shape is not a stable equilibrium with these stops (or another one "
+                     f"is reached first), so it hangs {r.distance.max:.3g} mm off it{hint}")
     if cd is not None:
         res = cd.result
         lo = int(np.sum(res.at_bounds < 0))

@@ -182,6 +182,11 @@ def test_a_held_chain_is_built_with_its_fixture(tmp_path, capsys):
     assert (out / "fixture.step").is_file() and (out / "fixture.stl").is_file()
     assert "fixture" in [name for name, _ in assembly_leaves(out / "assembly.step")]
     assert "anchor fixture" in (out / "report.md").read_text()
+    # rodcad check re-simulates with the fixture's bound read back from design.json
+    capsys.readouterr()
+    assert main(["check", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["error_vs_design"]["max_rel_span"] < 1e-6
 
 
 def test_fused_pieces_replace_runs_of_stops(tmp_path, capsys):

@@ -173,22 +173,29 @@ class _Reader:
         return a
 
 
+def _deg_pair(rd: _Reader, lim: Any, key: str, what: str) -> tuple[float, float] | None:
+    """A design.json ``[lo, hi]`` in degrees (null: open on that side) as radians, or None
+    (reported) when it is not one."""
+    if not isinstance(lim, list) or len(lim) != 2:
+        rd.bad(key, f"expected [lo, hi] in degrees (null where {what})")
+        return None
+    out = [-math.inf, math.inf]
+    for k, v in enumerate(lim):
+        if v is None:
+            continue
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+            rd.bad(f"{key}[{k}]", f"expected a number of degrees or null, got {v!r}")
+            continue
+        out[k] = math.radians(float(v))
+    return out[0], out[1]
+
+
 def _limits(rd: _Reader, rods: list[Any], n: int) -> np.ndarray:
     out = np.tile([-np.inf, np.inf], (max(n - 1, 0), 1))
     for i in range(n - 1):
         lim = rods[i].get("limits_deg") if isinstance(rods[i], dict) else None
-        if lim is None:
-            continue
-        if not isinstance(lim, list) or len(lim) != 2:
-            rd.bad(f"rods[{i}].limits_deg", "expected [lo, hi] in degrees (null where free)")
-            continue
-        for k, v in enumerate(lim):
-            if v is None:
-                continue
-            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
-                rd.bad(f"rods[{i}].limits_deg[{k}]", f"expected a number of degrees or null, got {v!r}")
-                continue
-            out[i, k] = math.radians(float(v))
+        if lim is not None and (pair := _deg_pair(rd, lim, f"rods[{i}].limits_deg", "free")) is not None:
+            out[i] = pair
     return out
 
 
@@ -202,20 +209,10 @@ def _end_limits(rd: _Reader, data: dict[str, Any]) -> np.ndarray | None:
         rd.bad("anchor_limits_deg", "expected [[lo, hi] | null, [lo, hi] | null] in degrees")
         return None
     for k, lim in enumerate(value):
-        if lim is None:
-            continue
-        if not isinstance(lim, list) or len(lim) != 2:
-            rd.bad(f"anchor_limits_deg[{k}]", "expected [lo, hi] in degrees (null where open)")
-            continue
-        for j, v in enumerate(lim):
-            if v is None:
-                continue
-            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
-                rd.bad(f"anchor_limits_deg[{k}][{j}]", f"expected a number of degrees or null, got {v!r}")
-                continue
-            out[k, j] = math.radians(float(v))
-        if out[k, 0] > out[k, 1]:
-            rd.bad(f"anchor_limits_deg[{k}]", "lo is above hi")
+        if lim is not None and (pair := _deg_pair(rd, lim, f"anchor_limits_deg[{k}]", "open")) is not None:
+            out[k] = pair
+            if out[k, 0] > out[k, 1]:
+                rd.bad(f"anchor_limits_deg[{k}]", "lo is above hi")
     return None if np.all(np.isinf(out)) else out
 
 

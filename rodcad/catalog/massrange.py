@@ -53,7 +53,7 @@ from rodcad.fabrication.layout import (
     max_cavity_layout,
 )
 
-__all__ = ['MASSRANGE_VERSION', 'MassInfo', 'ball_layout', 'layouts', 'compute_mass_info', 'is_cached', 'mass_info', 'mass_infos']
+__all__ = ['MASSRANGE_VERSION', 'MassInfo', 'ball_layout', 'cavity_layout', 'layouts', 'compute_mass_info', 'is_cached', 'mass_info', 'mass_infos']
 
 
 #: Bump when results change (invalidates cached mass ranges).
@@ -127,12 +127,16 @@ def layouts(rod: RodType) -> tuple[SphereLayout, SphereLayout]:
     """The cavity layout at m_min ('capped' voids) and the ball socket layout
     at m_max ('silo' voids, raised by :func:`ball_offset`) of a rod type (its first ball
     kind; :func:`ball_layout` for another)."""
+    return cavity_layout(rod), ball_layout(rod)
+
+
+def cavity_layout(rod: RodType) -> SphereLayout:
+    """The cavity layout at m_min ('capped' voids): the most volume the walls allow."""
     from rodcad.catalog.fastgeom import RodClearance, rod_mass_properties
 
     _, center = rod_mass_properties(rod.geometry)
     clearance = RodClearance(rod.geometry)
-    cavities = max_cavity_layout(clearance, clearance.bounds, center, rod.material.min_wall, void="capped")
-    return cavities, ball_layout(rod)
+    return max_cavity_layout(clearance, clearance.bounds, center, rod.material.min_wall, void="capped")
 
 
 def ball_layout(rod: RodType, kind: int = 0) -> SphereLayout:
@@ -163,15 +167,14 @@ def compute_mass_info(rod: RodType) -> MassInfo:
     rho = rod.material.density / 1000.0  # g/mm^3
     solid_mass = volume * rho
     m_max, count, kind = solid_mass, 0, 0
-    cavities, _ = layouts(rod)
+    cavities = cavity_layout(rod)
     kind_max = []
     for k in range(len(rod.ball_kinds)):  # the heaviest over the ball kinds
         balls = ball_layout(rod, k)
         m_k = (volume - balls.volume) * rho + balls.count * rod.ball_kinds[k].mass if balls.count else solid_mass
         kind_max.append((int(balls.count), float(m_k)))
-        if balls.count:
-            if m_k > m_max:
-                m_max, count, kind = m_k, balls.count, k
+        if balls.count and m_k > m_max:
+            m_max, count, kind = m_k, balls.count, k
     m_min = (volume - cavities.volume) * rho
     return MassInfo(float(volume), float(solid_mass), (float(center[0]), float(center[1])), float(m_min),
                     float(m_max), float(cavities.radius), int(cavities.count), int(count), kind, tuple(kind_max))

@@ -26,7 +26,7 @@ import numpy as np
 
 from optimize.chain import EquilibriumResult
 
-__all__ = ["as_end_limits", "solve_with_end_limits"]
+__all__ = ["as_end_limits", "limit_turn", "solve_with_end_limits"]
 
 #: A fixture moment may have the wrong sign by this fraction of the chain's weight x length
 #: (round-off) and still count as holding.
@@ -59,14 +59,19 @@ def _cross(u, v) -> float:
     return float(u[0] * v[1] - u[1] * v[0])
 
 
-def _near(theta: float, lim: np.ndarray) -> float:
-    """``theta`` on the turn (mod 2 pi) nearest the limit's finite bounds: within half a turn
-    of their middle (a one-sided limit [lo, inf) allows the half turn above lo)."""
+def limit_turn(theta: float, lim: np.ndarray) -> float:
+    """The whole turns (rad, a multiple of 2 pi) between ``theta`` and the turn of an end
+    limit: ``theta - limit_turn`` lies within half a turn of the middle of the limit's finite
+    bounds (a one-sided limit [lo, inf) allows the half turn above lo); 0 without bounds."""
     finite = lim[np.isfinite(lim)]
     if not finite.size:
-        return float(theta)
-    c = float(finite.mean())
-    return float(theta - 2 * math.pi * round((theta - c) / (2 * math.pi)))
+        return 0.0
+    return 2 * math.pi * round((float(theta) - float(finite.mean())) / (2 * math.pi))
+
+
+def _near(theta: float, lim: np.ndarray) -> float:
+    """``theta`` on the turn (mod 2 pi) nearest the limit's finite bounds (:func:`limit_turn`)."""
+    return float(theta - limit_turn(theta, lim))
 
 
 def _inside(theta: float, lim: np.ndarray) -> bool:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linprog, lsq_linear
 
+from optimize.endlimits import limit_turn
 from optimize.problem import InverseProblem
 
 __all__ = [
@@ -51,9 +52,7 @@ def extended_bends(problem: InverseProblem) -> tuple[np.ndarray, np.ndarray]:
         for k, (rod, sgn) in enumerate(((0, 1.0), (-1, -1.0))):
             if np.all(np.isinf(e[k])):
                 continue
-            centre = np.mean(e[k]) if np.all(np.isfinite(e[k])) else e[k][np.isfinite(e[k])][0]
-            turn = 2 * np.pi * np.round((theta[rod] - centre) / (2 * np.pi))  # same branch as the limit
-            lo, hi = e[k] + turn
+            lo, hi = e[k] + limit_turn(theta[rod], e[k])  # the limit on the target angle's turn
             lim[0 if k == 0 else -1] = (lo, hi) if sgn > 0 else (-hi, -lo)
     return bends, lim
 

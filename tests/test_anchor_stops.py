@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from optimize import solve_equilibrium
+from optimize.endlimits import limit_turn
 from optimize.inverse import InverseProblem
 from optimize.statics import exact_masses, statics_matrix
 from optimize.stops import needed_stop_sides
@@ -125,7 +126,7 @@ def test_the_heart_agrees_with_mujoco(heart):
     theta = np.unwrap(r.equilibrium.angles)
     e = r.end_limits.copy()
     for k, t in ((0, theta[0]), (1, theta[-1])):
-        e[k] += 2 * np.pi * np.round((t - e[k][np.isfinite(e[k])].mean()) / (2 * np.pi))
+        e[k] += limit_turn(t, e[k])
     rng = np.random.default_rng(0)
     angles0 = theta + rng.normal(0.0, 0.01, r.n)
     mj = settle_chain(p.lengths, r.masses, a, b, com=p.com, limits=p.limits, angles0=angles0, g=r.design.g,

@@ -366,22 +366,22 @@ def _fit_centroid(fracs, roof: float, floors, cy: float):
         f = lambda v: _slabs_centroid(slabs_at(v, roof))[1] if slabs_at(v, roof) else roof
         if f(hi - 1e-9) < cy:
             return None
-        for _ in range(200):
-            mid = (lo + hi) / 2
-            lo, hi = (mid, hi) if f(mid) < cy else (lo, mid)
-            if hi - lo <= 1e-13:
-                break
-        return slabs_at(hi, roof)
+        return slabs_at(_bisect(f, lo, hi, cy)[1], roof)
     lo, hi = floors[0], roof  # too high: lower the roof
     g = lambda r: _slabs_centroid(slabs_at(-math.inf, r))[1] if slabs_at(-math.inf, r) else -math.inf
     if g(lo + 1e-9) > cy:
         return None
+    return slabs_at(-math.inf, _bisect(g, lo, hi, cy)[0])
+
+
+def _bisect(fn, lo: float, hi: float, y: float) -> tuple[float, float]:
+    """The bracket [lo, hi] of where the increasing ``fn`` crosses ``y``, bisected to 1e-13."""
     for _ in range(200):
         mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if g(mid) < cy else (lo, mid)
+        lo, hi = (mid, hi) if fn(mid) < y else (lo, mid)
         if hi - lo <= 1e-13:
             break
-    return slabs_at(-math.inf, lo)
+    return lo, hi
 
 
 def _model(rod: RodType) -> ChamberModel:

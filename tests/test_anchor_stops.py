@@ -280,3 +280,20 @@ def test_a_balanced_shape_the_chain_does_not_settle_in_is_explained(tmp_path):
     path.write_text(text % "stops", encoding="utf-8")
     fused = pipeline.build(load_design(path), cad=False)
     assert fused.distance.max < 1e-6 and not any("does not settle" in n for n in fused.notes)
+
+
+@pytest.mark.parametrize("extra, key, words", [
+    ("catalog: pla-weighted\nanchors: [[0, 0], [200, 0]]\ntarget: {form: semicircle}\nconstraints: {fuse: stops}\n",
+     "6:21: constraints.fuse", "printed to order"),
+    ("anchors: [[0, 0], [50, 0]]\ntarget: {form: closed-heart, width: 100, bulge: 0.3}\n",
+     "4:49: target.bulge", "between 0 and 0.25"),
+    ("anchors: [[0, 0], [50, 0]]\ntarget: {form: closed-heart, width: 100}\n",
+     "4:37: target.width", "less than 3 times the anchors' distance"),
+])
+def test_bad_fuse_and_closed_heart_input(tmp_path, capsys, extra, key, words):
+    path = tmp_path / "d.yaml"
+    path.write_text("design: 1\nname: b\n" + extra, encoding="utf-8")
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:{key}:" in err and words in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()

@@ -43,7 +43,7 @@ def test_cad_outputs_exist_and_design_json_has_as_built(built):
 def test_rod_files_are_valid_and_watertight(built):
     import trimesh
 
-    from rodcad.cad.export import import_step
+    from rodcad.cad.export import STL_DEFLECTION, import_step
     from rodcad.cad.solids import is_valid_solid, mass_properties
 
     out, data = built
@@ -53,7 +53,8 @@ def test_rod_files_are_valid_and_watertight(built):
         mesh = trimesh.load_mesh(step.with_suffix(".stl"))
         assert mesh.is_watertight
         vol = mass_properties(solid).volume
-        assert mesh.volume == pytest.approx(vol, rel=1e-3)
+        # within the mesh's accuracy: no point farther than its deflection from the surface
+        assert abs(mesh.volume - vol) <= STL_DEFLECTION * solid.area
         # print orientation: lying on the bed
         assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-3)
 

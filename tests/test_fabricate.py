@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-from rodcad.cad.export import import_step, read_assembly
+from rodcad.cad.export import STL_DEFLECTION, import_step, read_assembly
 from rodcad.cad.rods import (
     fabricate_chain,
     fabricate_rod,
@@ -199,7 +199,7 @@ def test_rod_files(chain, tmp_path: Path) -> None:
         assert bb.max.Z == pytest.approx(12.0, abs=1e-6)  # on its side: the section height is up
         mesh = trimesh.load(str(tmp_path / "rods" / f"{f.file_stem}.stl"), force="mesh")
         assert mesh.is_watertight
-        assert mesh.volume == pytest.approx(f.plastic_volume, rel=1e-3)
+        assert abs(mesh.volume - f.plastic_volume) <= STL_DEFLECTION * back.area  # the mesh's accuracy
         if f.ball_count:
             assert f.socket_radius < f.pause_z <= bb.max.Z - 1.2 + 1e-6  # the roof, a wall under the top
             z_centres = f.socket_centers[:, 1] + f.print_matrix[2, 3]

@@ -43,7 +43,8 @@ def test_cad_outputs_exist_and_design_json_has_as_built(built):
 def test_rod_files_are_valid_and_watertight(built):
     import trimesh
 
-    from rodcad.cad.export import STL_DEFLECTION, import_step
+    from rodcad.cad.export import import_step
+    from rodcad.cad.mesh import DEFLECTION as STL_DEFLECTION
     from rodcad.cad.solids import is_valid_solid, mass_properties
 
     out, data = built

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-from rodcad.cad.export import STL_DEFLECTION, import_step, read_assembly
+from rodcad.cad.mesh import DEFLECTION as STL_DEFLECTION
+from rodcad.cad.export import import_step, read_assembly
 from rodcad.cad.rods import (
     fabricate_chain,
     fabricate_rod,

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from rodcad.cad.collision import DistanceTo
-from rodcad.cad.export import STL_DEFLECTION, export_step, export_stl, import_step, placed, rod_matrix
+from rodcad.cad.mesh import DEFLECTION as STL_DEFLECTION
+from rodcad.cad.export import export_step, export_stl, import_step, placed, rod_matrix
 from rodcad.cad.fixture import (
     check_fixture,
     fixture_solid,

@@ -17,9 +17,10 @@ from build123d import import_step as _import_step
 from OCP.gp import gp_Trsf
 from OCP.TopLoc import TopLoc_Location
 
+from rodcad.cad.mesh import ANGULAR, DEFLECTION, mesh_solid, write_stl
 from rodcad.cad.solids import GeometryError
 
-__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'STL_DEFLECTION', 'STL_ANGULAR', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed', 'check_files']
+__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed', 'check_files']
 
 
 def export_step(solid: Solid, path: str | os.PathLike[str], name: str | None = None) -> Path:
@@ -94,21 +95,10 @@ def print_matrix(solid: Solid) -> np.ndarray:
     return m
 
 
-#: Linear deflection of every STL rodcad writes (mm, absolute: no point of the mesh is
-#: farther than this from the solid's surface), so a mesh's volume is within this times the
-#: solid's area of the solid's (about 1e-3 of a rod's volume; in practice 50 times less).
-STL_DEFLECTION = 0.002
-#: Angular deflection of the STLs (rad); loose, so that the linear deflection decides.
-STL_ANGULAR = 0.5
-
-
-def export_stl(solid: Solid, path: str | os.PathLike[str], *, tolerance: float = STL_DEFLECTION,
-               angular_tolerance: float = STL_ANGULAR) -> Path:
-    """Write a binary STL (mm), meshed to an absolute deflection.
-
-    build123d's exporter asks OCCT for a deflection relative to each face's size, which
-    leaves a 45 mm rod's curved faces 0.05-0.1 mm off; this one asks for ``tolerance`` mm
-    everywhere (the solid's earlier triangulation, if any, is dropped first).
+def export_stl(solid: Solid, path: str | os.PathLike[str], *, tolerance: float = DEFLECTION,
+               angular_tolerance: float = ANGULAR) -> Path:
+    """Write a binary STL (mm) of the solid, meshed to an absolute deflection, closed and
+    checked (:func:`rodcad.cad.mesh.mesh_solid`).
 
     Args:
         solid: what to write.
@@ -116,18 +106,8 @@ def export_stl(solid: Solid, path: str | os.PathLike[str], *, tolerance: float =
         tolerance: linear deflection of the mesh (mm, absolute).
         angular_tolerance: angular deflection (rad).
     """
-    from OCP.BRepMesh import BRepMesh_IncrementalMesh
-    from OCP.BRepTools import BRepTools
-    from OCP.StlAPI import StlAPI_Writer
-
-    path = Path(path)
-    BRepTools.Clean_s(solid.wrapped)
-    BRepMesh_IncrementalMesh(solid.wrapped, float(tolerance), False, float(angular_tolerance), True).Perform()
-    writer = StlAPI_Writer()
-    writer.ASCIIMode = False
-    if not writer.Write(solid.wrapped, str(path)):
-        raise OSError(f"could not write {path}")  # pragma: no cover - writer failure
-    return path
+    return write_stl(mesh_solid(solid, deflection=tolerance, angular=angular_tolerance), path,
+                     name=solid.label or "rodcad")
 
 
 @dataclass
@@ -262,14 +242,9 @@ def rod_matrices(points: np.ndarray) -> list[np.ndarray]:
     return [rod_matrix(p[i], math.atan2(d[i, 1], d[i, 0])) for i in range(len(d))]
 
 
-#: STL vertices closer than 10^-WELD_DIGITS mm are welded when a mesh comes out open.
-WELD_DIGITS = 4
-
-
-def check_files(step: Path, stl: Path, volume: float, deflection: float = STL_DEFLECTION) -> None:
+def check_files(step: Path, stl: Path, volume: float, deflection: float = DEFLECTION) -> None:
     """A written solid checked: the STEP re-imports as one valid solid of the same volume
-    and the STL is watertight (welded and rewritten where OCCT's mesh leaves
-    near-coincident vertices) with that volume to within its accuracy: ``deflection``
+    and the STL, read back by trimesh, is watertight with that volume to within its accuracy: ``deflection``
     (mm, the STL's absolute linear deflection) times the solid's area.
 
     Raises:
@@ -286,18 +261,6 @@ def check_files(step: Path, stl: Path, volume: float, deflection: float = STL_DE
     if abs(back.volume - volume) > 1e-6 * volume:
         raise FabricationError(f"{step} re-imports with volume {back.volume:.4f} instead of {volume:.4f} mm^3")
     mesh = trimesh.load(str(stl), force="mesh")
-    for digits in (None, WELD_DIGITS):
-        if mesh.is_watertight:
-            break
-        # OCCT's sphere poles give zero-area triangles, and faces meshed apart can leave their
-        # shared edge's vertices a few nanometres apart: weld (to 10^-WELD_DIGITS mm), drop
-        # the zero-area triangles and rewrite
-        mesh.merge_vertices(digits_vertex=digits)
-        mesh.update_faces(mesh.nondegenerate_faces())
-        mesh.remove_unreferenced_vertices()
-        if mesh.is_watertight:
-            mesh.export(str(stl), file_type="stl")
-            mesh = trimesh.load(str(stl), force="mesh")
     if not mesh.is_watertight:
         raise FabricationError(f"{stl} is not watertight")
     if abs(mesh.volume - volume) > min(MASS_TOL * volume, deflection * back.area):

@@ -2,8 +2,8 @@
 settings the masses assume and a pause at every ball-insert layer, and one plain 3MF per
 rod for other slicers.
 
-The meshes are tessellated by build123d's :class:`~build123d.Mesher` and written by
-lib3mf (the library behind it); the PrusaSlicer metadata files are then added to the
+The meshes are tessellated to an absolute deflection (:func:`rodcad.cad.mesh.mesh_solid`,
+the tessellation of the STLs too) and written by lib3mf (through build123d's Mesher); the PrusaSlicer metadata files are then added to the
 zip archive:
 
 - ``Metadata/Slic3r_PE.config``: the print settings, one ``; key = value`` line each
@@ -70,11 +70,6 @@ DEFAULT_NOZZLE = 0.4
 CONFIG_FILE = "Metadata/Slic3r_PE.config"
 PAUSES_FILE = "Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml"
 MODEL_CONFIG_FILE = "Metadata/Slic3r_PE_model.config"
-#: Tessellation of the rods (build123d Mesher): linear deflection relative to each edge's
-#: size and angular deflection (rad). The meshes enclose the B-rep's volume within about
-#: 0.1 % with a quarter of the triangles of Mesher's defaults (0.001, 0.1).
-LINEAR_DEFLECTION = 0.002
-ANGULAR_DEFLECTION = 0.25
 #: Largest relative difference allowed between a mesh's volume and its solid's.
 VOLUME_TOL = 5e-3
 #: Heights closer than this (mm) are one height.
@@ -213,32 +208,20 @@ def _bed(printer: Printer | None) -> tuple[tuple[float, float, float], float]:
 
 
 def _mesh(rod: FabricatedRod) -> _Mesh:
-    """The rod's solid on the bed (its print matrix), tessellated by build123d's Mesher,
-    checked closed and of the solid's volume, moved onto Z = 0 (where a slicer drops it)."""
-    from build123d import Mesher
-    from lib3mf import Lib3MF
-
+    """The rod's solid on the bed (its print matrix), tessellated to an absolute deflection
+    (:func:`rodcad.cad.mesh.mesh_solid`: closed, within the deflection times its area of the
+    solid's volume), moved onto Z = 0 (where a slicer drops it)."""
     from rodcad.cad.export import transformed
+    from rodcad.cad.mesh import mesh_solid
 
-    mesher = Mesher()
-    mesher.add_shape(transformed(rod.solid, rod.print_matrix), linear_deflection=LINEAR_DEFLECTION,
-                     angular_deflection=ANGULAR_DEFLECTION)
-    if len(mesher.meshes) != 1:
-        raise ValueError(f"rod {rod.file_stem}: tessellated into {len(mesher.meshes)} meshes, expected 1")
-    mo = mesher.meshes[0]
-    if not mo.IsManifoldAndOriented():
-        raise ValueError(f"rod {rod.file_stem}: its mesh is not closed and oriented")
-    verts, tris = mo.GetVertices(), mo.GetTriangleIndices()
-    v = np.frombuffer((Lib3MF.Position * len(verts))(*verts), dtype=np.float32).reshape(-1, 3).astype(float)
-    t = np.frombuffer((Lib3MF.Triangle * len(tris))(*tris), dtype=np.uint32).reshape(-1, 3).astype(np.int64)
-    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
-    volume = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6)
-    if abs(volume - rod.plastic_volume) > VOLUME_TOL * rod.plastic_volume:
-        raise ValueError(f"rod {rod.file_stem}: its mesh encloses {volume:.2f} mm^3, the solid "
+    mesh = mesh_solid(transformed(rod.solid, rod.print_matrix))
+    v = mesh.vertices.copy()
+    if abs(mesh.volume - rod.plastic_volume) > VOLUME_TOL * rod.plastic_volume:
+        raise ValueError(f"rod {rod.file_stem}: its mesh encloses {mesh.volume:.2f} mm^3, the solid "
                          f"{rod.plastic_volume:.2f} mm^3")
     lo = v.min(axis=0)
     v -= lo
-    return _Mesh(v, t, float(lo[2]))
+    return _Mesh(v, mesh.triangles.astype(np.int64), float(lo[2]))
 
 
 def _roofs(rod: FabricatedRod) -> list[float]:

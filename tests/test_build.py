@@ -98,7 +98,7 @@ def test_reachable_catenary_example_is_exact():
 
 
 def test_same_seed_same_design_json(tmp_path):
-    ex = ROOT / "examples" / "semicircle.yaml"
+    ex = ROOT / "examples" / "semicircle-menu.yaml"
     outs = []
     for k in range(2):
         out = tmp_path / f"o{k}"
@@ -112,7 +112,7 @@ def test_same_seed_same_design_json(tmp_path):
 
 
 def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch, capsys):
-    ex = ROOT / "examples" / "semicircle.yaml"
+    ex = ROOT / "examples" / "semicircle-menu.yaml"
     out = tmp_path / "out"
     assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0  # an earlier output
     (out / "mine.txt").write_text("keep me")
@@ -134,7 +134,7 @@ def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch, capsys):
 def test_missed_tolerance_exits_1_and_keeps_outdir(tmp_path, capsys):
     design = tmp_path / "d.yaml"
     # masses only (pla-pinned has no convex stops): the best fit misses 0.1 % of the span
-    design.write_text((ROOT / "examples" / "semicircle.yaml").read_text().replace("pla-weighted", "pla-pinned")
+    design.write_text((ROOT / "examples" / "semicircle-menu.yaml").read_text().replace("pla-weighted", "pla-pinned")
                       + "tolerance: 0.001\n")
     out = tmp_path / "out"
     assert main(["build", str(design), "-o", str(out), "--no-cad", "-q"]) == 1
@@ -146,7 +146,7 @@ def test_missed_tolerance_exits_1_and_keeps_outdir(tmp_path, capsys):
 
 
 def test_rod_count_constraint_and_fixed_rod(tmp_path):
-    base = (ROOT / "examples" / "semicircle.yaml").read_text().replace("pla-weighted", "pla-pinned")
+    base = (ROOT / "examples" / "semicircle-menu.yaml").read_text().replace("pla-weighted", "pla-pinned")
     d = load_design(tmp_path / "d.yaml", text=base + "constraints:\n  lengths: [30]\n"
                     "  fixed:\n    - {index: 2, type: free-30, mass: 3.0}\n")
     r = pipeline.build(d, cad=False)
@@ -229,9 +229,25 @@ chandelier:
     assert p.key == "chandelier" and p.line == 5 and "above" in p.message
 
 
-def test_semicircle_example_rests_on_curve_stops_and_says_so(tmp_path):
+def test_readme_first_example_is_the_default_catalogs_semicircle(tmp_path):
+    """README's first command: the paper's semicircle from the default catalog (rods printed to
+    order, each an arc of the circle), within 0.1 % of its span of the circle."""
+    ex = ROOT / "examples" / "semicircle.yaml"
+    assert "catalog:" not in ex.read_text()  # the default catalog
+    assert "rodcad build examples/semicircle.yaml" in (ROOT / "README.md").read_text()
     out = tmp_path / "semi"
-    assert main(["build", str(ROOT / "examples" / "semicircle.yaml"), "-o", str(out), "--no-cad", "-q"]) == 0
+    assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    assert data["catalog"] == "pla-parametric"
+    assert all(r["curvature"] == pytest.approx(1 / 100, rel=1e-3) for r in data["rods"])  # arcs of the circle
+    assert data["curve"]["rel_span"] < 1e-3
+    report = (out / "report.md").read_text()
+    assert "pla-parametric" in report and "hang freely" in report
+
+
+def test_semicircle_menu_example_rests_on_curve_stops_and_says_so(tmp_path):
+    out = tmp_path / "semi"
+    assert main(["build", str(ROOT / "examples" / "semicircle-menu.yaml"), "-o", str(out), "--no-cad", "-q"]) == 0
     data = json.loads((out / "design.json").read_text())
     disc = data["discretisation"]
     assert disc["added_stops"] and all(15.0 <= s["deg"] <= 25.0 for s in disc["added_stops"])

@@ -8,7 +8,7 @@ import numpy as np
 
 from optimize.discretize import centerline, curve_distance
 
-__all__ = ['draw_rods', 'finish_figure', 'plot_chain']
+__all__ = ['draw_rods', 'finish_figure', 'fit_title', 'plot_chain']
 
 
 def plot_chain(r, *paths: Path) -> None:
@@ -51,19 +51,19 @@ def plot_chain(r, *paths: Path) -> None:
     title = f"{d.name}: {r.n} rods"
     if r.method:
         title += f", {r.method}"
+    if not eq.stable:
+        title += "  [NOT STABLE]"
     if r.distance is not None:
-        title += f"\njoints {100 * r.distance.max_rel_span:.3g} % of span off the target"
         if r.plan is not None and d.target_curve is not None:
             from rodcad.design.shell import curve_size
 
             hang = curve_distance(d.target_curve, centerline(pts, curvature))
             size = curve_size(d.target_curve)
-            title += (f", rods within {100 * hang / d.span:.3g} %" if size < 1.5 * d.span else
-                      f", rods within {100 * hang / size:.3g} % of its {size:.4g} mm size")
+            title += (f"\nrods at most {100 * hang / d.span:.3g} % of the span off the target curve" if size < 1.5 * d.span
+                      else f"\nrods at most {100 * hang / size:.3g} % of its {size:.4g} mm size off the target curve")
+        title += f"\njoints {100 * r.distance.max_rel_span:.3g} % of the span off the target"
         if r.as_built is not None:
-            title += f" (as built {100 * r.as_built.distance.max_rel_span:.3g} %)"
-    if not eq.stable:
-        title += "  [NOT STABLE]"
+            title += f", as built {100 * r.as_built.distance.max_rel_span:.3g} %"
     finish_figure(fig, ax, lc, d.anchors, title, paths)
 
 
@@ -93,10 +93,32 @@ def finish_figure(fig, ax, lc, anchors: np.ndarray, title: str, paths) -> None:
     ax.autoscale_view()
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
-    ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
     ax.grid(True, lw=0.3, alpha=0.5)
-    fig.tight_layout()
+    fit_title(fig, ax, title)
     for path in paths:
         fig.savefig(path, dpi=130)
     plt.close(fig)
+
+
+def fit_title(fig, ax, title: str) -> None:
+    """Set the axes' title and lay the figure out so that the title lies inside the canvas:
+    lines too long for the room on either side of the axes' centre are wrapped at spaces
+    (the layout is redone and the figure drawn after each wrap, as the title's place is
+    settled only at drawing)."""
+    import textwrap
+
+    lines = title.splitlines()
+    text = ax.set_title(title)
+    for _ in range(6):
+        fig.tight_layout()
+        fig.draw_without_rendering()
+        box = text.get_window_extent(fig.canvas.get_renderer())
+        if box.x0 >= 0 and box.x1 <= fig.bbox.width:
+            return
+        centre = (box.x0 + box.x1) / 2
+        room = 2 * min(centre, fig.bbox.width - centre) - 8  # px, a margin of 4 on each side
+        longest = max(len(line) for line in lines)
+        width = max(20, int(longest * min(0.95, room / max(box.width, 1.0))))
+        lines = [w for line in lines for w in (textwrap.wrap(line, width) or [""])]
+        text.set_text("\n".join(lines))

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from rodcad.design.chandelier import ChainResult
+from rodcad.outputs.preview import fit_title
 
 __all__ = ['preview_3d']
 
@@ -77,8 +78,8 @@ def preview_3d(path: str | Path, chains: Sequence[ChainResult],
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")
-    ax.set_title(title)
     fig.colorbar(ScalarMappable(norm, cmap), ax=ax, label="rod mass (g)", shrink=0.6, pad=0.1)
+    fit_title(fig, ax, title)
     path = Path(path)
     fig.savefig(path, dpi=130)
     written = [path]

@@ -1,0 +1,93 @@
+"""Previews: no text is cut off by the canvas (titles, labels, legends) for any example.
+
+Every figure rodcad saves while building the shipped examples is inspected at save time
+(Figure.savefig is wrapped): everything each axes draws (title, axis labels, tick labels,
+legend) and every figure text must lie inside the canvas.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodcad.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem != "chain")
+
+
+def _outside(fig) -> list[str]:
+    """What of ``fig`` is drawn outside the canvas: each axes' tight box (its title, labels,
+    the tick labels it draws, its legend) and every figure-level text, with 1 px of slack
+    for anti-aliasing."""
+    renderer = fig.canvas.get_renderer()
+    w, h = fig.bbox.width, fig.bbox.height
+    boxes = [(f"axes {k} ({ax.get_title()!r})", ax.get_tightbbox(renderer)) for k, ax in enumerate(fig.axes)]
+    boxes += [(repr(t.get_text()), t.get_window_extent(renderer)) for t in fig.texts
+              if t.get_visible() and t.get_text().strip()]
+    return [f"{what} at x {b.x0:.0f}..{b.x1:.0f}, y {b.y0:.0f}..{b.y1:.0f} of {w:.0f} x {h:.0f}"
+            for what, b in boxes if b is not None and (b.x0 < -1 or b.y0 < -1 or b.x1 > w + 1 or b.y1 > h + 1)]
+
+
+@pytest.fixture
+def saved_figures(monkeypatch):
+    """Every figure saved while the test runs: (path, texts outside the canvas)."""
+    from matplotlib.figure import Figure
+
+    seen: list[tuple[str, list[str]]] = []
+    original = Figure.savefig
+
+    def savefig(self, fname, *args, **kwargs):
+        original(self, fname, *args, **kwargs)  # draws the figure: extents are final
+        seen.append((str(fname), _outside(self)))
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    return seen
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
+def test_no_preview_text_is_clipped(example, tmp_path, saved_figures):
+    assert main(["build", str(example), "-o", str(tmp_path / "out"), "--no-cad", "-q"]) == 0
+    assert saved_figures, "no figure was saved"
+    clipped = [(path, bad) for path, bad in saved_figures if bad]
+    assert not clipped, clipped
+
+
+def test_a_long_title_is_wrapped_inside_the_canvas(tmp_path, saved_figures):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rodcad.outputs.preview import draw_rods, finish_figure
+
+    fig, ax = plt.subplots(figsize=(8, 6))
+    pts = np.array([[0.0, 0.0], [30.0, -20.0], [60.0, 0.0]])
+    lc, _ = draw_rods(ax, pts, [0.0, 0.01], [10.0, 12.0])
+    title = "a chain: 2 rods, refine\n" + " ".join(["joints 1.23e-09 % of span off the target"] * 4)
+    finish_figure(fig, ax, lc, pts[[0, -1]], title, [tmp_path / "p.png"])
+    (path, bad), = saved_figures
+    assert not bad, bad
+    assert len(fig.axes[0].get_title().splitlines()) > 2  # it was wrapped
+
+
+CHAINS = [p for p in EXAMPLES if p.stem != "chandelier"]
+
+
+@pytest.mark.parametrize("example", CHAINS, ids=lambda p: p.stem)
+def test_the_longest_preview_title_fits(example, tmp_path, saved_figures):
+    """With CAD the title also gives the as-built figure (the longest title): the design's
+    own re-simulation stands in for the solids' here."""
+    from dataclasses import replace
+
+    from rodcad import pipeline
+    from rodcad.design.loader import load_design
+    from rodcad.outputs.preview import plot_chain
+
+    r = pipeline.build(load_design(example), cad=False)
+    r = replace(r, as_built=pipeline.AsBuilt(r.masses, np.zeros((r.n, 2)), r.equilibrium, r.distance))
+    plot_chain(r, tmp_path / "preview.png")
+    (path, bad), = saved_figures
+    assert not bad, bad

@@ -77,17 +77,24 @@ def needed_stops(problem: InverseProblem, candidates=None, *, rel_tol: float = 1
 REWEIGHT_ROUNDS = 4
 
 
-def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1e-7, ends=()):
+def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1e-7, ends=(), forced=(),
+                      end_weight: float = 1.0):
     """Like :func:`needed_stops`, for stops printed to order on either side: a candidate
     joint may rest on a stop that keeps it from bending further (hi, moment <= 0) or from
     straightening (lo, moment >= 0), each placed exactly at its target bend.
 
     Args:
-        problem: the target, rods and mass bounds; joints already on a limit keep it.
-        candidates: joints that may get a stop (either side).
+        problem: the target, rods and mass bounds; joints already on a limit keep it (a
+            rigid joint, lo == hi, takes a moment of either sign at no cost).
+        candidates: joints that may get a stop (either side); the fewest are chosen
+            (reweighted L1 of their moments).
         rel_tol: a moment counts as needed above this fraction of the largest.
         ends: anchors whose fixture may stop the end rod at its target angle: 0 (A, the
             first rod) and/or 1 (B, the last rod).
+        forced: joints that rest on a stop whatever the masses (a straight or concave
+            bend): their side is chosen here at (almost) no cost, and they are always in
+            the result (on the hi side where they carry no moment).
+        end_weight: the cost of an anchor stop relative to a joint's.
 
     Returns:
         (joints, sides): sorted joint indices and, per joint, -1 for a stop on the sagging
@@ -100,7 +107,8 @@ def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1
     n = problem.n
     phi = np.diff(problem.angles)
     on_limit = set(statics_matrix(problem)[1].tolist())
-    cand = np.array(sorted(set(int(j) for j in candidates) - on_limit), dtype=int)
+    forced_set = set(int(j) for j in forced) - on_limit
+    cand = np.array(sorted((set(int(j) for j in candidates) | forced_set) - on_limit), dtype=int)
     lim = problem.limits.copy()
     lim[cand] = phi[cand, None]  # held both ways: the moment may take either sign
     end_lim = (np.full((2, 2), [-np.inf, np.inf]) if problem.end_limits is None
@@ -129,7 +137,10 @@ def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1
     if k:
         lb[-k:] = 0.0
     bounds = list(zip(np.where(np.isfinite(lb), lb, None), np.where(np.isfinite(ub), ub, None)))
-    weights = np.ones(k)
+    which = stops[new]
+    base = np.where(np.isin(which, list(forced_set)), FORCED_WEIGHT,
+                    np.where((which < 0) | (which >= n - 1), end_weight, 1.0))
+    weights = base.copy()
     best = None
     for _ in range(REWEIGHT_ROUNDS):
         # L1 of the moments, reweighted by their last size: favours few stops (reweighted L1)
@@ -142,16 +153,25 @@ def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1
             break
         mu = lp.x[n + 2:n + 2 + stops.size][new] - (lp.x[-k:] if k else 0.0)
         if mu.size == 0 or np.abs(mu).max() <= 0:
-            return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
-        count = int(np.sum(np.abs(mu) > rel_tol * np.abs(mu).max()))
+            best = (0, mu)
+            break
+        optional = ~np.isin(which, list(forced_set))
+        count = int(np.sum(np.abs(mu[optional]) > rel_tol * np.abs(mu).max()))
         if best is None or count < best[0]:
             best = (count, mu)
-        weights = 1.0 / (np.abs(mu) + 1e-3 * np.abs(mu).max())
+        weights = base / (np.abs(mu) + 1e-3 * np.abs(mu).max())
     if best is None:
         return None
     mu = best[1]
-    keep = np.abs(mu) > rel_tol * np.abs(mu).max()
-    joints = stops[new][keep].astype(int)
-    sides = np.where(mu[keep] > 0, 1, -1).astype(int)
+    big = np.abs(mu).max() if mu.size else 0.0
+    keep = (np.abs(mu) > rel_tol * big) if big > 0 else np.zeros(mu.size, dtype=bool)
+    keep |= np.isin(which, list(forced_set))
+    joints = which[keep].astype(int)
+    sides = np.where(mu[keep] > rel_tol * big, 1, -1).astype(int)
     order = np.argsort(joints)
     return joints[order], sides[order]
+
+
+#: The cost of a forced stop's moment in :func:`needed_stop_sides` (a joint's is 1): small,
+#: so its side follows the statics rather than the count.
+FORCED_WEIGHT = 1e-3

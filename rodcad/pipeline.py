@@ -393,7 +393,7 @@ def _design_notes(r: BuildResult) -> list[str]:
     if cd is not None and cd.result.info.get("reachable") and r.distance is not None and r.plan is not None \
             and r.distance.max > 0.01 * curve_size(r.plan.curve):  # not a mass snapped onto a buildable one
         hint = ("; print the runs of stopped joints as rigid pieces (constraints: {fuse: stops}), which hold it"
-                if r.plan is not None and r.plan.rods and r.design.constraints.fuse == "none" else "")
+                if r.plan is not None and r.plan.rods and r.design.constraints.fuse_mode == "never" else "")
         notes.append("the masses balance the target with every stop pushing the right way, but the chain does "
                      "not settle there: that shape is not a stable equilibrium with these stops (or another one "
                      f"is reached first), so it hangs {r.distance.max:.3g} mm off it{hint}")
@@ -460,14 +460,17 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
     cad = design.cad if cad is None else cad
     spec = design.chandelier
     c = design.constraints
-    if c.anchor_stops != "none" or c.end_limits is not None:
-        key = "constraints.anchor_stops" if c.anchor_stops != "none" else "constraints.anchor_limits_deg"
+    if c.anchor_stops == "auto" or c.end_limits is not None:
+        key = "constraints.anchor_stops" if c.anchor_stops == "auto" else "constraints.anchor_limits_deg"
         raise InputError([design.problem(key, "a chandelier's chains hang from the frame's lugs, bare pins: anchor "
                                          "stops are for a single chain's printed fixture")])
     arrays = _arrays(design, jobs, progress)
     try:
+        # the frame's lugs are bare pins, and the chains are built rod by rod: neither anchor
+        # stops nor (unless asked for) fused pieces
+        chains_c = dataclasses.replace(c, anchor_stops="none", fuse=c.fuse if c.fuse is not None else "never")
         res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
-                                seed=seed, jobs=jobs or 1, arrays=arrays, constraints=design.constraints,
+                                seed=seed, jobs=jobs or 1, arrays=arrays, constraints=chains_c,
                                 problem=design.problem, n_starts=N_STARTS, g=design.g, progress=progress,
                                 intervals=_intervals_fn(design, jobs, progress) if cad else None)
     except ValueError as err:
@@ -490,7 +493,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
             out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
     if cad and any(ch.design.plan.fused for ch in res.chains):
         raise InputError([design.problem("constraints.fuse", "a chandelier's chains are built rod by rod: fused "
-                                         "pieces (fuse: stops) are built for a single chain only; use 'none'")])
+                                         "pieces are built for a single chain only; use 'never'")])
     if cad:
         with progress.step("frame solid and clearance checks"):
             out.frame = build_frame(frame_plan, design.catalog, res.chains)

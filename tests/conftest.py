@@ -17,8 +17,13 @@ fast joint-limit function (test_jointlimits.py).
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
 
 import pytest
+
+# the benchmarks' generators (random chains, drawn shapes) are shared with the tests
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 from rodcad.cli import main
 

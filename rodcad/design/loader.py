@@ -171,8 +171,8 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         seen[f.index] = i
     constraints = Constraints(types, lengths, int(c["rods"]) if "rods" in c else None,
                               c.get("preferred_length"), tuple(fixed), c.get("joints", "any"),
-                              bool(c.get("same_shell", False)), c.get("anchor_stops", "none"),
-                              _anchor_limits(c.get("anchor_limits_deg"), v), c.get("fuse", "none"))
+                              bool(c.get("same_shell", False)), c.get("anchor_stops"),
+                              _anchor_limits(c.get("anchor_limits_deg"), v), c.get("fuse"))
 
     # target
     form, params, curve = None, {}, None

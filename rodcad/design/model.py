@@ -61,13 +61,16 @@ DEFAULT_CATALOG = "pla-parametric"
 #: ``constraints.joints``: 'any' lets joints rest on stops, 'free' forbids stops.
 JOINT_MODES = ("any", "free")
 
-#: ``constraints.anchor_stops``: 'none' (bare pins, the default) or 'auto' (the anchor
-#: fixture may stop the first and last rods where the shape needs it).
-ANCHOR_STOP_MODES = ("none", "auto")
+#: ``constraints.anchor_stops``: 'auto' (the anchor fixture may stop the first and last rods
+#: where the shape needs it: what the planner does when the design says nothing) or 'none'
+#: (bare pins).
+ANCHOR_STOP_MODES = ("auto", "none")
 
-#: ``constraints.fuse``: 'none' (the default) or 'stops' (every run of joints resting on
-#: stops is printed as one rigid piece instead, where it fits the printer).
-FUSE_MODES = ("none", "stops")
+#: ``constraints.fuse``: 'auto' (rods are printed as one piece where a bend is sharper than
+#: any stop the family prints: what the planner does when the design says nothing), 'never'
+#: (or 'none': no fused pieces) or 'stops' (also every run of joints resting on stops is
+#: printed as one rigid piece, where it fits the printer).
+FUSE_MODES = ("auto", "never", "none", "stops")
 
 
 #: Inverse-design methods (mirrors optimize.inverse.METHODS).
@@ -104,10 +107,12 @@ class Constraints:
         same_shell: a family printed to order makes every rod of the chain with one outer
             shell (one length, one curvature, the family's own ends); masses then differ
             only inside (the paper's Fig. 7).
-        anchor_stops: 'none' or 'auto' (:data:`ANCHOR_STOP_MODES`).
+        anchor_stops: 'auto', 'none' (:data:`ANCHOR_STOP_MODES`) or None: not given (the
+            planner decides: 'auto' for rods printed to order, bare pins for a fixed menu).
         anchor_limits_deg: bounds [lo, hi] on the absolute angles of the first and of the
             last rod (deg from +x) that the anchor fixture imposes, or None per end.
-        fuse: 'none' or 'stops' (:data:`FUSE_MODES`).
+        fuse: 'auto', 'never' ('none'), 'stops' (:data:`FUSE_MODES`) or None: not given
+            (the planner decides: 'auto' for rods printed to order).
     """
 
     types: tuple[str, ...] | None = None
@@ -117,9 +122,19 @@ class Constraints:
     fixed: tuple[FixedRod, ...] = ()
     joints: str = "any"
     same_shell: bool = False
-    anchor_stops: str = "none"
+    anchor_stops: str | None = None
     anchor_limits_deg: tuple[tuple[float, float] | None, tuple[float, float] | None] = (None, None)
-    fuse: str = "none"
+    fuse: str | None = None
+
+    @property
+    def anchor_stops_allowed(self) -> bool:
+        """The planner may stop the end rods at the fixture (unless the design says 'none')."""
+        return self.anchor_stops != "none"
+
+    @property
+    def fuse_mode(self) -> str:
+        """'auto' (also when not given), 'never' or 'stops'."""
+        return {None: "auto", "none": "never"}.get(self.fuse, self.fuse)
 
     @property
     def end_limits(self) -> np.ndarray | None:

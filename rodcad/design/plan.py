@@ -388,7 +388,7 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
         raise InputError([problem("constraints.same_shell", f"{who}one shell for every rod needs a family printed "
                                   "to order (the default catalog pla-parametric); this catalog's rod types are a "
                                   "fixed menu")])
-    if c.fuse != "none":
+    if c.fuse in ("auto", "stops"):
         raise InputError([problem("constraints.fuse", f"{who}fused pieces are printed to order: they need a family "
                                   "printed to order (the default catalog pla-parametric)")])
     if c.anchor_stops == "auto":
@@ -453,7 +453,8 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     if problems:
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
-    ends = {"anchor_stops": c.anchor_stops == "auto", "end_limits": c.end_limits, "fuse": c.fuse == "stops"}
+    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None, "end_limits": c.end_limits,
+            "fuse": c.fuse_mode}
     try:
         if c.rods is not None:
             lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)

@@ -25,77 +25,18 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
 
 import numpy as np
 
 from optimize import InverseProblem
 from optimize.discretize import discretize, fit_curvatures
-from optimize.statics import exact_masses
-from optimize.stops import needed_stop_sides
-from rodcad.catalog.jointlimits import joint_limits
-from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curvature
-from rodcad.catalog.printed import MassTable, rod_numbers
+from rodcad.catalog.model import Catalog, RodType, max_curvature
+from rodcad.design.decide import Allowed, decide
+from rodcad.design.laying import HI, LO, LOCK, PrintedFamily, STOP_SNAP_DEG
 from rodcad.design.shell import TRIES, ShellError, most_faithful, one_shell
 
 __all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "fused_pieces", "plan_printed",
            "rods_of"]
-
-#: A stop printed to order must stop, by the rods' outlines, within this of the bend it is
-#: made for (deg); it is designed exactly at the bend.
-STOP_SNAP_DEG = 0.05
-
-#: Rounds of adding the stops the masses need (each round re-derives the rods' centres of
-#: mass and ranges with their new ends).
-STOP_ROUNDS = 3
-
-
-@dataclass(frozen=True)
-class PrintedFamily:
-    """A family printed to order with its mass table (from the solids, cached)."""
-
-    family: Family
-    table: MassTable
-
-
-@lru_cache(maxsize=4096)
-def _limits(left: RodGeometry, right: RodGeometry) -> tuple[float, float]:
-    """Joint limits (deg) of two rods, +-inf where nothing stops."""
-    lo, hi = joint_limits(left, right)
-    return (-math.inf if lo is None else lo, math.inf if hi is None else hi)
-
-
-#: Rods whose parameters (length mm, curvature 1/mm, setbacks mm, chamfers deg) agree to
-#: these are made identical (a symmetric target's mirror images differ by round-off and by
-#: the curve's sampling): one solid to build, one name.
-SAME_ROD = (1e-9, 1e-7, 1e-9, 1e-6, 1e-6, 1e-9, 1e-6, 1e-6)
-
-
-def _params(t: RodType) -> tuple[float, ...]:
-    g = t.geometry
-    return (g.length, g.curvature, g.first.setback, g.first.top_chamfer, g.first.bottom_chamfer,
-            g.second.setback, g.second.top_chamfer, g.second.bottom_chamfer)
-
-
-def _unique(rods: list[RodType], catalog: Catalog) -> list[RodType]:
-    """Rods equal to round-off made one; distinct rods whose rounded names agree renamed."""
-    out: list[RodType] = []
-    by_name: dict[str, RodType] = {t.name: t for t in catalog.types}
-    for t in rods:
-        p = _params(t)
-        same = next((u for u in out if all(abs(a - b) <= tol for a, b, tol in zip(p, _params(u), SAME_ROD))), None)
-        if same is not None:
-            out.append(same)
-            continue
-        name, k = t.name, 2
-        while name in by_name and by_name[name] != t:
-            name, k = f"{t.name}.{k}", k + 1
-        if name != t.name:
-            t = replace(t, name=name)
-        by_name[name] = t
-        out.append(t)
-    return out
-
 
 @dataclass
 class PrintedPlan:
@@ -122,104 +63,6 @@ class PrintedPlan:
     stops: list[int]
     anchor_stops: list[int] = field(default_factory=list)
     fused: list[tuple[int, int]] = field(default_factory=list)
-
-
-@dataclass
-class _Laid:
-    rods: list[RodType]
-    problem: InverseProblem
-    notes: list[str]
-    unmet: list[int]
-
-
-#: Stop sides: a hi stop keeps the joint from bending further (top faces meet), a lo stop
-#: from straightening further (bottom faces meet).
-HI, LO = -1, 1
-
-
-def end_limits_for(points: np.ndarray, ends: dict[int, int], given: np.ndarray | None = None) -> np.ndarray | None:
-    """Bounds on the end rods' angles (rad) for anchor stops at their target angles: ``ends``
-    maps 0 (A) / 1 (B) to the side of :func:`optimize.stops.needed_stop_sides` (HI or LO,
-    in the anchor's bend, :func:`optimize.statics.extended_bends`); ``given`` (2, 2): the
-    design's own bounds, kept where no stop is added."""
-    out = np.full((2, 2), [-np.inf, np.inf]) if given is None else np.array(given, float)
-    d = np.diff(points, axis=0)
-    theta = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
-    for k, side in ends.items():
-        t = float(theta[0] if k == 0 else theta[-1])
-        t = math.atan2(math.sin(t), math.cos(t))  # the angle from +x in (-180, 180] deg
-        # A: bend = theta_0 (HI keeps it from growing); B: bend = -theta_{N-1}
-        upper = (side == HI) == (k == 0)  # the stop bounds the angle from above
-        out[k] = (-np.inf, t) if upper else (t, np.inf)
-    return None if np.all(np.isinf(out)) else out
-
-
-def _lay(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
-         phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True, same: bool = False,
-         end_limits: np.ndarray | None = None) -> _Laid:
-    """The rods for given stops (joint -> (bend deg, side)) and their inverse problem; with
-    ``limits`` False, only the stops' designed sides are limits (enough for the statics at
-    the target, which only sees joints resting on a limit); ``end_limits``: the anchor
-    fixtures' bounds on the end rods' angles (rad)."""
-    fam = pf.family
-    r = fam.ranges
-    assert fam.template is not None and r is not None
-    n = lengths.size
-    kappa = kappa.copy()
-
-    def tangent_bends() -> dict[int, float]:
-        psi = np.degrees(np.arcsin(np.clip(kappa * lengths / 2, -1, 1)))
-        return {j: s - psi[j] - psi[j + 1] for j, (s, _) in stops.items()}
-
-    turn = tangent_bends()
-    tol = 1e-9  # as the planner's test of a printable stop (a bend of 90 deg to round-off)
-    while r.stops is not None and (bent := [j for j, t in turn.items()
-                                            if not r.stops[0] - tol <= t <= r.stops[1] + tol]):
-        # faces the family cannot print: the rods beside such a stop are bent less, down to
-        # straight (a stop between straight rods is half the bend on each end, in the range)
-        before = kappa.copy()
-        for j in bent[:1] if same else bent:  # one shell: every rod bent less together
-            at = slice(None) if same else [j, j + 1]
-            kappa[at] = np.where(np.abs(kappa[at]) > 1e-4, kappa[at] * 0.8, 0.0)
-        if np.array_equal(kappa, before):  # straight already: the bend itself is out of range
-            break
-        turn = tangent_bends()
-    top = {j: turn[j] / 2 for j, (_, side) in stops.items() if side == HI}
-    under = {j: -turn[j] / 2 for j, (_, side) in stops.items() if side == LO}
-    rods = _unique([catalog.rod(fam.name, float(lengths[i]), float(kappa[i]), first_stop=top.get(i - 1),
-                                second_stop=top.get(i), first_under=under.get(i - 1), second_under=under.get(i))
-                    for i in range(n)], catalog)
-    lengths = np.array([t.length for t in rods])  # a rod made one with its twin: the twin's length
-    nums = [rod_numbers(t, pf.table, fam.template) for t in rods]
-    rows = np.zeros((max(n - 1, 0), 2))
-    notes, unmet = [], []
-    for j in range(n - 1):
-        bend = math.degrees(phi[j])
-        if not limits:  # only the stops: the statics at the target sees nothing else
-            lo, hi = -math.inf, math.inf
-            if j in stops:
-                lo, hi = (lo, stops[j][0]) if stops[j][1] == HI else (stops[j][0], hi)
-            rows[j] = np.radians([lo, hi])
-            continue
-        lo, hi = _limits(rods[j].geometry, rods[j + 1].geometry)
-        if j in stops:
-            s, side = stops[j]
-            got = hi if side == HI else lo
-            if abs(got - s) > STOP_SNAP_DEG:
-                notes.append(f"joint {j}: the stop printed for {s:.2f} deg stops at {got:.2f} deg by the rods' "
-                             "outlines")
-                unmet.append(j)
-            # designed flush: the faces meet exactly at the bend
-            lo, hi = (lo, s) if side == HI else (s, hi)
-        elif not lo < bend < hi:
-            notes.append(f"joint {j} bends {bend:.1f} deg, beyond what the family's free ends allow "
-                         f"([{lo:.1f}, {hi:.1f}] deg)")
-            unmet.append(j)
-        rows[j] = np.radians([lo, hi])
-    problem = InverseProblem(target=points, lengths=lengths,
-                             mass_bounds=np.array([x.mass_range for x in nums], float),
-                             com=np.array([x.com for x in nums], float), limits=rows, end_limits=end_limits)
-    return _Laid(rods, problem, notes, unmet)
 
 
 #: A bend below this (rad) is straight: only a stop holds it.
@@ -301,23 +144,26 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
 
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
-                 stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = False,
-                 end_limits: np.ndarray | None = None, fuse: bool = False):
-    """Lay rods printed to order on a target (see the module's docstring).
+                 stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
+                 end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0):
+    """Lay rods printed to order on a target (see the module's docstring); how each joint
+    holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 
     Args:
         curve: (M, 2) target polyline from A to B (mm).
         catalog: the catalog (rods are made with :meth:`Catalog.rod`).
         pf: the family and its mass table.
-        preferred_length: the rod length to aim at (default: eight rods on the curve,
-            within the family's range).
+        preferred_length: the rod length to aim at (default: the longest rods that follow
+            the curve).
         stops_allowed: False forbids stops (``constraints: {joints: free}``).
         same_shell: one outer shell for every rod (``constraints: {same_shell: true}``).
         anchor_stops: the anchor fixtures may stop the first and last rods at their target
-            angles where the masses need it (``constraints: {anchor_stops: auto}``).
+            angles where the shape needs it (False: ``constraints: {anchor_stops: none}``).
         end_limits: (2, 2) bounds on the end rods' angles the design gives (rad), or None.
-        fuse: every run of joints resting on stops is printed as one rigid piece instead
-            (``constraints: {fuse: stops}``), where the piece fits the catalog's printer.
+        fuse: 'auto' (rods printed as one piece where a bend is sharper than any stop),
+            'never', or 'stops' (also every run of joints resting on stops, where the piece
+            fits the catalog's printer).
+        n_starts, seed: the multi-start of the planner's checks.
 
     Returns:
         The :class:`PrintedPlan`.
@@ -332,67 +178,32 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     curve = np.asarray(curve, float)
     disc, kappa = one_shell(curve, r, preferred_length) if same_shell else _laid_on(curve, r, preferred_length)
     points, lengths = disc.points, disc.lengths
-    n = lengths.size
     d = np.diff(points, axis=0)
     phi = np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0])))
     deg = np.degrees(phi)
-
-    def printable(j: int) -> bool:
-        return r.stops is not None and r.stops[0] - 1e-9 <= deg[j] <= r.stops[1] + 1e-9
-
-    stops: dict[int, tuple[float, int]] = {}
-    notes: list[str] = []
-    beyond = []
-    mirrored = _is_mirror_symmetric(points)
-    for j in np.flatnonzero(phi <= STRAIGHT_TOL):  # straight (to round-off) or concave
-        if stops_allowed and printable(int(j)):
-            stops[int(j)] = (float(deg[j]), HI)
-        else:
-            beyond.append(int(j))
-    ends: dict[int, int] = {}  # anchor (0: A, 1: B) -> side of its stop
-
-    def lay(own_limits: bool = False) -> _Laid:
-        return _lay(catalog, pf, points, lengths, kappa, phi, stops, limits=own_limits, same=same_shell,
-                    end_limits=end_limits_for(points, ends, end_limits))
-
-    laid = lay()
-    needed_more = False
-    if (stops_allowed and r.stops is not None) or anchor_stops:
-        for _ in range(STOP_ROUNDS):
-            if exact_masses(laid.problem)[2]:
-                break
-            cand = [j for j in range(n - 1) if j not in stops and printable(j)] if stops_allowed else []
-            need = needed_stop_sides(laid.problem, cand, ends=[k for k in (0, 1) if k not in ends] if anchor_stops
-                                     else ())
-            if need is None or need[0].size == 0:
-                needed_more = need is None
-                break
-            for j, side in zip(*need):
-                if j < 0 or j >= n - 1:  # an anchor stop: -1 is A, n-1 is B
-                    ends[0 if j < 0 else 1] = int(side)
-                    if mirrored:
-                        ends.setdefault(1 if j < 0 else 0, int(side))
-                    continue
-                stops[int(j)] = (float(deg[j]), int(side))
-                if mirrored and printable(n - 2 - int(j)):  # a symmetric target keeps its symmetry
-                    stops.setdefault(n - 2 - int(j), (float(deg[n - 2 - int(j)]), int(side)))
-            laid = lay()
-    laid = lay(own_limits=True)  # the rods' own limits, checked
+    allowed = Allowed(stops=stops_allowed and r.stops is not None, anchor_stops=anchor_stops,
+                      fuse=fuse, verify=not same_shell)
+    dec = decide(catalog, pf, points, lengths, kappa, phi, allowed=allowed, end_limits=end_limits,
+                 mirrored=_is_mirror_symmetric(points), same=same_shell, n_starts=n_starts, seed=seed)
+    laid, stops, ends = dec.laid, dec.stops, dec.ends
+    notes: list[str] = list(dec.notes)
+    beyond = dec.beyond
     if beyond:
         why = ("stops are forbidden (constraints.joints: free)" if not stops_allowed else
                "the family prints no stops" if r.stops is None else
-               f"the family prints stops from {r.stops[0]:g} to {r.stops[1]:g} deg")
+               f"the family prints stops from {r.stops[0]:g} to {r.stops[1]:g} deg and fused pieces are not allowed")
         notes.append(f"joint(s) {beyond} bend {', '.join(f'{deg[j]:.1f}' for j in beyond)} deg, which only a stop "
-                     f"can hold, but {why}; the masses fit the target as well as they can")
+                     f"or a fused piece can hold, but {why}; the masses fit the target as well as they can")
     if ends:
         d = np.degrees(np.arctan2(*np.diff(points, axis=0)[[0, -1]].T[::-1]))
         notes.append("the anchor fixture stops " + " and ".join(
             f"the {'first' if k == 0 else 'last'} rod at {d[k]:.2f} deg" for k in sorted(ends))
             + " (its angle from +x): the fixture carries a moment there")
-    fused: list[tuple[int, int]] = []
     problem = laid.problem
-    if fuse and stops:
-        fused, too_big = fused_pieces(sorted(stops), points, np.array([t.curvature for t in laid.rods]),
+    fuse_joints = sorted(dec.fused | (set(stops) if fuse == "stops" else set()))
+    fused: list[tuple[int, int]] = []
+    if fuse_joints:
+        fused, too_big = fused_pieces(fuse_joints, points, np.array([t.curvature for t in laid.rods]),
                                       fam.template.geometry.height, catalog.printer)
         lim = problem.limits.copy()
         for first, last in fused:
@@ -402,14 +213,24 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             notes.append("printed as one rigid piece each (their joints fused at the bend): rods "
                          + ", ".join(f"{a} to {b}" for a, b in fused))
         for a, b in too_big:
-            notes.append(f"rods {a} to {b} rest on stops instead of being fused: as one piece they do not fit "
-                         "the printer's build volume")
-    held = [j for j in sorted(stops) if not any(a <= j < b for a, b in fused)]
+            if any(j in dec.fused for j in range(a, b)):
+                notes.append(f"rods {a} to {b} should be one piece (a bend sharper than any stop) but do not fit the "
+                             "printer's build volume as one")
+            else:
+                notes.append(f"rods {a} to {b} rest on stops instead of being fused: as one piece they do not fit "
+                             "the printer's build volume")
+    in_piece = {j for a, b in fused for j in range(a, b)}
+    held = [j for j in sorted(stops) if j not in in_piece]
+    locked = [j for j in held if stops[j][1] == LOCK]
     if held:
         notes.append(f"{len(held)} joint(s) rest on stops printed at the bend they hold: "
-                     + ", ".join(f"{j} ({stops[j][0]:.2f} deg{'' if stops[j][1] == HI else ', kept from straightening'})"
+                     + ", ".join(f"{j} ({stops[j][0]:.2f} deg"
+                                 + {HI: "", LO: ", kept from straightening", LOCK: ", held both ways"}[stops[j][1]] + ")"
                                  for j in held))
-    if needed_more:
+    if locked and dec.held:
+        notes.append(f"joint(s) {', '.join(map(str, sorted(set(locked) & set(dec.held))))} are held both ways "
+                     "(two-sided stops) so that the chain has no other shape to settle in")
+    if not dec.feasible and stops_allowed:
         notes.append("even with stops at every joint the family can print, the masses cannot hold this shape "
                      "within their ranges; the masses fit it as well as they can")
     if same_shell:

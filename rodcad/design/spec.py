@@ -188,15 +188,17 @@ def design_spec() -> Obj:
                                             description="Rods printed to order: every rod of the chain gets "
                                             "one outer shell (one length, one curvature, the family's own "
                                             "ends); the masses differ only inside (the paper's Fig. 7)."),
-                        "anchor_stops": Field(Str(choices=ANCHOR_STOP_MODES), default="none",
-                                              description="'auto': the piece the chain hangs from (a printed "
-                                              "fixture) may stop the first and last rods at their target "
-                                              "angles where the masses need it (a shape that rises above its "
-                                              "anchors); 'none' (default): bare pins."),
-                        "fuse": Field(Str(choices=FUSE_MODES), default="none",
-                                      description="'stops': every run of joints the planner rests on stops "
-                                      "is printed as one rigid piece instead (rods printed to order; a piece "
-                                      "that does not fit the printer stays on stops); 'none' (default)."),
+                        "anchor_stops": Field(Str(choices=ANCHOR_STOP_MODES),
+                                              description="'auto' (what the planner does unless told): the "
+                                              "piece the chain hangs from (a printed fixture) may stop the "
+                                              "first and last rods at their target angles where the shape needs "
+                                              "it (a shape that rises above its anchors); 'none': bare pins."),
+                        "fuse": Field(Str(choices=FUSE_MODES),
+                                      description="'auto' (what the planner does unless told): rods are "
+                                      "printed as one piece where a bend is sharper than any stop the "
+                                      "family prints; 'never' (or 'none'): no fused pieces; 'stops': also "
+                                      "every run of joints resting on stops is printed as one rigid piece "
+                                      "(where it fits the printer)."),
                         "anchor_limits_deg": Field(ListOf(Nullable(ListOf(Num(unit="deg"), min_items=2)),
                                                           min_items=2),
                                                    description="Bounds [lo, hi] on the angle (deg from +x) of "

@@ -1,0 +1,255 @@
+"""The planner decides how each joint of a chain printed to order holds its bend, and checks
+the result against the physics.
+
+For rods laid on a target (:mod:`rodcad.design.printed`), every joint and anchor gets one
+of:
+
+- **free**: it hangs; the masses hold its bend (a sagging bend, within what the rods' own
+  ends allow);
+- **a stop** printed at its bend, on either side (:data:`HI`: it cannot bend further,
+  :data:`LO`: it cannot straighten), where the masses need a moment there, or the bend is
+  straight or concave;
+- **a two-sided stop** (:data:`LOCK`: both faces flush, the joint held at its bend both
+  ways), where a one-sided stop leaves the chain another shape to fall into;
+- **fused**: the two rods printed as one piece (their ends mitred and united), where the
+  bend is sharper than any stop the family prints;
+- **an anchor stop**: the fixture holds the end rod at its angle (a moment at the anchor).
+
+The loop: (1) the forced choices (straight, concave and too-sharp bends); (2) the fewest
+further stops and anchor stops that let the masses balance the target within their ranges
+(a linear program, :func:`optimize.stops.needed_stop_sides`); (3) the masses
+(:func:`optimize.statics.exact_masses`); (4) the verdict of the solver
+(:func:`optimize.verify.verify`): the equilibrium reached from the designed state must be
+the target and stable, and no other stable shape the multi-start finds may lie lower; (5)
+where it fails, the joints where the chain goes instead are held both ways (two-sided
+stops, or fused where no stop can be printed) and the loop starts again. Each round holds
+at least one more joint, so the loop ends; a chain held at every joint is one rigid body
+pinned at both anchors, the last resort. Constraints restrict the choice (``joints: free``
+forbids stops, ``anchor_stops: none`` the fixture's, ``fuse: never`` fused pieces).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optimize.statics import exact_masses
+from optimize.stops import needed_stop_sides
+from optimize.verify import Verdict, verify
+from rodcad.catalog.model import Catalog
+from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
+
+__all__ = ["Allowed", "Decision", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
+
+#: Rounds of holding more joints both ways before the planner settles for what it has.
+MAX_ROUNDS = 10
+
+#: A bend below this (rad) is straight: only a stop holds it.
+STRAIGHT_TOL = 1e-9
+
+#: The chain must hang within this fraction of its size of the target for the planner to
+#: count a design as on target (the solver's exactness, far below any printing tolerance).
+ON_TARGET = 1e-6
+
+#: An anchor stop costs this much relative to a joint's stop in the linear program: the
+#: fixture is printed anyway, and a stop there keeps joints of the chain free.
+END_WEIGHT = 0.5
+
+
+@dataclass(frozen=True)
+class Allowed:
+    """What the design lets the planner use.
+
+    Attributes:
+        stops: joints may rest on stops (False: ``constraints: {joints: free}``).
+        anchor_stops: the fixture may stop the end rods (False: ``anchor_stops: none``).
+        fuse: 'auto' (where a bend is sharper than any stop), 'never', or 'stops' (every run
+            of stopped joints is printed as one piece too).
+        verify: check the result against the solver and hold more joints where it fails
+            (off for one shell of rods, whose stops are fixed by the shell).
+    """
+
+    stops: bool = True
+    anchor_stops: bool = True
+    fuse: str = "auto"
+    verify: bool = True
+
+
+@dataclass
+class Decision:
+    """How every joint holds its bend, the rods made for that, and the solver's verdict.
+
+    Attributes:
+        laid: the rods and their inverse problem (the rods' own limits).
+        stops: joint -> (bend deg, side :data:`HI` / :data:`LO` / :data:`LOCK`), fused joints
+            included (as :data:`LOCK`).
+        ends: anchor (0: A, 1: B) -> side of its stop.
+        fused: joints whose rods are printed as one piece.
+        beyond: joints whose bend nothing allowed can hold.
+        verdict: the solver's verdict (None when not checked).
+        rounds: rounds of the loop.
+        held: joints the loop held both ways to rule out other shapes.
+        notes: what the planner did and why, in words.
+        feasible: some choice of stops balances the target within the mass ranges.
+        history: per round, the joints held both ways so far and the solver's verdict.
+    """
+
+    laid: Laid
+    stops: dict[int, tuple[float, int]]
+    ends: dict[int, int]
+    fused: set[int]
+    beyond: list[int]
+    verdict: Verdict | None = None
+    rounds: int = 0
+    held: list[int] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    feasible: bool = True
+    history: list[tuple[list[int], Verdict | None]] = field(default_factory=list)
+
+    @property
+    def accepted(self) -> bool:
+        """The solver confirms it: on target, stable, nothing lower."""
+        v = self.verdict
+        return v is not None and v.on_target and not v.lower
+
+
+def _mirror(j: int, n: int) -> int:
+    return n - 2 - j
+
+
+def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
+           phi: np.ndarray, *, allowed: Allowed, end_limits: np.ndarray | None = None, mirrored: bool = False,
+           same: bool = False, n_starts: int = 12, seed: int = 0, budget_s: float = 20.0) -> Decision:
+    """Decide every joint's and anchor's way of holding its bend (see the module's docstring).
+
+    Args:
+        catalog, pf: the catalog and the family printed to order.
+        points, lengths, kappa, phi: joints on the curve (mm), rod lengths (mm), curvatures
+            (1/mm), target bends (rad).
+        allowed: what the design lets the planner use.
+        end_limits: the design's own bounds on the end rods' angles (rad), kept.
+        mirrored: the target is its own mirror image: every choice is mirrored.
+        same: one shell for every rod.
+        n_starts, seed: the multi-start of each verdict.
+        budget_s: wall time (s) after which the loop stops holding more joints.
+    """
+    t0 = time.perf_counter()
+    n = lengths.size
+    r = pf.family.ranges
+    assert r is not None
+    deg = np.degrees(phi)
+    stop_range = r.stops if allowed.stops else None
+
+    def printable(j: int) -> bool:
+        return stop_range is not None and stop_range[0] - 1e-9 <= deg[j] <= stop_range[1] + 1e-9
+
+    free_lim = free_limits(catalog, pf, lengths, kappa) if n > 1 else np.zeros((0, 2))
+    can_fuse = allowed.fuse != "never" and allowed.stops
+    forced, fused, beyond = [], set(), []
+    for j in range(n - 1):
+        straight = phi[j] <= STRAIGHT_TOL
+        free_ok = free_lim[j, 0] < deg[j] < free_lim[j, 1]
+        if not straight and free_ok:
+            continue
+        if printable(j):
+            forced.append(j)
+        elif can_fuse:
+            fused.add(j)
+        else:
+            beyond.append(j)
+    if mirrored:
+        fused |= {_mirror(j, n) for j in fused}
+    locks: set[int] = set()
+    ends_allowed = (0, 1) if allowed.anchor_stops else ()
+    best: Decision | None = None
+    notes: list[str] = []
+    history: list[tuple[list[int], Verdict | None]] = []
+    for rnd in range(MAX_ROUNDS + 1):
+        rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
+        bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
+                        end_limits=end_limits, fused=fused)
+        optional = [j for j in range(n - 1) if printable(j) and j not in forced and j not in rigid]
+        need = needed_stop_sides(bare.problem, optional, forced=[j for j in forced if j not in rigid],
+                                 ends=ends_allowed, end_weight=END_WEIGHT)
+        feasible = need is not None
+        stops = dict(rigid)
+        ends: dict[int, int] = {}
+        if need is None:  # no stops balance it: the forced ones, on the sagging side
+            stops.update({j: (float(deg[j]), HI) for j in forced if j not in rigid})
+        else:
+            for j, side in zip(*need):
+                j, side = int(j), int(side)
+                if j < 0 or j >= n - 1:
+                    ends[0 if j < 0 else 1] = side
+                elif j not in stops:
+                    stops[j] = (float(deg[j]), side)
+            if mirrored:
+                _symmetrize(stops, ends, n, deg, printable)
+        laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, limits=True, same=same,
+                        end_limits=end_limits_for(points, ends, end_limits), fused=fused)
+        verdict = None
+        if allowed.verify and n > 1:
+            masses = exact_masses(laid.problem)[0]
+            verdict = verify(laid.problem, masses, n_starts=n_starts, seed=seed, tol=ON_TARGET)
+        history.append((sorted(locks), verdict))
+        d = Decision(laid, stops, ends, set(fused), list(beyond), verdict, rnd, sorted(locks), notes, feasible,
+                     history)
+        if best is None or _better(d, best):
+            best = d
+        if verdict is None or d.accepted and not verdict.others or not feasible:
+            break
+        if time.perf_counter() - t0 > budget_s:
+            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) ({budget_s:g} s)")
+            break
+        new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
+        if d.accepted:  # other shapes exist, all higher: hold a joint more only if it is cheap
+            new = new[:1]
+        if not new:
+            break
+        for j in new:
+            (locks if printable(j) else fused).add(j)
+            if mirrored:
+                m = _mirror(j, n)
+                (locks if printable(m) else fused).add(m)
+    assert best is not None
+    return best
+
+
+def _symmetrize(stops: dict[int, tuple[float, int]], ends: dict[int, int], n: int, deg: np.ndarray,
+                printable) -> None:
+    """A symmetric target keeps its symmetry: every stop and anchor stop mirrored (a joint
+    with stops on both sides in the two halves holds both ways)."""
+    for j, (_, side) in list(stops.items()):
+        m = _mirror(j, n)
+        if m in stops:
+            if stops[m][1] != side:
+                stops[j] = stops[m] = (float(deg[j]), LOCK) if printable(j) else stops[j]
+        elif printable(m):
+            stops[m] = (float(deg[m]), side)
+    for k, side in list(ends.items()):
+        ends.setdefault(1 - k, side)
+
+
+def _to_hold(culprits: list[int], n: int, held: set[int], printable, can_fuse: bool) -> list[int]:
+    """The joints to hold both ways next: the culprits (an anchor's culprit moves to the joint
+    next to it), those that can be held."""
+    out: list[int] = []
+    for j in culprits:
+        j = 0 if j < 0 else (n - 2 if j >= n - 1 else j)
+        if j in held or j in out or not (printable(j) or can_fuse):
+            continue
+        out.append(j)
+    return out
+
+
+def _score(d: Decision) -> tuple:
+    v = d.verdict
+    if v is None:
+        return (1, 0.0, 0)
+    return (0 if d.accepted else 1, 0 if v.on_target else 1, v.error / max(v.size, 1e-300))
+
+
+def _better(a: Decision, b: Decision) -> bool:
+    return _score(a) < _score(b)

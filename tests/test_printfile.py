@@ -413,3 +413,25 @@ def test_prusaslicer_slices_each_rod_file_alone_at_its_designed_mass_with_its_pa
         assert [z for z, _ in sliced.pauses] == pytest.approx(sorted(needed_pauses(r)), abs=1e-6)
         assert all(named(msg) == {tag(r)} for _, msg in sliced.pauses) and sliced.early == []
     print("\n".join(lines))
+
+
+def test_a_face_narrower_than_the_tessellation_leaves_a_closed_mesh(tmp_path):
+    """A flush stop end whose bottom chamfer is 1.4e-5 deg (the semicircle of the default
+    catalog has four) has a face 2e-6 mm wide across the rod: its vertices are welded onto
+    its edges, so the mesh stays closed (build123d's Mesher rounds them apart and lib3mf
+    rejects the mesh)."""
+    from rodcad.cad.export import print_matrix
+    from rodcad.cad.solids import mass_properties, type_solid
+
+    rod = load_catalog("pla-parametric").rod("rod", 51.764, 0.0099995, second_under=-1.418147038556583e-05)
+    solid = type_solid(rod)
+    assert min(f.area for f in solid.faces()) < 1e-4  # mm^2: the sliver is there
+    plain = SimpleNamespace(index=0, file_stem=f"00_{rod.name}", solid=solid, print_matrix=print_matrix(solid),
+                            plastic_volume=mass_properties(solid).volume, socket_centers=np.zeros((0, 3)),
+                            socket_radius=0.0, ball_count=0, ball_diameter=None, pause_zs=(), fill_mass=0.0,
+                            print_note="curved")
+    (path,) = write_print_3mf([plain], tmp_path / "print.3mf")
+    (name, v), = read_objects(path).items()  # closed and oriented, as lib3mf reads it
+    bb = solid.bounding_box()
+    assert name == plain.file_stem and sorted(np.ptp(v, axis=0)) == pytest.approx(
+        sorted([bb.size.X, bb.size.Y, bb.size.Z]), abs=0.02)

@@ -20,7 +20,7 @@ the print stands at least at ``r - h/2``, the balls lie in the open sockets, and
 layer closes them. The fabrication puts the roofs of a chain's sockets on as few layers as
 the rods allow (:mod:`rodcad.fabrication.roofs`), so a plate pauses seldom.
 
-The meshes are tessellated by build123d's :class:`~build123d.Mesher`; the print settings,
+The meshes are tessellated by OCC (welded, checked closed); the print settings,
 pauses and object names are PrusaSlicer's metadata files (:mod:`rodcad.cad.slicer`).
 Sliced alone, the shipped catalogs' rods use filament within 1 % of their designed
 plastic mass (tests/test_printfile.py). Support is off but for rods that rest on their
@@ -62,13 +62,17 @@ __all__ = ["DEFAULT_BUILD_VOLUME", "DEFAULT_NOZZLE", "PrintProfile", "Placement"
            "rod_pauses", "plate_paths", "slicer_config", "pause_xml", "write_print_3mf", "write_rod_3mf",
            "write_print_files", "CONFIG_FILE", "PAUSES_FILE", "MODEL_CONFIG_FILE"]
 
-#: Tessellation of the rods (build123d Mesher): linear deflection relative to each edge's
-#: size and angular deflection (rad). The meshes enclose the B-rep's volume within about
+#: Tessellation of the rods (OCC's BRepMesh, as build123d's Mesher calls it): linear
+#: deflection relative to each edge's size and angular deflection (rad). The meshes enclose the B-rep's volume within about
 #: 0.1 % with a quarter of the triangles of Mesher's defaults (0.001, 0.1).
 LINEAR_DEFLECTION = 0.002
 ANGULAR_DEFLECTION = 0.25
 #: Largest relative difference allowed between a mesh's volume and its solid's.
 VOLUME_TOL = 5e-3
+#: Mesh vertices closer than this (mm) are one: a face narrower than it (a flush stop face
+#: chamfered by 1e-5 degrees is 2e-6 mm wide) collapses onto its edges instead of leaving
+#: slivers a 3MF reader rejects. The rods' smallest features (layer gaps) are 0.3 mm.
+WELD = 1e-4
 
 
 @dataclass
@@ -117,25 +121,56 @@ class _Mesh:
     z_shift: float  # how far the mesh was lowered onto the bed (mm)
 
 
-def _mesh(rod: FabricatedRod) -> _Mesh:
-    """The rod's solid on the bed (its print matrix), tessellated by build123d's Mesher,
-    checked closed and of the solid's volume, moved onto Z = 0 (where a slicer drops it)."""
-    from build123d import Mesher
-    from lib3mf import Lib3MF
+def _tessellate(solid: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (n, 3), triangles (m, 3)) of a solid: its faces tessellated by OCC's BRepMesh
+    (the deflections above), the vertices within :data:`WELD` of each other made one and the
+    triangles that collapse with them dropped."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.TopLoc import TopLoc_Location
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
 
+    BRepMesh_IncrementalMesh(solid.wrapped, LINEAR_DEFLECTION, True, ANGULAR_DEFLECTION, True)
+    points: list[tuple[float, float, float]] = []
+    tris: list[list[int]] = []
+    for face in solid.faces():
+        loc = TopLoc_Location()
+        poly = BRep_Tool.Triangulation_s(face.wrapped, loc)
+        if poly is None:
+            raise ValueError("a face of the solid has no tessellation")
+        trsf, n = loc.Transformation(), len(points)
+        points += [(q.X(), q.Y(), q.Z()) for q in (poly.Node(i).Transformed(trsf) for i in range(1, poly.NbNodes() + 1))]
+        order = (1, 3, 2) if face.wrapped.Orientation() == TopAbs_REVERSED else (1, 2, 3)
+        tris += [[tri.Value(k) + n - 1 for k in order] for tri in poly.Triangles()]
+    v, t = np.array(points, dtype=float), np.array(tris, dtype=np.int64).reshape(-1, 3)
+    pairs = cKDTree(v).query_pairs(WELD, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(v), len(v)))
+    _, label = connected_components(graph, directed=False)
+    _, first = np.unique(label, return_index=True)
+    t = label[t]
+    t = t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])]
+    return v[first], t
+
+
+def _closed(triangles: np.ndarray, n: int) -> bool:
+    """Whether a triangle mesh of ``n`` vertices is closed and consistently oriented: every
+    edge is used once in each direction."""
+    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    directed = e[:, 0] * n + e[:, 1]
+    return len(np.unique(directed)) == len(directed) and bool(np.isin(e[:, 1] * n + e[:, 0], directed).all())
+
+
+def _mesh(rod: FabricatedRod) -> _Mesh:
+    """The rod's solid on the bed (its print matrix), tessellated (:func:`_tessellate`),
+    checked closed and of the solid's volume, moved onto Z = 0 (where a slicer drops it)."""
     from rodcad.cad.export import transformed
 
-    mesher = Mesher()
-    mesher.add_shape(transformed(rod.solid, rod.print_matrix), linear_deflection=LINEAR_DEFLECTION,
-                     angular_deflection=ANGULAR_DEFLECTION)
-    if len(mesher.meshes) != 1:
-        raise ValueError(f"rod {rod.file_stem}: tessellated into {len(mesher.meshes)} meshes, expected 1")
-    mo = mesher.meshes[0]
-    if not mo.IsManifoldAndOriented():
+    v, t = _tessellate(transformed(rod.solid, rod.print_matrix))
+    if not _closed(t, len(v)):
         raise ValueError(f"rod {rod.file_stem}: its mesh is not closed and oriented")
-    verts, tris = mo.GetVertices(), mo.GetTriangleIndices()
-    v = np.frombuffer((Lib3MF.Position * len(verts))(*verts), dtype=np.float32).reshape(-1, 3).astype(float)
-    t = np.frombuffer((Lib3MF.Triangle * len(tris))(*tris), dtype=np.uint32).reshape(-1, 3).astype(np.int64)
     a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
     volume = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6)
     if abs(volume - rod.plastic_volume) > VOLUME_TOL * rod.plastic_volume:
@@ -154,7 +189,8 @@ def _roofs(rod: FabricatedRod) -> list[float]:
     if not len(socks):
         return [float(z) for z in rod.pause_zs][:rod.ball_count] if rod.ball_count else []
     m = np.asarray(rod.print_matrix, dtype=float)
-    return [float(z) + rod.socket_radius for z in socks @ m[2, :3] + m[2, 3]]
+    top = float(getattr(rod, "socket_height", 0.0) or rod.socket_radius)  # the roof above the centre
+    return [float(z) + top for z in socks @ m[2, :3] + m[2, 3]]
 
 
 def _fill(rod: FabricatedRod) -> tuple[float, str]:

@@ -53,8 +53,9 @@ from rodcad.catalog.model import Fill, RodGeometry, RodType
 __all__ = ["CHAMBER_VERSION", "Chamber", "ChamberModel", "GRID", "MAX_BRIDGE", "MIN_LENGTH", "MIN_VOLUME",
            "chamber_model", "fill_numbers", "plan_chamber"]
 
-#: Bump when chamber shapes change.
-CHAMBER_VERSION = "3"
+#: Bump when the largest chamber of a rod changes (the mass ranges and the seeds derive from
+#: it; a short chamber's shape, built anew every time, does not enter them).
+CHAMBER_VERSION = "2"
 
 #: Widest flat roof bridged over a chamber cell (mm): the roof of the 6.2 mm sockets of the
 #: shipped catalogs' 6 mm balls (a 'silo' socket's roof is a disc of the socket's diameter).

@@ -37,7 +37,7 @@ from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.pieces import PieceRefused, fuse_pieces
 from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
-from rodcad.cad.printfile import write_print_files
+from rodcad.cad.printfile import PrintProfile, write_print_files
 from rodcad.cad.rods import (
     ChainFabrication,
     FabricatedRod,
@@ -210,12 +210,18 @@ def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
 
 
 def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]], *, jobs: int | None,
-               progress: Progress, label: str) -> tuple[list[ChainFabrication], list[str]]:
-    """Every rod of every chain built in one go (identical rods once); split per chain."""
+               progress: Progress, label: str, fused: Sequence[tuple[int, int]] = ()
+               ) -> tuple[list[ChainFabrication], list[str]]:
+    """Every rod of every chain built in one go (identical rods once); split per chain. The
+    sockets' roofs go onto as few print layers as the rods allow (the rods of ``fused``
+    runs (first, last) keep theirs: their piece lies on the bed its own way)."""
     types = [design.catalog[name] for names, _ in chains for name in names]
     masses = np.concatenate([np.asarray(m, float) for _, m in chains])
+    layers = PrintProfile.from_mapping(print_profile(design.catalog)).layers
+    keep = {i for a, b in fused for i in range(a, b + 1)}
     with progress.step(label) as st:
-        fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count)
+        fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count,
+                              layers=layers, keep_roofs=keep)
     if len(chains) == 1:
         return [fab], list(fab.problems)
     out, k = [], 0
@@ -290,7 +296,8 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
             f"{100 * snap.error_after:.3g} % of the span")
     if cad:
         (fab,), problems = _fabricate(design, [(result.type_names, result.masses)], jobs=jobs, progress=progress,
-                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)")
+                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
+                                      fused=p.fused)
         result.fabrication = fab
         result.notes += problems
         if p.fused:

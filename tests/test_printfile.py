@@ -1,11 +1,14 @@
-"""The slicer project (issue 16): print.3mf with every rod placed on the bed, the print
-settings and a pause at every ball-insert layer; one 3MF per rod.
+"""The slicer projects (issues 16, 23): print.3mf with every rod placed on the bed, the
+print settings and a pause at every insert layer, each message naming the rods whose
+inserts go in there; one project per rod that slices alone the same way.
 
 The files are read back with lib3mf and zipfile; when PrusaSlicer's command line is
-installed (Debian: ``apt-get install prusa-slicer``) every plate is sliced and its
-G-code checked (M601 at each insert layer and nowhere else), and every distinct rod is
-sliced alone with the project's settings: its filament times the density must be its
-designed plastic mass within 2 %.
+installed (Debian: ``apt-get install prusa-slicer``) the plate is sliced and its G-code
+checked (an M601 at each insert layer and nowhere else, just before the layer that
+bridges the sockets of the rods its message names), and every distinct rod's own 3MF is
+sliced alone, as a user opening it would: its plastic (the G-code's extrusion by feature,
+skirt and support left out) times the density must be its designed plastic mass within
+2 %, and it pauses at its own insert layers.
 """
 
 from __future__ import annotations
@@ -41,8 +44,11 @@ needs_slicer = pytest.mark.skipif(PRUSA is None, reason="prusa-slicer is not on 
                                                           "prusa-slicer): the G-code checks need the slicer")
 #: (type, where in its mass range) per chain position: heavy rods with balls whose socket
 #: roofs fall in different layers (two identical ones sharing theirs) and a light one with
-#: cavities only: three plates.
+#: cavities only; then a rod printed to order (catalog pla-parametric), curved (it rests on
+#: its arc, with support) and weighted with two balls whose roofs fall in a third layer.
 CHAIN = [("free-30", 0.95), ("free-30", 0.95), ("concave20-30", 0.9), ("straight-40", 0.05)]
+#: (length, curvature, mass) of the curved rod printed to order: one of the heart's.
+CURVED = (47.604, 0.005325, 14.0)
 LAYER = 0.2
 PROFILE = {"material": "PLA", "density": 1.24, "infill": 1.0, "note": "ignored"}
 
@@ -59,6 +65,9 @@ def rods(catalog):
     for rod, f in zip(types, (f for _, f in CHAIN)):
         lo, hi = mass_info(rod).mass_range
         masses.append(lo + f * (hi - lo))
+    length, curvature, mass = CURVED
+    types.append(load_catalog("pla-parametric").rod("rod", length, curvature))
+    masses.append(mass)
     return fabricate_chain(types, masses, seed=0, jobs=2).rods
 
 
@@ -130,29 +139,49 @@ def pauses_in(path: Path) -> dict[float, str]:
     return out
 
 
-def test_the_chain_exercises_grouping(rods):
+def tag(rod) -> str:
+    return rod.file_stem.split("_")[0]
+
+
+def named(msg: str) -> set[str]:
+    """The rod tags a pause message names ('rod 03', 'rods 00, 03', '2 in rod 05', ...)."""
+    return set(re.findall(r"\b(\d{2})\b", msg))
+
+
+def test_the_chain_pauses_at_several_heights(rods):
     sets = [tuple(sorted(needed_pauses(r))) for r in rods]
-    assert len({s for s in sets if s}) >= 2, sets  # rods pausing at different layers
+    assert len({s for s in sets if s}) >= 3, sets  # rods pausing at different layers
     assert sets[0] == sets[1] != () and () in sets
+    assert rods[-1].print_note and not any(r.print_note for r in rods[:-1])  # the curved one rests on its arc
 
 
 def test_every_rod_is_one_object_named_by_its_file_with_the_print_settings(project, rods, catalog):
     out, plates = project
-    assert plates[0].name == "print.3mf" and [p.name for p in plates[1:]] == [
-        f"print-{k}.3mf" for k in range(2, len(plates) + 1)]
+    assert [p.name for p in plates] == ["print.3mf"]  # every rod fits one bed, whatever its pauses
     names = [n for p in plates for n in read_objects(p)]
     assert sorted(names) == sorted(r.file_stem for r in rods)
     bx, by, bz = catalog.printer.build_volume
-    for p in plates:
+    for p in [*plates, *(out / "rods" / f"{r.file_stem}.3mf" for r in rods)]:  # the rods' own files too
         cfg = config(p)
         assert cfg["fill_density"] == "100%" and cfg["layer_height"] == "0.2" and cfg["perimeters"] == "2"
         assert cfg["filament_density"] == "1.24" and cfg["pause_print_gcode"] == "M601"
         assert cfg["bed_shape"] == f"0x0,{bx:g}x0,{bx:g}x{by:g},0x{by:g}" and cfg["max_print_height"] == f"{bz:g}"
         model_config = zipfile.ZipFile(p).read(MODEL_CONFIG_FILE).decode()
         assert all(f'value="{n}"' in model_config for n in read_objects(p))
-    for r in rods:  # one plain 3MF per rod, the same geometry on the bed
+        assert model_config.count('key="support_material" value="1"') == sum(
+            1 for n in read_objects(p) if n == rods[-1].file_stem)
+    for r in rods:  # one project per rod: the same geometry, on the bed, its own pauses
         (name, v), = read_objects(out / "rods" / f"{r.file_stem}.3mf").items()
-        assert name == r.file_stem and v.min(axis=0) == pytest.approx([0, 0, 0], abs=1e-4)
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        assert name == r.file_stem and lo[2] == pytest.approx(0, abs=1e-4)
+        assert lo[0] >= 5 - 1e-4 and lo[1] >= 5 - 1e-4 and hi[0] <= bx - 5 + 1e-4 and hi[1] <= by - 5 + 1e-4
+        solid = r.solid.bounding_box()
+        assert sorted(hi - lo) == pytest.approx(sorted([solid.size.X, solid.size.Y, solid.size.Z]), abs=0.02)
+        got = pauses_in(out / "rods" / f"{r.file_stem}.3mf")
+        assert sorted(got) == pytest.approx(sorted(needed_pauses(r)), abs=1e-9)
+        for z, msg in got.items():
+            n = needed_pauses(r)[round(z, 6)]
+            assert msg == f"insert {n} ball{'s' if n > 1 else ''} of 6 mm (rod {tag(r)}) [{r.ball_name}]"
 
 
 def test_rods_lie_on_the_bed_apart_and_whole(project, rods, catalog):
@@ -176,17 +205,19 @@ def test_rods_lie_on_the_bed_apart_and_whole(project, rods, catalog):
                 assert apart >= 5 - 1e-3, f"{p.name}: objects {i} and {j} are {apart:.2f} mm apart"
 
 
-def test_each_plate_pauses_exactly_where_its_rods_need(project, rods):
+def test_the_plate_pauses_at_every_height_its_rods_need_naming_them(project, rods):
     _, plates = project
     by_name = {r.file_stem: r for r in rods}
     for p in plates:
         on = [by_name[n] for n in read_objects(p)]
-        needs = [needed_pauses(r) for r in on]
-        assert all(set(n) == set(needs[0]) for n in needs), f"{p.name} mixes rods that pause differently"
+        needs = {tag(r): needed_pauses(r) for r in on}
         got = pauses_in(p)
-        assert sorted(got) == pytest.approx(sorted(needs[0]), abs=1e-9)
+        assert sorted(got) == pytest.approx(sorted({z for n in needs.values() for z in n}), abs=1e-9)
+        assert len(got) >= 3
         for z, msg in got.items():
-            total = sum(n.get(round(z, 6), 0) for n in needs)
+            who = {t for t, n in needs.items() if round(z, 6) in n}
+            assert named(msg) == who, (z, msg)  # exactly the rods whose balls go in here
+            total = sum(n.get(round(z, 6), 0) for n in needs.values())
             assert msg.startswith(f"insert {total} ball") and "of 6 mm" in msg, msg
         for r in on:  # design.json's pause heights are the socket roofs these layers cover
             assert {covering_layer(z) for z in r.pause_zs} == set(needed_pauses(r))
@@ -206,7 +237,7 @@ def test_profile_and_pause_layers():
 
 
 def test_a_small_bed_takes_several_plates_and_a_rod_that_fits_none_is_refused(rods, tmp_path):
-    light = rods[3]  # 50 x 16 mm on the bed, no balls; a twin and a third one pause alike
+    light = rods[3]  # 50 x 16 mm on the bed, no balls; a twin and a third one alike
     twins = [light] + [dataclasses.replace(light, index=k, file_stem=f"{k:02d}_{light.type_name}") for k in (4, 5)]
     plates = plan_plates(twins, printer=Printer((120.0, 45.0, 30.0), 0.4))
     assert [[q.rod.index for q in p.placements] for p in plates] == [[3, 4], [5]]  # 2 per row, 1 row per bed
@@ -228,17 +259,31 @@ def test_a_small_bed_takes_several_plates_and_a_rod_that_fits_none_is_refused(ro
         plan_plates([light], printer=Printer((200.0, 200.0, 10.0), 0.4))
 
 
-def test_a_rod_whose_chamber_is_filled_pauses_alone_to_pour_its_shot(rods):
+def test_only_the_bed_splits_rods_into_plates(rods):
+    """On a bed too small for them (one 16 mm row of 115 mm a plate) the rods fill the plates
+    in packing order, whatever their pauses; each plate pauses where its own rods need it."""
+    plates = plan_plates([rods[0], rods[2], rods[3], rods[4]], printer=Printer((125.0, 40.0, 30.0), 0.4))
+    assert [[q.rod.index for q in p.placements] for p in plates] == [[0, 2], [3, 4]]
+    assert len({tuple(needed_pauses(q.rod)) for q in plates[0].placements}) == 2  # two pause heights, one plate
+    for p in plates:
+        assert sorted(p.pauses) == pytest.approx(sorted({z for q in p.placements for z in needed_pauses(q.rod)}))
+
+
+def test_a_rod_whose_chamber_is_filled_pauses_to_pour_its_shot_beside_the_others(rods):
     light = rods[3]
     filled = SimpleNamespace(**{**light.__dict__, "index": 6, "file_stem": f"06_{light.type_name}", "ball_count": 0,
                                 "socket_centers": np.zeros((0, 3)), "pause_zs": (8.05,), "fill_mass": 12.5,
                                 "fill_name": "tungsten shot"})
-    plates = plan_plates([light, filled])
-    assert [(len(p.placements), p.pauses) for p in plates] == [
-        (1, {}), (1, {8.2: "pour 12.50 g of tungsten shot into rod 06"})]
+    (plate,) = plan_plates([light, rods[0], filled])
+    z0 = max(needed_pauses(rods[0]))
+    assert len(plate.placements) == 3 and plate.pauses == {
+        8.2: "pour 12.50 g of tungsten shot into rod 06", z0: f"insert 2 balls of 6 mm (rod 00) [{rods[0].ball_name}]"}
 
 
 # --------------------------------------------------------------------------- PrusaSlicer
+
+#: Extrusion types (PrusaSlicer's ``;TYPE:``) that are not part of any rod.
+NOT_ROD = ("Skirt/Brim", "Support material", "Support material interface", "Wipe tower")
 
 
 def slice_file(src: Path, gcode: Path, *extra: str) -> str:
@@ -251,50 +296,142 @@ def slice_file(src: Path, gcode: Path, *extra: str) -> str:
     return gcode.read_text()
 
 
-def layers(gcode: str) -> tuple[list[float], dict[float, set[str]]]:
-    """(print_z of every M601, {print_z: extrusion types}) from PrusaSlicer's comments."""
-    z, pauses, types = 0.0, [], {}
+@dataclasses.dataclass
+class Sliced:
+    """What a G-code says, read from PrusaSlicer's comments and moves.
+
+    Attributes:
+        pauses: (print_z, message) per M601, the message of the M117 just before it.
+        types: {(print_z, object): extrusion types printed in that layer of that object}.
+        filament: {extrusion type: filament (mm) it extrudes}.
+        early: print_z of every M601 that came after an extrusion of its layer.
+    """
+
+    pauses: list[tuple[float, str]]
+    types: dict[tuple[float, str], set[str]]
+    filament: dict[str, float]
+    early: list[float]
+
+    def grams(self, diameter: float, density: float, *, skip: tuple[str, ...] = ()) -> float:
+        mm = sum(v for k, v in self.filament.items() if k not in skip)
+        return mm * math.pi * diameter**2 / 4 * density / 1000
+
+
+def read_gcode(gcode: str) -> Sliced:
+    """Layers (``;Z:``), objects (``; printing object``), types (``;TYPE:``), pauses (M117 +
+    M601) and the filament of every extruding move (absolute or relative E, G92 resets;
+    retractions and the E-only moves that undo them are left out)."""
+    z, obj, kind, message = 0.0, "", "", ""
+    absolute, e = True, 0.0
+    out = Sliced([], {}, {}, [])
+    extruded = False
     for line in gcode.splitlines():
         if line.startswith(";Z:"):
-            z = float(line[3:])
-        elif line.startswith(";TYPE:"):
-            types.setdefault(z, set()).add(line[6:])
-        elif line.split(";")[0].strip() == "M601":
-            pauses.append(z)
-    return pauses, types
+            z, extruded = float(line[3:]), False
+            continue
+        if line.startswith("; printing object "):
+            obj = line.split()[3]
+            continue
+        if line.startswith("; stop printing object"):
+            obj = ""
+            continue
+        if line.startswith(";TYPE:"):
+            kind = line[6:]
+            out.types.setdefault((z, obj), set()).add(kind)
+            continue
+        words = line.split(";")[0].split()
+        if not words:
+            continue
+        code, args = words[0], {w[0]: w[1:] for w in words[1:] if w}
+        if code == "M117":
+            message = line.split(";")[0][5:].strip()
+        elif code == "M601":
+            out.pauses.append((z, message))
+            if extruded:
+                out.early.append(z)
+        elif code == "M82":
+            absolute = True
+        elif code == "M83":
+            absolute = False
+        elif code == "G92" and "E" in args:
+            e = float(args["E"])
+        elif code in ("G0", "G1", "G2", "G3") and "E" in args:
+            v = float(args["E"])
+            d = v - e if absolute else v
+            e = v if absolute else e
+            if d > 0 and ("X" in args or "Y" in args):
+                out.filament[kind] = out.filament.get(kind, 0.0) + d
+                extruded = True
+    return out
 
 
 @needs_slicer
-def test_prusaslicer_pauses_each_plate_at_its_insert_layers_only(project, rods, tmp_path):
+def test_prusaslicer_pauses_the_plate_just_before_the_layer_that_closes_each_named_rods_sockets(project, rods,
+                                                                                              tmp_path):
     _, plates = project
+    by_name = {r.file_stem: r for r in rods}
     for p in plates:
-        gcode = slice_file(p, tmp_path / f"{p.stem}.gcode")
-        names = set(re.findall(r"^; printing object (\S+)", gcode, re.M))
+        sliced = read_gcode(slice_file(p, tmp_path / f"{p.stem}.gcode"))
+        names = {obj for _, obj in sliced.types if obj}
         assert names == set(read_objects(p))
-        rod = next(r for r in rods if r.file_stem in names)
-        want = sorted(needed_pauses(rod))
-        got, types = layers(gcode)
-        assert got == pytest.approx(want, abs=1e-6), p.name
-        for z in got:  # the layer after the pause closes the sockets
-            assert "Bridge infill" in types[z], (p.name, z, types[z])
+        needs = {tag(by_name[n]): (by_name[n], needed_pauses(by_name[n])) for n in names}
+        want = sorted({z for _, n in needs.values() for z in n})
+        assert [z for z, _ in sliced.pauses] == pytest.approx(want, abs=1e-6), p.name  # once each, in order
+        assert len(want) >= 3 and sliced.early == []  # each pause before its layer prints anything
+        project_msgs = pauses_in(p)
+        for z, msg in sliced.pauses:
+            assert msg == project_msgs[round(z, 6)]
+            who = {t for t, (_, n) in needs.items() if round(z, 6) in n}
+            assert named(msg) == who, (z, msg)
+            for t in who:  # the layer after the pause bridges that rod's sockets
+                rod = needs[t][0]
+                assert "Bridge infill" in sliced.types.get((z, rod.file_stem), set()), (p.name, z, rod.file_stem)
 
 
 @needs_slicer
-def test_prusaslicer_filament_of_each_rod_alone_is_its_designed_mass(project, rods, tmp_path):
+def test_prusaslicer_slices_each_rod_file_alone_at_its_designed_mass_with_its_pauses(project, rods, tmp_path):
+    """What a user opening rods/NN_TYPE.3mf alone gets: 100 % infill, the rod's pauses, and
+    the rod's plastic (skirt and support left out) its designed mass within 2 %."""
     out, plates = project
-    ini = tmp_path / "project.ini"  # the project's settings, as a PrusaSlicer config file
-    ini.write_text("\n".join(f"{k} = {v}" for k, v in config(plates[0]).items()) + "\n")
     density, diameter = 1.24, float(config(plates[0])["filament_diameter"])
     seen, lines = set(), []
     for r in rods:
         if id(r.solid) in seen:
             continue
         seen.add(id(r.solid))
-        gcode = slice_file(out / "rods" / f"{r.file_stem}.3mf", tmp_path / f"{r.file_stem}.gcode",
-                           "--load", str(ini), "--skirts", "0")
-        used_mm = float(re.search(r"^; filament used \[mm\] = ([\d.]+)", gcode, re.M)[1])
-        mass = used_mm * math.pi * diameter**2 / 4 * density / 1000
+        gcode = slice_file(out / "rods" / f"{r.file_stem}.3mf", tmp_path / f"{r.file_stem}.gcode")
+        assert re.search(r"^; fill_density = 100%$", gcode, re.M)
+        sliced = read_gcode(gcode)
+        used = float(re.search(r"^; filament used \[mm\] = ([\d.]+)", gcode, re.M)[1])
+        assert sum(sliced.filament.values()) == pytest.approx(used, rel=2e-3)  # the reader misses nothing
+        assert ("Support material" in sliced.filament) == bool(r.print_note)  # the curved rod gets support
+        mass = sliced.grams(diameter, density, skip=NOT_ROD)
         dev = mass / r.filament_mass - 1
-        lines.append(f"{r.file_stem}: sliced {mass:.3f} g, designed {r.filament_mass:.3f} g ({dev:+.2%})")
+        lines.append(f"{r.file_stem}: sliced {mass:.3f} g, designed {r.filament_mass:.3f} g ({dev:+.2%}); "
+                     f"skirt and support {sliced.grams(diameter, density) - mass:.3f} g")
         assert abs(dev) <= 0.02, lines[-1]
+        assert [z for z, _ in sliced.pauses] == pytest.approx(sorted(needed_pauses(r)), abs=1e-6)
+        assert all(named(msg) == {tag(r)} for _, msg in sliced.pauses) and sliced.early == []
     print("\n".join(lines))
+
+
+def test_a_face_narrower_than_the_tessellation_leaves_a_closed_mesh(tmp_path):
+    """A flush stop end whose bottom chamfer is 1.4e-5 deg (the semicircle of the default
+    catalog has four) has a face 2e-6 mm wide across the rod: its vertices are welded onto
+    its edges, so the mesh stays closed (build123d's Mesher rounds them apart and lib3mf
+    rejects the mesh)."""
+    from rodcad.cad.export import print_matrix
+    from rodcad.cad.solids import mass_properties, type_solid
+
+    rod = load_catalog("pla-parametric").rod("rod", 51.764, 0.0099995, second_under=-1.418147038556583e-05)
+    solid = type_solid(rod)
+    assert min(f.area for f in solid.faces()) < 1e-4  # mm^2: the sliver is there
+    plain = SimpleNamespace(index=0, file_stem=f"00_{rod.name}", solid=solid, print_matrix=print_matrix(solid),
+                            plastic_volume=mass_properties(solid).volume, socket_centers=np.zeros((0, 3)),
+                            socket_radius=0.0, ball_count=0, ball_diameter=None, pause_zs=(), fill_mass=0.0,
+                            print_note="curved")
+    (path,) = write_print_3mf([plain], tmp_path / "print.3mf")
+    (name, v), = read_objects(path).items()  # closed and oriented, as lib3mf reads it
+    bb = solid.bounding_box()
+    assert name == plain.file_stem and sorted(np.ptp(v, axis=0)) == pytest.approx(
+        sorted([bb.size.X, bb.size.Y, bb.size.Z]), abs=0.02)

@@ -33,8 +33,10 @@ __all__ = ["DEFLECTION", "ANGULAR", "WELD", "TriangleMesh", "mesh_solid", "write
 DEFLECTION = 0.002
 #: Angular deflection (rad); loose, so that the linear deflection decides.
 ANGULAR = 0.5
-#: Vertices closer than this (mm) are one vertex.
-WELD = 1e-5
+#: Vertices closer than this (mm) are one vertex: a face narrower than it (a flush stop face
+#: chamfered by 1e-5 degrees is 2e-6 mm wide) collapses onto its edges instead of leaving
+#: slivers a 3MF reader rejects. The rods' smallest features (layer gaps) are 0.3 mm.
+WELD = 1e-4
 
 
 @dataclass(frozen=True)
@@ -90,20 +92,14 @@ def _face_triangles(solid: Solid) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _weld(points: np.ndarray, tol: float) -> np.ndarray:
-    """An index per point: points within ``tol`` of each other (transitively) share one,
-    the lowest of their group."""
+    """An index per point: points within ``tol`` of each other (transitively) share one."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
-    label = np.arange(len(points))
-    pairs = cKDTree(points).query_pairs(tol, output_type="ndarray")
-    while len(pairs):
-        low = np.minimum(label[pairs[:, 0]], label[pairs[:, 1]])
-        if np.all(label[pairs[:, 0]] == low) and np.all(label[pairs[:, 1]] == low):
-            break
-        np.minimum.at(label, pairs[:, 0], low)
-        np.minimum.at(label, pairs[:, 1], low)
-        label = label[label]
-    return label
+    pairs = cKDTree(points).query_pairs(tol, output_type="ndarray").reshape(-1, 2)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points), len(points)))
+    return connected_components(graph, directed=False)[1]
 
 
 def _closed(triangles: np.ndarray) -> bool:
@@ -138,10 +134,10 @@ def mesh_solid(solid: Solid, *, deflection: float = DEFLECTION, angular: float =
         nodes, tris = _face_triangles(solid)
     finally:
         BRepTools.Clean_s(solid.wrapped)
-    index = _weld(nodes, WELD)
-    used, inverse = np.unique(index, return_inverse=True)
-    vertices = nodes[used]
-    t = inverse[tris]
+    label = _weld(nodes, WELD)
+    _, first = np.unique(label, return_index=True)
+    vertices = nodes[first]
+    t = label[tris]
     keep = (t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])
     t = t[keep]
     mesh = TriangleMesh(vertices, t, float(deflection))

@@ -15,8 +15,9 @@ booleans, to :data:`MASS_REL` and :data:`COM_MM`).
 Print orientation: the piece lies on its side like a rod (:func:`rodcad.cad.export.print_matrix`),
 turned about the hinge axis so the rods holding balls lean as little as possible from
 upright. A socket whose rod leans by alpha has a tilted flat roof; its pause comes before
-the first layer that reaches the roof's lowest point, ``centre + r (cos alpha - sin alpha)``
-above the socket's centre (at least the centre: the ball always drops in whole).
+the first layer that reaches the roof's lowest point, ``centre + h cos alpha - r sin alpha``
+above the socket's centre (h the roof's height above the centre along the socket's axis,
+r its radius; at least the centre: the ball always drops in whole).
 
 Units: mm, mm^3, g.
 """
@@ -115,7 +116,8 @@ def _roofs(piece_to_bed: np.ndarray, rods: Sequence[FabricatedRod], mats: Sequen
         to_bed = piece_to_bed @ m
         up = to_bed[:3, :3] @ np.array([0.0, 1.0, 0.0])  # the rod's +y: the silo's axis
         cos_a = float(up[2])
-        lift = r.socket_radius * max(0.0, cos_a - math.sqrt(max(0.0, 1 - cos_a * cos_a)))
+        top = r.socket_height or r.socket_radius  # the roof above the centre, along the silo's axis
+        lift = max(0.0, top * cos_a - r.socket_radius * math.sqrt(max(0.0, 1 - cos_a * cos_a)))
         out += [float(z) + lift for z in socks @ to_bed[2, :3] + to_bed[2, 3]]
     return out
 

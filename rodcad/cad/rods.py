@@ -32,7 +32,9 @@ The data flow for one rod (type + target mass), one step per function (the numbe
 Void shapes (all printable without support in the print orientation, see
 :data:`rodcad.fabrication.layout.VOIDS`): cavities are spheres cut flat at 45 degrees
 ('capped'), sockets are 'silos' (half sphere + cylinder, flat bridged roof)
-all standing on one print layer, so one pause serves all balls. Every layout
+all standing on one print layer, so one pause serves all balls; given the print's
+layers, :func:`fabricate_chain` raises roofs onto layers the chain's other rods share
+(:mod:`rodcad.fabrication.roofs`), so a plate of them pauses seldom. Every layout
 is symmetric about the rod's centre of mass (mirrors across x, y and z, or
 the half turn about the com axis with the z mirror; sockets are raised by
 :func:`rodcad.fabrication.layout.ball_offset` so socket and ball together act at their
@@ -53,7 +55,7 @@ from __future__ import annotations
 import math
 import shutil
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -67,6 +69,7 @@ from rodcad.parallel import default_jobs, worker_pool
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
+    from rodcad.fabrication.layers import LayerGrid
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, print_matrix, rod_matrices
 from rodcad.cad.frame import pin_solid
 from rodcad.cad.solids import mass_properties, type_solid, with_voids
@@ -82,6 +85,7 @@ from rodcad.fabrication.cavities import (
 )
 from rodcad.fabrication.intervals import compute_table, interval_table, intervals_key
 from rodcad.fabrication.plan import Measurement, RodPlan, plan_rod
+from rodcad.fabrication.roofs import shared_roofs
 
 __all__ = [
     "ChainFabrication",
@@ -133,6 +137,9 @@ class FabricatedRod:
         print_note: remark on the print orientation ('' for flat-lying rods).
         thickness: rod thickness along the hinge axes (mm), the pin length.
         pin_diameter: hinge pin diameter (mm).
+        socket_height: the sockets' flat roofs above their centres (mm); 0: the socket
+            radius (plain silos). Raised roofs share a print layer with the chain's others
+            (:mod:`rodcad.fabrication.roofs`).
         fill_mass: grams of shot poured into the chamber at ``pause_z`` (rods with a fill).
         fill_name: what the shot is ('' without).
         chamber_volume: the chamber's volume (mm^3; 0 without).
@@ -173,6 +180,7 @@ class FabricatedRod:
     chamber_volume: float = 0.0
     ball_name: str = ""
     ball_mass_each: float = 0.0
+    socket_height: float = 0.0
 
 
 @dataclass
@@ -212,14 +220,14 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
 
     rho = rod.material.density / 1000.0
     plain = type_solid(rod)
-    socks, cavs, rs = plan.sockets, plan.cavities, plan.socket_radius
+    socks, cavs, rs, top = plan.sockets, plan.cavities, plan.socket_radius, plan.socket_top
     n_balls = len(socks)
     kind = rod.ball_kinds[plan.ball_kind] if n_balls else None
     metal = n_balls * kind.mass if kind is not None else 0.0
     target = plan.build_mass
 
     def make(r: float) -> Any:
-        groups = [("silo", socks, rs)] if n_balls else []
+        groups = [("silo", socks, rs, top)] if n_balls else []
         if len(cavs):
             groups.append(("capped", cavs, r))
         return with_voids(plain, groups, rod.name)
@@ -240,7 +248,7 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
             volume = mass_properties(solid).volume
             booleans += 1
     props = mass_properties(solid)
-    voids = (void_solids("silo", socks, rs) if n_balls else []) + \
+    voids = (void_solids("silo", socks, rs, top) if n_balls else []) + \
         (void_solids("capped", cavs, r) if len(cavs) else [])
     wall = math.inf
     if voids:
@@ -255,28 +263,35 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
                                  booleans)
 
 
-def _key(rod: RodType, target: float, seed: int) -> str:
+def _key(rod: RodType, target: float, seed: int, roof: float | None = None) -> str:
     from rodcad.catalog.model import GEOMETRY_VERSION
 
+    raised = () if roof is None else (round(float(roof), 9),)
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
                     asdict(rod.geometry), asdict(rod.material),
-                    rod.balls_json(), round(float(target), 9), int(seed))
+                    rod.balls_json(), round(float(target), 9), int(seed), *raised)
 
 
-def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None]) -> dict[str, Any]:
-    """Worker: plan, build, root-solve and measure one rod; returns numbers only."""
-    rod, target, seed, table = args
-    plan = plan_rod(rod, target, seed, table)
+def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, float | None]) -> dict[str, Any]:
+    """Worker: plan, build, root-solve and measure one rod (its sockets' roofs raised to
+    ``roof`` where given, kept plain where the B-rep then measures a wall under the
+    minimum); returns numbers only."""
+    rod, target, seed, table, roof = args
+    plan = plan_rod(rod, target, seed, table, roof=roof)
     _, plan.cavity_radius, plan.measured = _build(rod, plan)
+    if plan.socket_height and plan.measured.min_wall < rod.material.min_wall - 1e-6:
+        plan = plan_rod(rod, target, seed, table)
+        _, plan.cavity_radius, plan.measured = _build(rod, plan)
     return plan.to_json()
 
 
-def _type_star(args: tuple[RodType, list[float], int, dict[str, Any] | None]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+def _type_star(args: tuple[RodType, list[tuple[float, float | None]], int, dict[str, Any] | None]
+               ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """Worker: the type's table of reachable masses (unless given), then every
     rod of that type (the type's candidate pools are built once per worker)."""
     rod, targets, seed, table = args
     table = table if table is not None else compute_table(rod, seed)
-    return table, [_fabricate_star((rod, m, seed, table)) for m in targets]
+    return table, [_fabricate_star((rod, m, seed, table, roof)) for m, roof in targets]
 
 
 def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
@@ -292,7 +307,7 @@ def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
         key = _key(rod, target, seed)
         plan = cache.get("fab", key)
         if plan is None:
-            plan = _fabricate_star((rod, target, seed, interval_table(rod, seed, cache)))
+            plan = _fabricate_star((rod, target, seed, interval_table(rod, seed, cache), None))
             cache.put("fab", key, plan)
     return _assemble_result(rod, target, index, plan)
 
@@ -302,7 +317,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     plan = RodPlan.from_json(data)
     rho = rod.material.density / 1000.0
     socks, cavs, rs, r = plan.sockets, plan.cavities, plan.socket_radius, plan.cavity_radius
-    groups = ([("silo", socks, rs)] if len(socks) else []) + ([("capped", cavs, r)] if len(cavs) else [])
+    groups = ([("silo", socks, rs, plan.socket_top)] if len(socks) else []) + ([("capped", cavs, r)] if len(cavs) else [])
     solid = with_voids(type_solid(rod), groups, rod.name)
     meas = plan.measured
     if meas is None:
@@ -318,7 +333,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     kind = rod.ball_kinds[plan.ball_kind] if len(socks) else None
     pm = print_matrix(solid)
     roofs: list[float] = []
-    for z in sorted(socks @ UP + rs + pm[2, 3]):  # rod +y is bed +Z
+    for z in sorted(socks @ UP + plan.socket_top + pm[2, 3]):  # rod +y is bed +Z
         if not roofs or z - roofs[-1] > 1e-6:
             roofs.append(float(z))
     pause = roofs[0] if roofs else None
@@ -336,7 +351,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         solid=solid, cavity_centers=cavs, socket_centers=socks, socket_radius=rs if len(socks) else 0.0,
         min_wall=meas.min_wall, layout=plan.layout, print_matrix=pm,
         file_stem=f"{index:02d}_{rod.name}", print_note=note, thickness=rod.geometry.thickness,
-        pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs))
+        pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs), socket_height=plan.socket_height)
 
 
 def _filled_result(rod: RodType, target: float) -> FabricatedRod:
@@ -377,13 +392,17 @@ def _print_note(rod: RodType) -> str:
 
 def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: int = 0, jobs: int | None = None,
                     progress: Callable[[int, int], None] | None = None,
-                    cache: DiskCache | None = None) -> ChainFabrication:
+                    cache: DiskCache | None = None, layers: LayerGrid | None = None,
+                    keep_roofs: Collection[int] = ()) -> ChainFabrication:
     """Cavities and ball sockets for every rod of a chain, built on the B-rep.
 
     Identical rods (same type, same target mass to 1 microgram) are built
     once and share their solid; distinct ones are solved in ``jobs`` worker
     processes (default: the CPUs) and cached on disk. Out-of-range targets are
-    clipped to the type's range, built, and reported in ``problems``.
+    clipped to the type's range, built, and reported in ``problems``. Given the
+    print's ``layers``, the sockets' roofs are raised onto as few shared layers as the
+    rods allow (:func:`rodcad.fabrication.roofs.shared_roofs`), so the chain's prints
+    pause seldom; masses and centres of mass stay.
 
     Args:
         types: rod type per chain position.
@@ -392,6 +411,8 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
         jobs: worker processes.
         progress: called with (done, total) distinct rods.
         cache: disk cache (default :class:`DiskCache`).
+        layers: the print's layers (None: every socket as laid out).
+        keep_roofs: positions whose sockets stay as laid out (the rods of fused pieces).
 
     Returns:
         The :class:`ChainFabrication`; e.g. ``all(abs(r.mass_error) < 1e-3 for r in fab.rods)``.
@@ -404,19 +425,21 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     if len(types) != len(masses):
         raise ValueError(f"{len(types)} rod types but {len(masses)} masses")
     cache = cache if cache is not None else DiskCache()
-    keys: dict[tuple[str, float], int] = {}
-    distinct: list[tuple[RodType, float]] = []
+    roofs: list[float | None] = [None] * len(types) if layers is None else shared_roofs(
+        types, masses, layers, seed=seed, jobs=jobs, cache=cache, keep=keep_roofs)
+    keys: dict[tuple[str, float, float | None], int] = {}
+    distinct: list[tuple[RodType, float, float | None]] = []
     where: list[int] = []
-    for rod, m in zip(types, masses):
-        k = (rod.name, round(float(m), 6))
+    for rod, m, roof in zip(types, masses, roofs):
+        k = (rod.name, round(float(m), 6), None if roof is None else round(roof, 9))
         if k not in keys:
             keys[k] = len(distinct)
-            distinct.append((rod, float(m)))
+            distinct.append((rod, float(m), roof))
         where.append(keys[k])
     plans: list[dict[str, Any] | None] = []
     todo: list[int] = []
-    for i, (rod, m) in enumerate(distinct):
-        hit = None if rod.fill is not None else cache.get("fab", _key(rod, m, seed))
+    for i, (rod, m, roof) in enumerate(distinct):
+        hit = None if rod.fill is not None else cache.get("fab", _key(rod, m, seed, roof))
         plans.append(hit)
         if hit is None and rod.fill is None:  # a rod with a fill is built below, in one boolean
             todo.append(i)
@@ -443,7 +466,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
             tables[rod.name] = hit if isinstance(hit, dict) and "options" in hit else None
     pool = worker_pool(jobs) if jobs > 1 and len(tasks) > 1 else None
     try:
-        args = [(distinct[idx[0]][0], [distinct[i][1] for i in idx], seed, tables[distinct[idx[0]][0].name])
+        args = [(distinct[idx[0]][0], [distinct[i][1:] for i in idx], seed, tables[distinct[idx[0]][0].name])
                 for idx in tasks]
         results = pool.map(_type_star, args, chunksize=1) if pool is not None else map(_type_star, args)
         for idx, (table, res) in zip(tasks, results):
@@ -453,7 +476,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
                 cache.put("fabint", intervals_key(rod, seed), table)
             for i, plan in zip(idx, res):
                 plans[i] = plan
-                cache.put("fab", _key(distinct[i][0], distinct[i][1], seed), plan)
+                cache.put("fab", _key(*distinct[i][:2], seed, distinct[i][2]), plan)
                 done += 1
                 if progress:
                     progress(done, len(distinct))
@@ -461,7 +484,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
         if pool is not None:
             pool.shutdown()
     built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i])
-             for i, (rod, m) in enumerate(distinct)]
+             for i, (rod, m, _) in enumerate(distinct)]
     rods: list[FabricatedRod] = []
     problems: list[str] = []
     for index, (rod, m) in enumerate(zip(types, masses)):

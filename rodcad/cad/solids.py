@@ -30,6 +30,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from build123d import CenterOf, Edge, Face, Location, Plane, Solid, Vector, Wire
@@ -281,18 +282,19 @@ def is_valid_solid(shape: object) -> bool:
     return len(solids) == 1 and bool(solids[0].is_valid)
 
 
-def void_template(kind: str, radius: float) -> Solid:
+def void_template(kind: str, radius: float, height: float | None = None) -> Solid:
     """One void of shape ``kind`` around the origin (see :data:`rodcad.fabrication.layout.VOIDS`).
 
     The print's up direction is the rod frame's +y: 'capped' is the sphere cut
     flat at y = +-r/sqrt(2) (overhangs at most 45 degrees, a bridged roof of
     diameter r sqrt(2)); 'silo' is the lower half sphere plus a cylinder of the
-    same radius from y = 0 to y = r (a flat roof bridged over the ball);
-    'sphere' is the plain sphere.
+    same radius from y = 0 to y = r, or to y = ``height`` (a flat roof bridged over the
+    ball); 'sphere' is the plain sphere.
 
     Args:
         kind: 'sphere', 'capped' or 'silo'.
         radius: mm.
+        height: a silo's roof above its centre (mm; default the radius).
     """
     sphere = Solid.make_sphere(radius)
     if kind == "sphere":
@@ -303,31 +305,34 @@ def void_template(kind: str, radius: float) -> Solid:
         return one_solid(sphere.intersect(slab), "capping a cavity")
     if kind == "silo":
         up = Plane((0, 0, 0), x_dir=(1, 0, 0), z_dir=(0, 1, 0))
-        return one_solid(sphere.fuse(Solid.make_cylinder(radius, radius, up)).clean(), "shaping a ball socket")
+        top = radius if height is None else float(height)
+        return one_solid(sphere.fuse(Solid.make_cylinder(radius, top, up)).clean(), "shaping a ball socket")
     raise GeometryError(f"unknown void shape {kind!r}")
 
 
-def void_solids(kind: str, centers: np.ndarray, radius: float) -> list[Solid]:
-    """Voids of one shape and radius placed at ``centers`` ((n, 3), mm)."""
+def void_solids(kind: str, centers: np.ndarray, radius: float, height: float | None = None) -> list[Solid]:
+    """Voids of one shape and radius (a silo's roof ``height`` above its centre) placed at
+    ``centers`` ((n, 3), mm)."""
     if len(centers) == 0:
         return []
-    tpl = void_template(kind, radius)
+    tpl = void_template(kind, radius, height)
     return [tpl.moved(Location((float(x), float(y), float(z)))) for x, y, z in np.asarray(centers, dtype=float)]
 
 
-def with_voids(solid: Solid, voids: Sequence[tuple[str, np.ndarray, float]], name: str = "") -> Solid:
+def with_voids(solid: Solid, voids: Sequence[tuple[Any, ...]], name: str = "") -> Solid:
     """The solid with closed voids cut out, each checked to stay closed.
 
     Args:
         solid: the rod solid.
-        voids: (shape, centres (n, 3), radius) groups, see :func:`void_template`.
+        voids: (shape, centres (n, 3), radius) groups, or (shape, centres, radius, silo
+            height), see :func:`void_template`.
         name: label of the result (default: the solid's).
 
     Raises:
         GeometryError: the result is not one valid solid, or a void broke the
             surface or merged with another (the shell count is off).
     """
-    tools = [v for kind, centers, radius in voids for v in void_solids(kind, centers, radius)]
+    tools = [v for kind, centers, radius, *height in voids for v in void_solids(kind, centers, radius, *height)]
     if not tools:
         return solid
     result = one_solid(solid.cut(*tools), "cutting the cavities and ball sockets")

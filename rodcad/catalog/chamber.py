@@ -24,7 +24,9 @@ mass m then sets the chamber's length Lc in closed form (:func:`plan_chamber`):
 with V_c = cells x Hc x Tc x Lc and rho_fill = density x packing, so every mass from
 rho_pla (V_solid - V_max) to rho_pla (V_solid - V_max) + rho_fill V_max is reachable
 continuously. A chamber shorter than :data:`MIN_LENGTH` shrinks its section instead (same
-centre), one holding less than :data:`MIN_VOLUME` is left out (the plain solid).
+centre): its cells get thinner (z) down to :data:`MIN_LENGTH`, keeping their roof where every
+other chamber of the rod's shape has it (one pause height), and only then lower; one holding
+less than :data:`MIN_VOLUME` is left out (the plain solid).
 
 A curved rod's body is an arc band, so one straight box loses height to the band's sag. Its
 cells may instead be STEPPED (:func:`_stepped`): nested boxes centred on the centre of mass
@@ -51,7 +53,8 @@ from rodcad.catalog.model import Fill, RodGeometry, RodType
 __all__ = ["CHAMBER_VERSION", "Chamber", "ChamberModel", "GRID", "MAX_BRIDGE", "MIN_LENGTH", "MIN_VOLUME",
            "chamber_model", "fill_numbers", "plan_chamber"]
 
-#: Bump when chamber shapes change.
+#: Bump when the largest chamber of a rod changes (the mass ranges and the seeds derive from
+#: it; a short chamber's shape, built anew every time, does not enter them).
 CHAMBER_VERSION = "2"
 
 #: Widest flat roof bridged over a chamber cell (mm): the roof of the 6.2 mm sockets of the
@@ -420,12 +423,14 @@ def plan_chamber(rod: RodType, target: float) -> tuple[Chamber | None, float, st
     volume = abs(m - solid) / per_mm3
     if volume < MIN_VOLUME or mdl.area <= 0:
         return None, solid, message
-    length, scale = volume / mdl.area, 1.0
-    if length < MIN_LENGTH and mdl.max_length >= MIN_LENGTH:  # a short chamber: a smaller section
-        length = MIN_LENGTH
-        scale = math.sqrt(volume / (mdl.area * MIN_LENGTH))
+    length, scale, thin = volume / mdl.area, 1.0, 1.0
+    if length < MIN_LENGTH and mdl.max_length >= MIN_LENGTH:  # a short chamber: a smaller section,
+        length = MIN_LENGTH  # thinner cells first (the roof stays: one pause height for every rod),
+        keep = volume / (mdl.area * MIN_LENGTH)  # then lower ones
+        thin = max(keep, min(1.0, MIN_LENGTH / mdl.thickness))
+        scale = keep / thin
     length = min(length, mdl.max_length)
-    hc, tz = mdl.height * scale, mdl.thickness * scale
+    hc, tz = mdl.height * scale, mdl.thickness * thin
     cy = mdl.center[1]
     slabs = None if not mdl.slabs else tuple((f, cy + (y0 - cy) * scale, cy + (y1 - cy) * scale)
                                              for f, y0, y1 in mdl.slabs)

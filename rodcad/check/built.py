@@ -50,6 +50,8 @@ class BuiltRod:
         pin_diameter: mm; thickness: along the hinge axes (mm).
         piece: (first, last) of the fused piece the rod is printed in (its ``file`` holds the
             whole piece; ``print_matrix`` places this rod's frame in it), or None.
+        socket_height: its sockets' flat roofs above the ball centres (mm; 0 where
+            design.json does not say: the socket radius).
     """
 
     index: int
@@ -72,6 +74,7 @@ class BuiltRod:
     ball_diameter: float | None = None
     ball_kind: str = ""
     piece: tuple[int, int] | None = None
+    socket_height: float = 0.0
 
     @property
     def stem(self) -> str:
@@ -273,7 +276,8 @@ def _rod(rd: _Reader, outdir: Path, i: int, r: Any) -> BuiltRod | None:
     return BuiltRod(i, name, length, designed, mass, com, volume, balls, max(ball_mass, 0.0), path, matrix, params,
                     (float(lo_hi[0]), float(lo_hi[1])), pin, thick, fill_mass, fill_center,
                     float(fab["ball_diameter_mm"]) if isinstance(fab.get("ball_diameter_mm"), (int, float)) else None,
-                    str(fab.get("ball_kind") or ""), None if piece is None else (piece[0], piece[1]))
+                    str(fab.get("ball_kind") or ""), None if piece is None else (piece[0], piece[1]),
+                    float(fab["socket_height_mm"]) if isinstance(fab.get("socket_height_mm"), (int, float)) else 0.0)
 
 
 def _folder_problems(outdir: Path) -> list[Problem]:

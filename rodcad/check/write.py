@@ -250,7 +250,7 @@ def _print_rods(res: CheckResult, rb: Rebalanced, stems: list[str]) -> list[Any]
             ball_diameter=None if balls is None or not count else balls.diameter,
             ball_name="" if balls is None or not count else balls.name,
             socket_centers=np.asarray(b.ball_centers, float).reshape(-1, 3),
-            socket_radius=0.0 if balls is None else balls.socket_diameter / 2, pause_zs=(),
+            socket_radius=0.0 if balls is None else balls.socket_diameter / 2, socket_height=b.socket_height, pause_zs=(),
             print_note="", fill_mass=float(b.fill_mass), fill_name=""))
     return out
 

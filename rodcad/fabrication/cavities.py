@@ -20,8 +20,10 @@ from rodcad.fabrication.layout import (
     SphereLayout,
     ball_offset,
     max_ball_layout,
+    silo_top_points,
     sphere_layout,
     symmetric_images,
+    tall_silo,
     void_volume,
 )
 
@@ -48,6 +50,7 @@ __all__ = [
     "lattice_layouts",
     "orbits",
     "place_cavities",
+    "raised_sockets",
     "silo_distance",
     "socket_layout",
 ]
@@ -142,16 +145,18 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
     return CavityPool(images, cmin, intra, rng.permutation(len(images)))
 
 
-def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float) -> np.ndarray:
-    """Distance (mm) from points to the nearest silo socket (0 inside one)."""
+def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float, height: float | None = None) -> np.ndarray:
+    """Distance (mm) from points to the nearest silo socket (0 inside one) whose roof is
+    ``height`` above its centre (default: the radius)."""
     pts = np.atleast_2d(points)
     if len(centers) == 0:
         return np.full(len(pts), math.inf)
+    top = radius if height is None else height
     d = pts[:, None, :] - np.asarray(centers)[None, :, :]  # (n, k, 3)
     h = d @ UP
     radial = np.linalg.norm(d - h[..., None] * UP, axis=-1)
     ball = np.maximum(np.linalg.norm(d, axis=-1) - radius, 0.0)
-    cyl = np.hypot(np.maximum(radial - radius, 0.0), np.maximum(np.maximum(-h, h - radius), 0.0))
+    cyl = np.hypot(np.maximum(radial - radius, 0.0), np.maximum(np.maximum(-h, h - top), 0.0))
     return np.minimum(ball, cyl).min(axis=1)
 
 
@@ -163,24 +168,27 @@ class _CavityLayout:
     layout: str
 
 
-def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float) -> list[np.ndarray]:
+def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float,
+               socket_h: float | None = None) -> list[np.ndarray]:
     """Poisson-disk dart throwing of symmetric orbits: returns the accepted
-    orbits (their distinct points) in acceptance order (memoised)."""
-    key = (id(pool), radius, wall, np.asarray(sockets, dtype=float).tobytes(), socket_r)
+    orbits (their distinct points) in acceptance order (memoised). The sockets' roofs are
+    ``socket_h`` above their centres (default: their radius)."""
+    key = (id(pool), radius, wall, np.asarray(sockets, dtype=float).tobytes(), socket_r, socket_h)
     if key not in THROWS:
         if len(THROWS) > 4096:
             THROWS.clear()
-        THROWS[key] = _throw(pool, radius, wall, sockets, socket_r)
+        THROWS[key] = _throw(pool, radius, wall, sockets, socket_r, socket_h)
     return THROWS[key]
 
 
-def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float) -> list[np.ndarray]:
+def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float,
+           socket_h: float | None) -> list[np.ndarray]:
     need = radius + wall
     spacing = 2 * radius + wall
     ok = (pool.clearance >= need) & (pool.intra >= spacing - 1e-9)
     if len(sockets) and len(pool.images):  # clear of the ball sockets, all candidates at once
         flat, starts = pool.flat
-        ok &= np.minimum.reduceat(silo_distance(flat, sockets, socket_r), starts) >= need
+        ok &= np.minimum.reduceat(silo_distance(flat, sockets, socket_r, socket_h), starts) >= need
     accepted: list[np.ndarray] = []
     placed = np.zeros((0, 3))
     for i in pool.order:
@@ -204,9 +212,11 @@ def cavity_radii(rod: RodType) -> list[float]:
     return out
 
 
-def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: float, seed: int) -> _CavityLayout | None:
+def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: float, seed: int,
+                   socket_h: float | None = None) -> _CavityLayout | None:
     """Symmetric cavities removing ``volume`` (mm^3), as few and as large as
-    possible: Poisson-disk layouts first, the symmetric lattice as fallback.
+    possible: Poisson-disk layouts first, the symmetric lattice as fallback; clear of the
+    sockets (roofs ``socket_h`` above their centres; default their radius).
 
     For each design radius r_d, the layout's sites fit cavities up to r_d; a
     prefix of its orbits (in dart order) with n sites removes ``volume`` with
@@ -220,7 +230,7 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
         for rd in cavity_radii(rod):
             if best is not None and rd <= best.radius:
                 break
-            orbits = dart_throw(pool, rd, wall, sockets, socket_r)
+            orbits = dart_throw(pool, rd, wall, sockets, socket_r, socket_h)
             n = 0
             for j, orb in enumerate(orbits):
                 n += len(orb)
@@ -232,7 +242,7 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
     if best is not None:
         return best
     # Fallback: the deterministic lattice (it reaches the catalog's m_min).
-    for rd, lay in lattice_layouts(rod, sockets, socket_r):
+    for rd, lay in lattice_layouts(rod, sockets, socket_r, socket_h=socket_h):
         if lay.count == 0:
             continue
         r = (volume / (lay.count * CAPPED_K)) ** (1 / 3)
@@ -242,16 +252,18 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
 
 
 def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
-                    skip: Callable[[float], bool] = lambda radius: False) -> Iterator[tuple[float, SphereLayout]]:
-    """The symmetric lattice cavity layouts beside these ball sockets, largest radius first
-    (the fallback of :func:`place_cavities`: it reaches the catalog's m_min); radii for
-    which ``skip(radius)`` is true are passed over."""
+                    skip: Callable[[float], bool] = lambda radius: False, *,
+                    socket_h: float | None = None) -> Iterator[tuple[float, SphereLayout]]:
+    """The symmetric lattice cavity layouts beside these ball sockets (roofs ``socket_h``
+    above their centres; default their radius), largest radius first (the fallback of
+    :func:`place_cavities`: it reaches the catalog's m_min); radii for which
+    ``skip(radius)`` is true are passed over."""
     solid = type_solid(rod)
     com = mass_properties(solid).center
     clr = RodClearance(rod.geometry)
 
     def clearance(p: np.ndarray) -> np.ndarray:
-        return np.minimum(clr(p), silo_distance(p, sockets, socket_r))
+        return np.minimum(clr(p), silo_distance(p, sockets, socket_r, socket_h))
 
     info = mass_info(rod)
     radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
@@ -272,6 +284,41 @@ def socket_layout(rod: RodType) -> Any:
     lift = ball_offset(rod.balls.socket_diameter / 2, rod.balls.mass, rod.material.density)
     return max_ball_layout(clearance, clearance.bounds, mass_properties(solid).center, rod.balls.socket_diameter,
                            rod.material.min_wall, void="silo", raise_by=lift)
+
+
+def raised_sockets(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
+                   roof: float) -> tuple[np.ndarray, float] | None:
+    """The sockets of one row (laid out by :func:`socket_layout`) with their flat roofs
+    raised to ``roof`` (mm along :data:`UP`, rod frame): each socket's cylinder reaches up
+    to the roof and its centre rises with it so that socket and ball still act at their
+    site (:func:`rodcad.fabrication.layout.tall_silo`): the rod's centre of mass stays put.
+
+    Returns:
+        (centres (K, 3), the roofs' height above the centres) in mm, or None where the
+        sockets are not one row, the roof is below theirs, or the raised sockets would
+        leave less than the minimum wall to the rod's faces.
+    """
+    socks = np.asarray(sockets, dtype=float).reshape(-1, 3)
+    if not len(socks):
+        return None
+    ys = socks @ UP
+    if np.ptp(ys) > 1e-9:
+        return None
+    balls = rod.ball_kinds[kind]
+    rho = rod.material.density
+    site = float(ys[0]) - ball_offset(socket_r, balls.mass, rho)
+    if roof < float(ys[0]) + socket_r - 1e-9:
+        return None
+    centre, height = tall_silo(site, socket_r, balls.mass, rho, roof)
+    out = socks + UP * (centre - ys[0])
+    if RodClearance(rod.geometry)(silo_top_points(out, socket_r, height)).min() < rod.material.min_wall + WALL_MARGIN:
+        return None
+    return out, height
+
+
+#: Wall kept (mm) beyond the material's minimum where a socket's roof is raised: the sampled
+#: check of :func:`raised_sockets` stands in for the B-rep's measurement.
+WALL_MARGIN = 0.05
 
 
 def orbits(points: np.ndarray, center: Sequence[float], symmetry: str) -> list[np.ndarray]:

@@ -27,10 +27,13 @@ __all__ = [
     "max_ball_layout",
     "max_cavity_layout",
     "silo_rim_points",
+    "silo_top_points",
+    "silo_volume",
     "sphere_layout",
     "SphereLayout",
     "symmetric_images",
     "symmetric_subset",
+    "tall_silo",
     "void_centroid",
     "void_volume",
 ]
@@ -70,6 +73,8 @@ UP = np.array([0.0, 1.0, 0.0])
 #:   the same radius up to c + r, closed by a flat bridged roof. The print
 #:   pauses just below the roof and the ball drops in (its top stays below the
 #:   roof). Its top rim reaches past the sphere, so fits are checked there too.
+#:   A taller silo (its roof higher above the ball, :func:`tall_silo`) puts the
+#:   roofs of a chain's rods on a shared print layer (:mod:`rodcad.fabrication.roofs`).
 VOIDS = ("sphere", "capped", "silo")
 
 
@@ -94,7 +99,19 @@ def void_centroid(kind: str, radius: float) -> float:
     return 0.15 * radius if kind == "silo" else 0.0
 
 
-def ball_offset(socket_radius: float, ball_mass: float, density: float) -> float:
+def silo_volume(radius: float, height: float | None = None) -> float:
+    """Volume (mm^3) of a 'silo' socket of ``radius``: the lower half sphere plus a cylinder
+    ``height`` mm tall above the centre (default: the radius, the plain silo)."""
+    h = radius if height is None else height
+    return 2.0 / 3.0 * math.pi * radius**3 + math.pi * radius**2 * h
+
+
+def _silo_moment(radius: float, height: float) -> float:
+    """First moment (mm^4) along :data:`UP` of a silo about its centre."""
+    return math.pi * radius**2 * (height * height / 2 - radius * radius / 4)
+
+
+def ball_offset(socket_radius: float, ball_mass: float, density: float, height: float | None = None) -> float:
     """How far (mm, along :data:`UP`) to raise a silo socket above the site it
     stands for, so that socket (plastic removed) and ball (at the socket centre)
     together act as a point mass at the site: a symmetric set of sites then
@@ -104,9 +121,33 @@ def ball_offset(socket_radius: float, ball_mass: float, density: float) -> float
         socket_radius: mm.
         ball_mass: g.
         density: plastic density (g/cm^3).
+        height: the silo's roof above its centre (mm; default the radius).
     """
-    removed = void_volume("silo", socket_radius) * density / 1000.0
-    return removed * void_centroid("silo", socket_radius) / (ball_mass - removed)
+    h = socket_radius if height is None else height
+    rho = density / 1000.0
+    return rho * _silo_moment(socket_radius, h) / (ball_mass - rho * silo_volume(socket_radius, h))
+
+
+def tall_silo(site: float, radius: float, ball_mass: float, density: float, roof: float) -> tuple[float, float]:
+    """A silo socket whose flat roof is at ``roof`` (mm along :data:`UP`) and which, with its
+    ball at its centre, still acts as a point mass at ``site`` (:func:`ball_offset` for a
+    taller cylinder): (centre, height of the roof above the centre), both mm.
+
+    The roof must be at least the plain silo's (site + its offset + the radius); a higher
+    roof lengthens the cylinder above the ball, and the socket's centre rises a little with
+    it, so the rod's centre of mass does not move.
+    """
+    def gap(h: float) -> float:
+        return site + ball_offset(radius, ball_mass, density, h) + h - roof
+
+    lo, hi = radius, roof - site
+    if gap(lo) > 1e-9:
+        raise ValueError(f"a roof at {roof:.4f} mm is below the plain socket's ({roof - gap(lo):.4f} mm)")
+    for _ in range(80):  # gap rises with h: bisection to round-off
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if gap(mid) < 0 else (lo, mid)
+    h = (lo + hi) / 2
+    return roof - h, h
 
 
 def silo_rim_points(centers: np.ndarray, radius: float, n: int = 16) -> np.ndarray:
@@ -116,6 +157,18 @@ def silo_rim_points(centers: np.ndarray, radius: float, n: int = 16) -> np.ndarr
     ring = np.stack([np.cos(th), np.zeros(n), np.sin(th)], axis=1) * radius
     rims = np.concatenate([ring + UP * radius, ring * 0.8 + UP * 0.6 * radius])
     return (np.asarray(centers, dtype=float)[:, None, :] + rims[None]).reshape(-1, 3)
+
+
+def silo_top_points(centers: np.ndarray, radius: float, height: float, n: int = 24) -> np.ndarray:
+    """Points on the upper part of silo sockets whose roofs are ``height`` above their
+    centres: the roof's rim, a ring at half the radius and its centre, and rings on the
+    cylinder every half radius below the roof ((len(centers) * m, 3))."""
+    th = np.linspace(0, 2 * math.pi, n, endpoint=False)
+    ring = np.stack([np.cos(th), np.zeros(n), np.sin(th)], axis=1) * radius
+    levels = np.arange(height, -1e-9, -radius / 2)
+    rims = [ring + UP * y for y in levels] + [ring / 2 + UP * height, UP[None] * height]
+    pts = np.concatenate(rims)
+    return (np.asarray(centers, dtype=float)[:, None, :] + pts[None]).reshape(-1, 3)
 
 
 @dataclass(frozen=True)

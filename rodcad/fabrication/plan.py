@@ -9,20 +9,26 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rodcad.fabrication.layout import void_volume
+from rodcad.fabrication.layout import MIN_CAVITY_RADIUS, void_volume
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
 from rodcad.catalog.massrange import mass_info
 from rodcad.fabrication.cavities import (
+    CAPPED_K,
     EDGE_TOL,
     SOLID_TOL,
     FabricationError,
     place_cavities,
+    raised_sockets,
 )
 from rodcad.fabrication.intervals import compute_table, fmt_mass
 
-__all__ = ["Measurement", "RodPlan", "plan_rod"]
+__all__ = ["BallChoice", "MIN_REMOVE", "Measurement", "RodPlan", "choose_balls", "plan_rod"]
+
+#: Least cavity volume (mm^3) a rod must keep removing for its sockets' roofs to be raised
+#: (the taller sockets take that plastic instead): room for eight of the smallest cavities.
+MIN_REMOVE = 8 * CAPPED_K * MIN_CAVITY_RADIUS**3
 
 
 @dataclass(frozen=True)
@@ -62,6 +68,8 @@ class RodPlan:
         message: why the built mass differs from the target, or ''.
         measured: the B-rep's measurements, once built.
         ball_kind: which of the rod's ball kinds the sockets hold (:attr:`RodType.ball_kinds`).
+        socket_height: the sockets' flat roofs above their centres (mm); 0: the socket
+            radius (the plain silo, see :data:`rodcad.fabrication.layout.VOIDS`).
     """
 
     mass: float
@@ -75,6 +83,12 @@ class RodPlan:
     message: str
     measured: Measurement | None = None
     ball_kind: int = 0
+    socket_height: float = 0.0
+
+    @property
+    def socket_top(self) -> float:
+        """The sockets' roofs above their centres (mm; 0 without sockets)."""
+        return self.socket_height or self.socket_radius
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -83,6 +97,8 @@ class RodPlan:
             "cavity_radius": self.cavity_radius, "cavity_bound": self.cavity_bound, "layout": self.layout,
             "message": self.message, "ball_kind": self.ball_kind,
         }
+        if self.socket_height:
+            out["socket_height"] = self.socket_height
         if self.measured is not None:
             out["measured"] = {**asdict(self.measured), "com": list(self.measured.com)}
         return out
@@ -100,19 +116,40 @@ class RodPlan:
             measured=None if meas is None else Measurement(
                 float(meas["volume"]), float(meas["mass"]), (float(meas["com"][0]), float(meas["com"][1])),
                 float(meas["min_wall"]), int(meas["booleans"])),
-            ball_kind=int(data.get("ball_kind", 0)))
+            ball_kind=int(data.get("ball_kind", 0)), socket_height=float(data.get("socket_height", 0.0)))
 
 
-def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None) -> RodPlan:
-    """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
+@dataclass(frozen=True)
+class BallChoice:
+    """The balls a rod gets for its target mass, and what the cavities must remove beside them.
 
-    The ball subset and the cavity volume come from the type's table of
-    reachable masses (:func:`achievable_intervals`); one cavity layout search
-    follows for the chosen subset.
+    Attributes:
+        mass: the mass to build (g): the target, clipped to the type's range and moved out
+            of a gap between ball counts.
+        build_mass: the reachable mass the layout is chosen for (g).
+        message: why ``mass`` differs from the target, or ''.
+        sockets: (K, 3) socket centres of the plain silos (mm, rod frame).
+        socket_radius: mm (0 without balls).
+        kind: the ball kind (:attr:`RodType.ball_kinds`).
+        remove: the cavity volume (mm^3) that makes ``build_mass`` beside the plain silos.
     """
+
+    mass: float
+    build_mass: float
+    message: str
+    sockets: np.ndarray
+    socket_radius: float
+    kind: int
+    remove: float
+
+
+def choose_balls(rod: RodType, target: float, table: dict[str, Any]) -> BallChoice:
+    """The ball subset and the cavity volume for ``target`` g from the type's table of
+    reachable masses (:func:`rodcad.fabrication.intervals.compute_table`): the target is
+    clipped to the type's range, and one in a gap between ball counts is moved to the
+    nearest reachable mass (the message says so)."""
     info = mass_info(rod)
     rho = rod.material.density / 1000.0
-    table = table if table is not None else compute_table(rod, seed)
     m_lo, m_hi = info.m_min, info.m_max
     message = ""
     m = float(target)
@@ -170,13 +207,48 @@ def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | Non
     i, remove = found
     opt = options[i]
     socks = np.array(opt["sockets"], dtype=float).reshape(-1, 3)
-    rs = float(opt["socket_radius"])
-    cav = place_cavities(rod, remove, socks, rs, seed) if remove > 0 else None
+    rs = float(opt["socket_radius"]) if len(socks) else 0.0
+    return BallChoice(m, build, message, socks, rs, int(opt.get("kind", 0)), float(remove))
+
+
+def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None, *,
+             roof: float | None = None) -> RodPlan:
+    """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
+
+    The ball subset and the cavity volume come from the type's table of
+    reachable masses (:func:`choose_balls`); one cavity layout search
+    follows for the chosen subset.
+
+    Args:
+        rod: the rod type.
+        target: its mass (g).
+        seed: seed of the cavity layouts.
+        table: the type's table of reachable masses (computed when None).
+        roof: where the sockets' flat roofs should be (mm along the print's up, rod frame),
+            or None for the plain sockets. The raised sockets (:func:`raised_sockets`) take
+            the plastic above the balls that the cavities would otherwise remove, so the
+            mass and the centre of mass stay; where the rod's walls or its cavity volume do
+            not allow it, or no cavity layout removes what is left, the plain sockets are
+            kept.
+    """
+    table = table if table is not None else compute_table(rod, seed)
+    choice = choose_balls(rod, target, table)
+    socks, rs, remove, height = choice.sockets, choice.socket_radius, choice.remove, 0.0
+    cav = None
+    raised = None if roof is None else raised_sockets(rod, socks, rs, choice.kind, roof)
+    if raised is not None and raised[1] > rs + 1e-9:
+        left = remove - len(socks) * math.pi * rs * rs * (raised[1] - rs)
+        cav = place_cavities(rod, left, raised[0], rs, seed, socket_h=raised[1]) if left >= MIN_REMOVE else None
+        if cav is not None:
+            socks, height, remove = raised[0], raised[1], left
+    if cav is None:
+        cav = place_cavities(rod, remove, socks, rs, seed) if remove > 0 else None
     if remove > 0 and cav is None:  # pragma: no cover - the table says it fits
         raise FabricationError(f"{rod.name}: no cavity layout removes {remove:.3f} mm^3 beside "
                                f"{len(socks)} balls, although the table of reachable masses says one does")
     return RodPlan(
-        mass=m, build_mass=build, sockets=socks, socket_radius=rs if len(socks) else 0.0,
+        mass=choice.mass, build_mass=choice.build_mass, sockets=socks, socket_radius=rs,
         cavities=np.zeros((0, 3)) if cav is None else np.asarray(cav.centers, dtype=float).reshape(-1, 3),
         cavity_radius=0.0 if cav is None else cav.radius, cavity_bound=0.0 if cav is None else cav.bound,
-        layout="" if cav is None else cav.layout, message=message, ball_kind=int(opt.get("kind", 0)))
+        layout="" if cav is None else cav.layout, message=choice.message, ball_kind=choice.kind,
+        socket_height=height)

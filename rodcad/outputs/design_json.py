@@ -156,6 +156,7 @@ def fabrication_json(f, piece=None) -> dict[str, Any]:
         "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
         "pause_zs_mm": [float(z) for z in f.pause_zs],
         "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
+        "socket_height_mm": float(getattr(f, "socket_height", 0.0) or f.socket_radius) if f.ball_count else None,
         "ball_mass_g": float(f.mass - f.filament_mass - f.fill_mass),
         "ball_kind": (getattr(f, "ball_name", "") or None) if f.ball_count else None,
         "fill": {"name": f.fill_name, "grams": float(f.fill_mass),

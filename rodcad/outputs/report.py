@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from rodcad import __version__
+from rodcad.fabrication.layers import LayerGrid
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
 
 __all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
@@ -20,6 +21,19 @@ def _fmt_err(e: dict[str, Any] | None) -> str:
     rel = e["max_rel_span"]
     return (f"max {e['max_mm']:.3g} mm ({100 * rel:.3g} % of the span), mean {e['mean_mm']:.3g} mm, "
             f"sum {e['sum_mm']:.3g} mm")
+
+
+def _pauses(parts, prof: dict[str, Any]) -> str:
+    """'1 pause, at z = 12.4 mm' / '3 pauses, at z = 11.4, 11.8 and 12.4 mm' / 'no pause': the
+    layer tops (print_z) the print pauses at for these printed parts (rods and pieces), with the
+    profile's layers (:class:`rodcad.fabrication.layers.LayerGrid`)."""
+    h = float(prof.get("layer_height") or 0.2)
+    layers = LayerGrid(h, float(prof.get("first_layer_height") or h))
+    zs = sorted({layers.pause_z(z) for p in parts for z in p.pause_zs})
+    if not zs:
+        return "no pause"
+    at = ", ".join(f"{z:g}" for z in zs[:-1]) + (" and " if len(zs) > 1 else "") + f"{zs[-1]:g}"
+    return f"{len(zs)} pause{'s' if len(zs) > 1 else ''}, at z = {at} mm"
 
 
 def report_markdown(r, data: dict[str, Any]) -> str:
@@ -183,8 +197,11 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     if fab is not None:
         add("1. Open `print.3mf` in PrusaSlicer (2.5 or newer): every rod is on the bed, in print orientation, "
             "with the print settings the masses assume (100 % infill) and a pause (M601) at each layer where "
-            "balls go in; rods whose pauses differ are on separate plates (`print-2.3mf`, ...). Other "
-            "slicers: print each file of `rods/` (`.3mf`, `.stl` or `.step`) as it lies.")
+            f"balls go in or shot is poured ({_pauses(fab.parts, prof)}), its message naming the rods whose "
+            "inserts go in there; the other rods print on through it. Rods that do not fit one bed continue "
+            "on `print-2.3mf`, .... Each `rods/NN_TYPE.3mf` is a project of that rod alone, with the same "
+            "settings and its own pauses. Other slicers: print each file of `rods/` (`.stl` or `.step`) as "
+            "it lies.")
         add("2. Rods with balls: at each pause drop the balls the message names into the sockets and resume "
             "(without the project: pause at the Z height in the table, e.g. PrusaSlicer's 'Add pause print'). "
             "Rods with a chamber to fill: pause at the Z height in the table (the top of the chamber), pour "
@@ -351,8 +368,9 @@ def chandelier_markdown(b, data: dict[str, Any]) -> str:
             L.append(f"- {ball['count']} x {ball_text(ball['diameter_mm'], ball.get('kind') or '')}")
     L.append(f"- Total rod mass: {bom['total_mass_g']:.1f} g")
     L += ["", "## Assembly", "",
-          "1. Print the frame and every chain's rods (`<chain>/rods/`, already in print orientation); "
-          "pause rods with balls at the Z height their chain's design lists.",
+          "1. Print the frame and every chain's rods: `<chain>/print.3mf` (PrusaSlicer) holds a chain's rods "
+          "with the print settings and a pause at each layer where balls go in, naming the rods; "
+          "`<chain>/rods/` has each rod in print orientation.",
           "2. Assemble each chain in index order (rod k's second joint takes rod k+1's first, one pin each).",
           "3. Pin each chain's first rod to its A lug and its last rod to its B lug, chain by chain in the "
           "order of `assembly.step`.", ""]

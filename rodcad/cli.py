@@ -16,7 +16,7 @@ import sys
 from collections.abc import Sequence
 
 from rodcad import __version__
-from rodcad.errors import InputError
+from rodcad.errors import DesignLimit, InputError
 from rodcad.outdir import OutputFolderError
 
 #: Modules that register subcommands, in the order ``--help`` lists them.
@@ -58,6 +58,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OutputFolderError as err:
         print(f"rodcad: {err}", file=sys.stderr)
         return 2
+    except DesignLimit as err:
+        print(f"rodcad: {err}; outputs left as they were", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("rodcad: interrupted; outputs left as they were", file=sys.stderr)
         return 1

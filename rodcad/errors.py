@@ -1,8 +1,10 @@
-"""One error type for bad user input, carrying every problem found.
+"""One error type for bad user input, carrying every problem found, and one for requests
+the physics or fabrication cannot meet.
 
 Each problem is printed as ``FILE:LINE:COL: key.path: message`` (yamllint's
 location format with cfgv's key path), all of them at once, and the CLI exits
-with code 2 without a traceback.
+with code 2 without a traceback. A :class:`DesignLimit` is not the file's mistake: one
+line, exit 1.
 """
 
 from __future__ import annotations
@@ -42,3 +44,8 @@ class InputError(Exception):
 
     def __str__(self) -> str:
         return "\n".join(str(p) for p in self.problems)
+
+
+class DesignLimit(Exception):
+    """A request the physics or fabrication cannot meet (not the input file's mistake): the
+    CLI prints its message in one line and exits 1, leaving the outputs as they were."""

@@ -47,6 +47,7 @@ from rodcad.cad.rods import (
     write_rod_files,
 )
 from rodcad.design.chains import ChainSpec, design_chains
+from rodcad.design.fit import DEFAULT_TOLERANCE, curve_fit, fit_limit
 from rodcad.design.chandelier import ChandelierDesign, design_chandelier
 from rodcad.design.frame import FramePlan, frame_outline, plan_frame
 from rodcad.design.masses import ChainDesign, check_equilibrium
@@ -157,10 +158,40 @@ class BuildResult:
         return len(self.type_names)
 
     @property
+    def tolerance(self) -> float:
+        """The design's ``tolerance``, or :data:`rodcad.design.fit.DEFAULT_TOLERANCE`."""
+        return self.design.tolerance if self.design.tolerance is not None else DEFAULT_TOLERANCE
+
+    @property
+    def fit(self) -> float | None:
+        """How far the hanging rods' centrelines are from the target curve over the target's
+        size (:func:`rodcad.design.fit.curve_fit`), the as-built chain's where it is worse;
+        None for an explicit chain."""
+        if self.plan is None or self.design.target_curve is None:
+            return None
+        curvature = [self.design.catalog[n].curvature for n in self.type_names]
+        fit = curve_fit(self.plan.curve, self.equilibrium.points, curvature)
+        if self.as_built is not None:
+            fit = max(fit, curve_fit(self.plan.curve, self.as_built.equilibrium.points, curvature))
+        return fit
+
+    @property
     def meets_tolerance(self) -> bool:
-        """True unless the design sets a tolerance the result misses."""
-        tol = self.design.tolerance
-        return tol is None or self.distance is None or self.distance.max_rel_span <= tol
+        """The rods hang within the tolerance of the target curve (always, for an explicit chain)."""
+        fit = self.fit
+        return fit is None or fit <= self.tolerance * (1 + 1e-9)
+
+    def limit(self) -> str:
+        """What keeps the chain off its tolerance and what would reach it, in one line."""
+        fit = self.fit
+        if fit is None or self.plan is None or self.chain_design is None:
+            return ""
+        fam = next((f for f in self.design.catalog.printed_families), None) if self.plan.rods else None
+        return fit_limit(curve=self.plan.curve, target_points=self.target_points,
+                         curvature=[self.design.catalog[n].curvature for n in self.type_names], plan=self.plan,
+                         inverse=self.chain_design.result, check=self.chain_design.check, fit=fit,
+                         tolerance=self.tolerance, family_ranges=fam.ranges if fam is not None else None,
+                         constraints=self.design.constraints)
 
 
 @dataclass
@@ -189,8 +220,18 @@ class ChandelierBuild:
 
     @property
     def meets_tolerance(self) -> bool:
-        tol = self.design.tolerance
-        return tol is None or all(c.distance.max_rel_span <= tol for c in self.result.chains)
+        """Every chain's rods hang within the tolerance of its target curve."""
+        tol = self.design.tolerance if self.design.tolerance is not None else DEFAULT_TOLERANCE
+        return all(self.fits[k] <= tol * (1 + 1e-9) for k in range(len(self.result.chains)))
+
+    @property
+    def fits(self) -> list[float]:
+        """Per chain, how far its rods hang off its target curve over the target's size."""
+        out = []
+        for ch in self.result.chains:
+            curvature = [self.design.catalog[n].curvature for n in ch.design.plan.type_names]
+            out.append(curve_fit(ch.design.plan.curve, ch.points, curvature))
+        return out
 
 
 # --------------------------------------------------------------------------- shared steps

@@ -4,9 +4,10 @@ Writes OUTDIR (default ``outputs/<design name>``): design.json, report.md,
 preview.png and preview.svg, and unless ``--no-cad`` assembly.step plus
 rods/*.step and rods/*.stl. Everything is written to a temporary folder first
 and renamed into place at the end, so a failed or interrupted run leaves OUTDIR
-as it was. When the design sets a ``tolerance`` that the result misses, OUTDIR
-is left alone, the best achievable design goes to ``OUTDIR.best-fit`` and the
-exit code is 1.
+as it was. When the rods hang further off the target curve than the design's
+``tolerance`` (default 1 % of the target's size), OUTDIR is left alone, the best
+achievable design goes to ``OUTDIR.best-fit``, one line says what limits it and
+what would reach it, and the exit code is 1.
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet)
     design = load_design(args.design)
     outdir = Path(args.outdir) if args.outdir else Path("outputs") / design.name
-    folders = [outdir] + ([outdir.with_name(outdir.name + ".best-fit")] if design.tolerance is not None else [])
+    folders = [outdir, outdir.with_name(outdir.name + ".best-fit")]
     problems = []
     for folder in folders:  # before any work: never replace what rodcad did not write
         try:
@@ -73,9 +74,8 @@ def run(args: argparse.Namespace) -> int:
     pipeline.write_outputs(result, target, progress=progress)
     print(summary_text(result, target))
     if not result.meets_tolerance:
-        err = result.distance.max_rel_span
-        print(f"rodcad: the design misses its tolerance ({err:.3g} of the span > {design.tolerance:g}); "
-              f"{outdir} left as it was, the best achievable design is in {target}", file=sys.stderr)
+        print(f"rodcad: {design.name} {result.limit()}; {outdir} left as it was, the best fit is in {target}",
+              file=sys.stderr)
     elif code:
         print("rodcad: the anchor fixture is not fit to print: " + "; ".join(result.fixture_problems)
               + f"; {outdir} left as it was, the design and its fixture are in {target}", file=sys.stderr)
@@ -92,7 +92,10 @@ def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progre
     pipeline.write_chandelier_outputs(b, target, progress=progress)
     print(chandelier_summary(b, target))
     if target != outdir:
-        print(f"rodcad: a chain misses the tolerance; {outdir} left as it was, the best achievable design "
-              f"is in {target}", file=sys.stderr)
+        tol = design.tolerance if design.tolerance is not None else 0.01
+        off = [f"{ch.name} hangs {100 * f:.3g} % of its size off its curve" for ch, f in zip(b.result.chains, b.fits)
+               if f > tol]
+        print(f"rodcad: {'; '.join(off)} (tolerance {100 * tol:.3g} %); {outdir} left as it was, the best "
+              f"achievable design is in {target}", file=sys.stderr)
         return 1
     return 0

@@ -128,8 +128,11 @@ class Constraints:
 
     @property
     def anchor_stops_allowed(self) -> bool:
-        """The planner may stop the end rods at the fixture (unless the design says 'none')."""
-        return self.anchor_stops != "none"
+        """The planner may stop the end rods at the fixture: unless the design says 'none',
+        or forbids every stop (``joints: free``, weights alone) without asking for them."""
+        if self.anchor_stops is None:
+            return self.joints != "free"
+        return self.anchor_stops == "auto"
 
     @property
     def fuse_mode(self) -> str:

@@ -38,7 +38,7 @@ from rodcad.design.printed import (
     count_for,
     plan_printed,
 )
-from rodcad.errors import InputError, Problem
+from rodcad.errors import DesignLimit, InputError, Problem
 
 __all__ = ['CatalogArrays', 'ChainPlan', 'catalog_arrays', 'plan_chain', 'plan_constrained', 'STOP_REACH']
 
@@ -466,8 +466,8 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
                               same_shell=same, **ends)
     except ShellError as err:
         raise InputError([problem("constraints.same_shell", f"{who}{err}")]) from None
-    except ValueError as err:
-        raise InputError([problem("target", f"{who}{err}")]) from None
+    except ValueError as err:  # the rods cannot be laid on this target: a limit, not the file's mistake
+        raise DesignLimit(f"{who}cannot lay rods of {span} on this target: {err}") from None
     return _from_printed(curve, lp)
 
 

@@ -204,7 +204,7 @@ def design_json(r) -> dict[str, Any]:
         "error": r.distance.as_dict() if r.distance is not None else None,
         "anchor_limits_deg": anchor_limits_deg(r.end_limits),
         "fused": [[int(a), int(b)] for a, b in (r.plan.fused if r.plan is not None else [])],
-        "tolerance": d.tolerance,
+        "tolerance": r.tolerance,
         "meets_tolerance": r.meets_tolerance,
         "notes": list(r.notes),
     }

@@ -98,8 +98,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         f"found from 12 starts ({'unique' if sim['unique'] else 'not unique'})")
     add(f"- Reactions: A ({sim['reaction_a'][0]:.4g}, {sim['reaction_a'][1]:.4g}) N, "
         f"B ({sim['reaction'][0]:.4g}, {sim['reaction'][1]:.4g}) N")
-    if d.tolerance is not None:
-        add(f"- Tolerance {d.tolerance:g} of the span: {'met' if r.meets_tolerance else 'MISSED'}")
+    if getattr(r, "fit", None) is not None:
+        given = "the design's" if d.tolerance is not None else "the default"
+        add(f"- Tolerance ({given}): the rods within {100 * r.tolerance:.3g} % of the target's size of its curve: "
+            + ("met" if r.meets_tolerance else f"MISSED: {r.limit()}"))
     for note in r.notes:
         add(f"- Note: {note}")
     add("")

@@ -111,6 +111,8 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
             if np.isfinite(lo) or np.isfinite(hi):
                 lo = lo if np.isfinite(lo) else -_BIG
                 hi = hi if np.isfinite(hi) else _BIG
+                if hi - lo < 2e-9:  # a rigid joint (lo == hi): MuJoCo needs lo < hi, so a range of 2e-9 rad
+                    lo, hi = (lo + hi) / 2 - 1e-9, (lo + hi) / 2 + 1e-9
                 lim = (f'limited="true" range="{_f(lo)} {_f(hi)}" '
                        f'solreflimit="{sref_lim}" solimplimit="{simp}"')
         out.append(f'{indent}  <joint name="j{i}" type="hinge" axis="0 0 1" {lim}/>')

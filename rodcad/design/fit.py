@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from optimize.discretize import centerline, curve_distance
+from optimize.endlimits import limit_turn
 from rodcad.design.shell import curve_size
 
 __all__ = ["DEFAULT_TOLERANCE", "curve_fit", "fit_limit"]
@@ -69,7 +70,18 @@ def fit_limit(*, curve: np.ndarray, target_points: np.ndarray, curvature, plan, 
         return (f"hangs {pct}: joint(s) {', '.join(map(str, unmet))} bend more than anything allowed can hold; "
                 f"{hint}")
     eq = check.equilibrium
-    if inverse is not None and not inverse.exact:
+    given = c.end_limits if c is not None else None
+    if given is not None:
+        d = np.diff(np.asarray(target_points, float), axis=0)
+        theta = np.arctan2(d[:, 1], d[:, 0])[[0, -1]]
+        for k, (t, lim) in enumerate(zip(theta, np.asarray(given, float))):
+            t = float(t - limit_turn(t, lim))  # on the limit's turn
+            if not lim[0] - 1e-9 <= t <= lim[1] + 1e-9:
+                return (f"hangs {pct}: constraints.anchor_limits_deg holds the {'first' if k == 0 else 'last'} rod "
+                        f"within [{np.degrees(lim[0]):.4g}, {np.degrees(lim[1]):.4g}] deg, where the target needs "
+                        f"{np.degrees(t):.4g} deg; widen or remove that bound (the planner chooses the fixture's "
+                        "stops itself)")
+    if inverse is not None and not inverse.exact and np.any(inverse.at_bounds != 0):
         lo = int(np.sum(inverse.at_bounds < 0))
         hi = int(np.sum(inverse.at_bounds > 0))
         if c is not None and c.joints == "free":

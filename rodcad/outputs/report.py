@@ -247,13 +247,16 @@ def _joints_text(r) -> str:
     lim = np.asarray(r.limits, float).reshape(-1, 2)
     bends = np.diff(r.equilibrium.angles)
     on |= {j for j in range(n - 1) if np.any(np.abs(lim[j] - bends[j]) < 1e-9)}
-    fused = {j for j in range(n - 1) if lim[j, 0] == lim[j, 1]}
-    on -= fused
-    free = [j for j in range(n - 1) if j not in on and j not in fused]
+    pieces = r.plan.fused if r.plan is not None else []
+    fused = {j for a, b in pieces for j in range(a, b)}
+    both = {j for j in range(n - 1) if lim[j, 0] == lim[j, 1] and j not in fused}  # two-sided stops
+    on -= fused | both
+    free = [j for j in range(n - 1) if j not in on and j not in fused and j not in both]
     text = (f"{len(free)} of {n - 1} hang freely ({', '.join(map(str, free)) or 'none'}), "
             f"{len(on)} rest on stops ({', '.join(map(str, sorted(on))) or 'none'})")
+    if both:
+        text += f", {len(both)} held both ways by two-sided stops ({', '.join(map(str, sorted(both)))})"
     if fused:
-        pieces = r.plan.fused if r.plan is not None else []
         text += (f", {len(fused)} fused ({', '.join(map(str, sorted(fused)))}; one piece each: rods "
                  + ", ".join(f"{a}-{b}" for a, b in pieces) + ")")
     info = getattr(r.equilibrium, "info", {}) or {}

@@ -21,7 +21,8 @@ __all__ = ["Progress", "Step"]
 
 
 class Step:
-    """One running step; :meth:`count` reports ``done`` of ``total`` items."""
+    """One running step; :meth:`count` reports ``done`` of ``total`` items, :meth:`note` what
+    it is doing now."""
 
     def __init__(self, progress: Progress, name: str) -> None:
         self.progress = progress
@@ -42,6 +43,18 @@ class Step:
             self._last_tenth = tenth
             p.stream.write(f"  {self.name} ... {done}/{total}\n")
             p.stream.flush()
+
+
+    def note(self, text: str) -> None:
+        """Say what the step is doing now (in place on a terminal, a line in a log)."""
+        p = self.progress
+        if p.quiet:
+            return
+        if p.tty:
+            p.stream.write(f"\r\033[K  {self.name} ... {text}")
+        else:
+            p.stream.write(f"  {self.name} ... {text}\n")
+        p.stream.flush()
 
 
 class Progress:

@@ -125,13 +125,14 @@ def design_chains(
     plans: dict[int, ChainPlan] = {}
     what = "the target" if len(specs) == 1 else f"the targets of {len(specs)} chains"
     problems: list[Problem] = []
-    with progress.step(f"laying rods on {what}"):
+    with progress.step(f"laying rods on {what}") as st:
         for i, s in enumerate(specs):
             k = s.key()
             if k not in first:
                 first[k] = i
                 try:
-                    plans[i] = plan_constrained(s.curve, constraints, arrays, problem, label=s.label)
+                    plans[i] = plan_constrained(s.curve, constraints, arrays, problem, label=s.label,
+                                                report=st.note)
                 except InputError as err:  # every chain's problems at once
                     problems += err.problems
     if problems:

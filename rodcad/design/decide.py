@@ -121,7 +121,8 @@ def _mirror(j: int, n: int) -> int:
 
 def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
            phi: np.ndarray, *, allowed: Allowed, end_limits: np.ndarray | None = None, mirrored: bool = False,
-           same: bool = False, n_starts: int = 12, seed: int = 0, budget_s: float = 20.0) -> Decision:
+           same: bool = False, n_starts: int = 12, seed: int = 0, budget_s: float = 20.0,
+           report=None) -> Decision:
     """Decide every joint's and anchor's way of holding its bend (see the module's docstring).
 
     Args:
@@ -134,6 +135,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         same: one shell for every rod.
         n_starts, seed: the multi-start of each verdict.
         budget_s: wall time (s) after which the loop stops holding more joints.
+        report: called with a line of progress per round (or None).
     """
     t0 = time.perf_counter()
     n = lengths.size
@@ -191,6 +193,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                         end_limits=end_limits_for(points, ends, end_limits), fused=fused)
         verdict = None
         if allowed.verify and n > 1:
+            if report is not None:
+                report(f"checking the stops with the solver (round {rnd + 1}"
+                       + (f", {len(locks)} joint(s) held both ways)" if locks else ")"))
             masses = exact_masses(laid.problem)[0]
             verdict = verify(laid.problem, masses, n_starts=n_starts, seed=seed, tol=ON_TARGET)
         history.append((sorted(locks), verdict))

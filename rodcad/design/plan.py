@@ -362,7 +362,7 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
 
 
 def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: CatalogArrays,
-                     problem: Callable[[str, str], Problem], *, label: str = "") -> ChainPlan:
+                     problem: Callable[[str, str], Problem], *, label: str = "", report=None) -> ChainPlan:
     """Lay rods on a target with every constraint of a design applied (the one place
     they are): allowed types and lengths, the preferred length, the rod count (trying
     each allowed length as the preferred one until the count is met) and fixed rods
@@ -375,6 +375,7 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
         problem: makes a :class:`rodcad.errors.Problem` pointing at a key of the design
             file (``Design.problem``).
         label: the chain's name in messages (a chandelier's chains), or "".
+        report: called with a line of progress now and then (or None).
 
     Raises:
         InputError: the constraints cannot be met on this target (pointing at the key).
@@ -383,7 +384,7 @@ def plan_constrained(curve: np.ndarray, constraints: Constraints, arrays: Catalo
     who = f"{label}: " if label else ""
     printed = _printed_family(arrays, c)
     if printed is not None:
-        return _plan_printed(curve, c, arrays, printed, problem, who)
+        return _plan_printed(curve, c, arrays, printed, problem, who, report)
     if c.same_shell:
         raise InputError([problem("constraints.same_shell", f"{who}one shell for every rod needs a family printed "
                                   "to order (the default catalog pla-parametric); this catalog's rod types are a "
@@ -434,7 +435,7 @@ def _printed_family(arrays: CatalogArrays, c: Constraints) -> PrintedFamily | No
 
 
 def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: PrintedFamily,
-                  problem: Callable[[str, str], Problem], who: str) -> ChainPlan:
+                  problem: Callable[[str, str], Problem], who: str, report=None) -> ChainPlan:
     """Rods printed to order on the target, with the constraints that apply to them."""
     problems = []
     r = pf.family.ranges
@@ -454,7 +455,7 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
     ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None, "end_limits": c.end_limits,
-            "fuse": c.fuse_mode}
+            "fuse": c.fuse_mode, "report": report}
     try:
         if c.rods is not None:
             lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)

@@ -145,7 +145,8 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
-                 end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0):
+                 end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0,
+                 report=None):
     """Lay rods printed to order on a target (see the module's docstring); how each joint
     holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 
@@ -164,6 +165,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             'never', or 'stops' (also every run of joints resting on stops, where the piece
             fits the catalog's printer).
         n_starts, seed: the multi-start of the planner's checks.
+        report: called with a line of progress now and then (or None).
 
     Returns:
         The :class:`PrintedPlan`.
@@ -184,7 +186,8 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     allowed = Allowed(stops=stops_allowed and r.stops is not None, anchor_stops=anchor_stops,
                       fuse=fuse, verify=not same_shell)
     dec = decide(catalog, pf, points, lengths, kappa, phi, allowed=allowed, end_limits=end_limits,
-                 mirrored=_is_mirror_symmetric(points), same=same_shell, n_starts=n_starts, seed=seed)
+                 mirrored=_is_mirror_symmetric(points), same=same_shell, n_starts=n_starts, seed=seed,
+                 report=report)
     laid, stops, ends = dec.laid, dec.stops, dec.ends
     notes: list[str] = list(dec.notes)
     beyond = dec.beyond

@@ -67,7 +67,7 @@ def _nlp_point(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
         jac=lambda t: c_sin * np.cos(t) - c_cos * np.sin(t),
         constraints=cons,
         method="SLSQP",
-        options={"maxiter": 1000, "ftol": 1e-15},
+        options={"maxiter": min(500, 100 + 10 * n), "ftol": 1e-15},  # runs that take more do not converge
     )
     return res.x if np.all(np.isfinite(res.x)) else None
 

@@ -175,9 +175,10 @@ def rigid_reaction(chain: Chain, theta: np.ndarray, act: np.ndarray) -> complex:
 
     Such a set is statically indeterminate: the free joints' moments are zero (linear
     equations in H, V and the first fixture's moment M_0) and every held stop and fixture
-    must push the right way (inequalities). Of those reactions the linear program takes the
-    smallest |H| + |V|; when none exists, the least-squares solution of the equations, whose
-    wrong-sign moments then tell the active-set iteration which stop to let go.
+    must push the right way (inequalities). Of those the linear program takes the one whose
+    fixtures carry the least moment (|M_0| + |M_1|), then the smallest |H| + |V|; when none
+    exists, the least-squares solution of the equations, whose wrong-sign moments then tell
+    the active-set iteration which stop to let go.
 
     Args:
         chain: the problem.
@@ -213,16 +214,23 @@ def rigid_reaction(chain: Chain, theta: np.ndarray, act: np.ndarray) -> complex:
         ub_rows.append(-ends[1] * rows[-1])
         ub_rhs.append(ends[1] * const[-1])
     m0_bounds = (None, None) if ends[0] else (0.0, 0.0)
-    # x = (h, v, m0, th, tv): minimise th + tv with th >= |h|, tv >= |v|
-    pad = np.zeros((len(ub_rows), 2))
-    A_ub = np.vstack([np.hstack([np.array(ub_rows).reshape(-1, 3), pad]),
-                      [[1, 0, 0, -1, 0], [-1, 0, 0, -1, 0], [0, 1, 0, 0, -1], [0, -1, 0, 0, -1]]])
-    b_ub = np.concatenate([ub_rhs, np.zeros(4)])
-    A_eq = np.hstack([rows[eq], np.zeros((len(eq), 2))]) if eq else None
+    # x = (h, v, m0, th, tv, t0, t1) with th >= |h|, tv >= |v|, t0 >= |M_0|, t1 >= |M_1|:
+    # the fixtures carry as little as the statics allow, then the pins' reaction is least
+    k = len(ub_rows)
+    A_ub = np.zeros((k + 8, 7))
+    A_ub[:k, :3] = np.array(ub_rows).reshape(-1, 3)
+    b_ub = np.concatenate([ub_rhs, np.zeros(8)])
+    for i, (col, t) in enumerate(((0, 3), (1, 4), (2, 5))):
+        A_ub[k + 2 * i, [col, t]] = [1.0, -1.0]
+        A_ub[k + 2 * i + 1, [col, t]] = [-1.0, -1.0]
+    A_ub[k + 6, :3], A_ub[k + 6, 6], b_ub[k + 6] = -rows[-1], -1.0, const[-1]  # -M_1 <= t1
+    A_ub[k + 7, :3], A_ub[k + 7, 6], b_ub[k + 7] = rows[-1], -1.0, -const[-1]  # M_1 <= t1
+    A_eq = np.hstack([rows[eq], np.zeros((len(eq), 4))]) if eq else None
     b_eq = -const[eq] if eq else None
     big = 1e9
-    res = linprog(np.array([0, 0, 0, 1.0, 1.0]), A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq,
-                  bounds=[(-big, big), (-big, big), m0_bounds, (0, None), (0, None)], method="highs")
+    cost = np.array([0, 0, 0, 1e-3, 1e-3, 1.0, 1.0])
+    res = linprog(cost, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq,
+                  bounds=[(-big, big), (-big, big), m0_bounds] + [(0, None)] * 4, method="highs")
     if res.status == 0:
         x = res.x
     else:

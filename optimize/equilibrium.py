@@ -177,8 +177,8 @@ def _exchange(chain: Chain, act: np.ndarray, max_iter: int):
             if last is None:
                 status = 2
                 break
-            act, theta, lam, primal, pside, dual, firm = last
-            new = _next_active_set(chain, act, primal, pside, dual, "single", kinked, firm)
+            act, theta, lam, primal, pside, dual = last
+            new = _next_active_set(chain, act, primal, pside, dual, "single", kinked, (theta, lam))
             if new is None:
                 status = 3
                 break
@@ -186,7 +186,7 @@ def _exchange(chain: Chain, act: np.ndarray, max_iter: int):
             continue
         lam, theta = sol.lam, sol.theta
         primal, pside, dual = violations(chain, theta, lam, act)
-        last = (act, theta, lam, primal, pside, dual, _held_moments(chain, theta, lam, act))
+        last = (act, theta, lam, primal, pside, dual)
         if not primal.any() and not dual.any():
             status = 0
             break
@@ -199,7 +199,7 @@ def _exchange(chain: Chain, act: np.ndarray, max_iter: int):
             visited = set()
         visited.add(key)
         new = _next_active_set(chain, act, primal, pside, dual, "single" if cycling else "exchange", kinked,
-                               last[-1])
+                               (theta, lam))
         if new is None:
             status = 3  # every single change leaves anchor B out of reach: fall back below
             break
@@ -310,13 +310,13 @@ def _held_moments(chain: Chain, theta: np.ndarray, lam: complex, act: np.ndarray
 RELEASE_TRIES = 8
 
 
-def _next_active_set(chain, act, primal, pside, dual, mode, kinked, firm):
+def _next_active_set(chain, act, primal, pside, dual, mode, kinked, point):
     """The next active set: all violations exchanged at once, or one change: the anchor
     stops' violations first (the fixture holds the chain's ends before its joints), then
-    the worst joint's, letting go of one of the least firm held stops (``firm``,
-    :func:`_held_moments`) when the rods could not close the chain otherwise; else the worst
-    wrong-sign moment let go. Sets that can not close the chain, or whose dual solve ended
-    on a kink (``kinked``), are passed over."""
+    the worst joint's, letting go of one of the least firm held stops (at ``point``, the
+    set's (theta, lam): :func:`_held_moments`) when the rods could not close the chain
+    otherwise; else the worst wrong-sign moment let go. Sets that can not close the chain,
+    or whose dual solve ended on a kink (``kinked``), are passed over."""
 
     def usable(new):
         return new.tobytes() not in kinked and ActiveSet(chain, new).feasible(chain)
@@ -334,6 +334,7 @@ def _next_active_set(chain, act, primal, pside, dual, mode, kinked, firm):
         new[j] = pside[j]
         if usable(new):
             return new
+    firm = _held_moments(chain, point[0], point[1], act) if adds else np.zeros(0)
     releases = [k for k in np.argsort(firm)[:RELEASE_TRIES] if np.isfinite(firm[k])]
     for j in adds:
         for k in releases:

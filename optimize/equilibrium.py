@@ -387,6 +387,8 @@ def _assemble(chain, theta, lam, act, status, nit, nnewton, used_nlp, path="exch
     message = MESSAGES[status]
     if status == 3:
         message += _reach_hint(chain)
+        if chain.end_limited.any():
+            message += " The anchor stops bound the end rods' angles too."
     if used_nlp and status == 0:
         message += " (active set found through the SLSQP fallback)"
     elif path == "descent" and status == 0:

@@ -95,8 +95,13 @@ def find_equilibria(
         p = rng.uniform(0.1, 0.9)
         active0 = np.where(rng.random(n - 1) < p, rng.choice([-1, 1], size=n - 1), 0)
         active0 = np.where(limited, active0, 0)
-        # each anchor stop free or held at one of its finite bounds, at random
-        end0 = [int(rng.choice([0] + [s for s, b in ((-1, e[0]), (1, e[1])) if np.isfinite(b)])) for e in ends]
+        # each anchor stop free or held at one of its finite bounds, at random (no draw for
+        # a bare pin: the starts of a chain without anchor stops stay as they were)
+        end0 = [0, 0]
+        for k, e in enumerate(ends):
+            options = [0] + [s for s, bound in ((-1, e[0]), (1, e[1])) if np.isfinite(bound)]
+            if len(options) > 1:
+                end0[k] = int(rng.choice(options))
         try:
             res = solve_equilibrium(
                 lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0,

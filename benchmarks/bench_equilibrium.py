@@ -11,18 +11,31 @@ that in some of them a rigid piece pushes. It prints the median and largest time
 solve over all K and over those the dual exchange alone cannot solve, and how many of
 the K took which path (exchange, active-set descent, SLSQP fallback).
 
-Run:  python benchmarks/bench_equilibrium.py [--repeat 7] [--compressed 400]
+The "anchor stops" case (issue 24): chains with both anchors stopped and stops along them
+(the "1/3 limited" chains, their first rod held 0.2 rad above and their last rod 0.2 rad
+below where they rest on the joint stops alone), N = 10 to 1000; target N = 300 under 1 s.
+Then hearts hung from their cusp with anchor stops, as the planner designed them
+(benchmarks/data/*.json, from ``rodcad build benchmarks/data/NAME.yaml --no-cad``; 30, 20, 120
+and 300 rods, the 20-rod one a user's polyline): one solve, and the multi-start
+(find_equilibria, default n_starts); targets: the 300-rod heart (both end rods held, 297
+joints on stops) solved under 1 s, the 30-rod heart's multi-start under 2 s. Only the public API is used, so the same script times other versions.
+
+Run:  python benchmarks/bench_equilibrium.py [--repeat 7] [--compressed 400] [--anchor-stops 1]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import platform
 import time
+from pathlib import Path
 
 import numpy as np
 
-from optimize import solve_equilibrium
+from optimize import find_equilibria, solve_equilibrium
+
+DATA = Path(__file__).resolve().parent / "data"
 
 
 def chain(n: int, seed: int = 0):
@@ -46,6 +59,52 @@ def limited(n: int, seed: int = 0, fraction: float = 1 / 3):
     hi[order[:k]] = 0.8 * phi[order[:k]]
     limits = np.column_stack([np.full(n - 1, -np.inf), hi])
     return lengths, masses, com, a, b, limits
+
+
+def end_limited(n: int, seed: int = 0):
+    """A "1/3 limited" chain with both anchors stopped: the first rod held 0.2 rad above, the
+    last 0.2 rad below where they rest on the joint stops alone (both anchor stops bind)."""
+    lengths, masses, com, a, b, limits = limited(n, seed)
+    held = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits)
+    ends = np.array([[held.angles[0] + 0.2, np.inf], [-np.inf, held.angles[-1] - 0.2]])
+    return lengths, masses, com, a, b, limits, ends
+
+
+def load_chain(name: str):
+    """A chain saved in benchmarks/data/NAME.json: lengths, masses, com, a, b, limits, ends."""
+    data = json.loads((DATA / f"{name}.json").read_text())
+
+    def rad(rows):
+        return np.array([[-np.inf if r[0] is None else r[0], np.inf if r[1] is None else r[1]] for r in rows])
+
+    a, b = (np.array(p, float) for p in data["anchors"])
+    return (np.array(data["lengths"]), np.array(data["masses"]), np.array(data["com"]), a, b,
+            rad(data["limits"]), rad(data["end_limits"]))
+
+
+def anchor_stops(repeat: int) -> None:
+    print(f"\nanchor stops: both end rods held, stops along the chain")
+    print(f"{'N':>6} {'case':<22} {'median ms':>10} {'stops':>6} {'ends':>5} {'nit':>4} {'path':>9} "
+          f"{'kkt':>9} {'ok':>3} {'target':>10}")
+    for n in (10, 30, 100, 300, 1000):
+        l, m, c, a, b, lim, e = end_limited(n)
+        t, r = timed(lambda: solve_equilibrium(l, m, a, b, com=c, limits=lim, end_limits=e), repeat)
+        target = "< 1 s" if n == 300 else ""
+        print(f"{n:>6} {'1/3 limited, both held':<22} {1e3 * t:>10.2f} {int(np.count_nonzero(r.active)):>6} "
+              f"{int(np.count_nonzero(r.info.get('end_active', 0))):>5} {r.nit:>4} {r.info.get('path', '?'):>9} "
+              f"{r.kkt_residual:>9.1e} {'y' if r.success and r.stable else 'n':>3} {target:>10}")
+    for name in ("heart30", "user-heart", "heart120", "heart300"):
+        l, m, c, a, b, lim, e = load_chain(name)
+        t, r = timed(lambda: solve_equilibrium(l, m, a, b, com=c, limits=lim, end_limits=e), repeat)
+        target = "< 1 s" if name == "heart300" else ""
+        print(f"{l.size:>6} {name + ', one solve':<22} {1e3 * t:>10.2f} {int(np.count_nonzero(r.active)):>6} "
+              f"{int(np.count_nonzero(r.info.get('end_active', 0))):>5} {r.nit:>4} {r.info.get('path', '?'):>9} "
+              f"{r.kkt_residual:>9.1e} {'y' if r.success and r.stable else 'n':>3} {target:>10}")
+        t, multi = timed(lambda: find_equilibria(l, m, a, b, com=c, limits=lim, end_limits=e), max(1, repeat // 3))
+        target = "< 2 s" if name == "heart30" else ""
+        print(f"{l.size:>6} {name + ', multi-start':<22} {1e3 * t:>10.2f} {'':>6} {'':>5} {multi.n_starts:>4} "
+              f"{'':>9} {'':>9} {'y' if multi.n_failed == 0 else 'n':>3} {target:>10}   "
+              f"{multi.n_distinct} stable shape(s), counts {multi.counts}, {multi.n_failed} failed")
 
 
 def compressed_chain(seed: int):
@@ -103,6 +162,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--compressed", type=int, default=400, help="random chains in the compressed case")
+    ap.add_argument("--anchor-stops", type=int, default=1, help="run the anchor-stop cases (0: skip)")
     args = ap.parse_args()
     print(f"# {platform.processor() or platform.machine()}, python {platform.python_version()}, "
           f"numpy {np.__version__}")
@@ -129,6 +189,8 @@ def main() -> None:
         ratio = free_times[hi_n] / free_times[lo_n]
         nlogn = hi_n * np.log(hi_n) / (lo_n * np.log(lo_n))
         print(f"  {lo_n:>5} -> {hi_n:<6} x{ratio:6.2f}   (N log N: x{nlogn:5.2f})")
+    if args.anchor_stops:
+        anchor_stops(args.repeat)
     if args.compressed:
         compressed(args.compressed)
 

@@ -33,150 +33,46 @@ When that fails (a rigid group must push: its angle on the other branch of
 starts only after that. Either way the final point satisfies the KKT conditions
 exactly: closure to round-off, limits as hard inequalities, and joint moments of
 the right sign. ``info['path']`` says which ("exchange", "descent", "slsqp").
+
+Anchor stops (``end_limits``: bounds on theta_0 and theta_{N-1}) take part in the same
+active set as two more stops, between a fixed ground and an end rod: a held one fixes the
+angle of its group, whose chord then moves the anchor in the dual (:mod:`optimize.dual`),
+and the fixture's moment follows from that group's balance. Each active-set iteration
+costs O(N); there is no search over combinations of held ends.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from optimize.branches import descend, polish_nlp
 from optimize.chain import (
     MESSAGES,
+    ActiveSet,
     Chain,
     EquilibriumResult,
-    Groups,
+    fixture_moments,
     is_stable,
     kkt_residual,
     multipliers,
     sag_guess,
     violations,
 )
-from optimize.branches import descend, polish_nlp
-from optimize.endlimits import as_end_limits, solve_with_end_limits
+from optimize.dual import dual_newton, initial_reaction, solve_set
+from optimize.endlimits import limit_turn, near
 from optimize.penalty import solve_penalty
 
 __all__ = ["Chain", "EquilibriumResult", "solve_equilibrium", "kkt_residual", "MESSAGES"]
-
-
-def _initial_reaction(chain: Chain) -> complex:
-    """A rough (H, V): the two-bar V with the whole weight hung at mid-span."""
-    weight = chain.g * chain.total_mass
-    slack = np.sqrt(max(chain.total_length**2 - chain.span**2, 1e-6 * chain.total_length**2))
-    h = 0.5 * weight * chain.d.real / slack
-    if abs(h) < 1e-3 * weight:
-        h = 1e-3 * weight
-    return complex(h, 0.5 * weight + 0.5 * weight * chain.d.imag / slack)
-
-
-def _dual_newton(P, Q, d, lam, length_scale, max_iter=200):
-    """Minimise Psi(lam) = sum|P lam - Q| - Re(conj(d) lam) by damped Newton.
-
-    Returns (lam, W = P lam - Q, iterations, converged).
-    """
-    absP = np.abs(P)
-    absP2 = absP * absP
-    safeP = np.where(absP > 0, absP, 1.0)
-    tol = 64 * np.finfo(float).eps * length_scale
-    tiny = 1e-300
-
-    def evaluate(lam):
-        W = P * lam - Q
-        r = np.abs(W)
-        rs = np.maximum(r, tiny)
-        u = W / rs
-        grad = np.sum(np.conj(P) * u) - d
-        psi = float(r.sum() - (np.conj(d) * lam).real)
-        return W, rs, u, grad, psi
-
-    W, r, u, grad, psi = evaluate(lam)
-    best_gn = abs(grad)
-    stall = 0
-    load_scale = float(np.max(np.abs(Q) / safeP)) if Q.size else 0.0
-    for it in range(1, max_iter + 1):
-        gn = abs(grad)
-        if gn <= tol:
-            return lam, W, it - 1, True
-        a = absP2 / r
-        v = u * np.conj(P) / safeP
-        vx, vy = v.real, v.imag
-        hxx = float(np.sum(a * vy * vy))
-        hyy = float(np.sum(a * vx * vx))
-        hxy = -float(np.sum(a * vx * vy))
-        det = hxx * hyy - hxy * hxy
-        trace = hxx + hyy
-        if not np.isfinite(det) or det <= 1e-14 * trace * trace:
-            reg = 1e-8 * trace + tiny
-            hxx += reg
-            hyy += reg
-            det = hxx * hyy - hxy * hxy
-        gx, gy = grad.real, grad.imag
-        step = complex(-(hyy * gx - hxy * gy) / det, -(hxx * gy - hxy * gx) / det)
-        slope = (np.conj(grad) * step).real
-        t = 1.0
-        while True:
-            trial = lam + t * step
-            W1, r1, u1, g1, psi1 = evaluate(trial)
-            if psi1 <= psi + 1e-4 * t * slope:
-                break
-            noise = 1e3 * np.finfo(float).eps * (abs(psi) + abs(psi1))
-            if abs(psi1 - psi) <= noise and abs(g1) < gn:
-                break  # the energy change is below round-off: judge by the gradient
-            if t < 1e-12:
-                break
-            t *= 0.5
-        lam, W, r, u, grad, psi = trial, W1, r1, u1, g1, psi1
-        k = int(np.argmin(r / safeP))
-        if r[k] <= 1e-6 * load_scale * safeP[k]:
-            # near a group's kink (W_k = 0): is lam_k = Q_k / P_k the minimum? It is when
-            # the rest's gradient lies within the subdifferential |P_k| of that term.
-            lam_k = Q[k] / P[k]
-            W_k = P * lam_k - Q
-            W_k[k] = 0.0
-            u_k = W_k / np.maximum(np.abs(W_k), tiny)
-            if abs(np.sum(np.conj(P) * u_k) - d) <= absP[k] * (1 + 1e-12):
-                return lam_k, W_k, it, False
-        if abs(grad) < best_gn * 0.999:
-            best_gn = abs(grad)
-            stall = 0
-        else:
-            stall += 1
-            if stall >= 3 and best_gn <= 1e-9 * length_scale:
-                return lam, W, it, True  # at the floor of round-off
-            if stall >= 20:
-                break
-            if stall >= 5 and r[k] <= 1e-10 * load_scale * safeP[k]:
-                lam = Q[k] / P[k]  # no load left on group k: the minimum sits on its kink
-                return lam, P * lam - Q, it, False
-    return lam, W, max_iter, abs(grad) <= 1e-9 * length_scale
-
-
-def _close_at_kink(chain: Chain, groups: Groups, W: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Exact closure when the dual optimum sits next to a kink.
-
-    When one group carries almost no load (|W_G| -> 0, e.g. a bottom rod that spans a
-    slack chain exactly horizontally) Newton converges slowly and stops a little short.
-    That group's angle is then undetermined by statics; turn it so the chain closes.
-    """
-    chords = np.add.reduceat(chain.lengths * np.exp(1j * theta), groups.starts)
-    miss = chords.sum() - chain.d
-    if abs(miss) <= 1e-14 * chain.total_length:
-        return theta
-    load = np.abs(W) / np.maximum(groups.chords, 1e-300)
-    g = int(np.argmin(load))
-    need = chain.d - (chords.sum() - chords[g])
-    if abs(abs(need) - groups.chords[g]) > 1e-6 * chain.total_length:
-        return theta  # not a kink: leave it to the KKT check
-    turn = np.angle(need / chords[g])
-    in_g = groups.gid == g
-    out = theta.copy()
-    out[in_g] += turn
-    return np.unwrap(out)
 
 
 def _taut(chain: Chain) -> EquilibriumResult:
     angle = np.angle(chain.d)
     theta = np.full(chain.n, angle)
     lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    ok = bool(np.all((lo <= 0) & (hi >= 0)))
+    t = np.array([near(angle, chain.end_limits[k]) for k in (0, 1)])
+    elo, ehi = chain.end_limits[:, 0], chain.end_limits[:, 1]
+    miss = max(float(np.max(np.maximum(lo, -hi), initial=0.0)), float(np.max(np.maximum(elo - t, t - ehi))), 0.0)
+    ok = miss == 0.0
     pts = chain.points(theta)
     pts[-1] = chain.anchor_b
     inf = np.full(2, np.inf)
@@ -187,13 +83,15 @@ def _taut(chain: Chain) -> EquilibriumResult:
         reaction_a=inf,
         moments=np.zeros(chain.n - 1),
         active=np.zeros(chain.n - 1, dtype=int),
-        kkt_residual=0.0 if ok else float(np.max(np.maximum(lo, -hi))),
+        kkt_residual=miss,
         closure_error=0.0,
         energy=chain.energy(theta),
         stable=ok,
         success=ok,
         status=4 if ok else 5,
         message=MESSAGES[4 if ok else 5],
+        info={"used_nlp": False, "path": "exchange", "end_moments": np.zeros(2),
+              "end_active": np.zeros(2, dtype=int), "fixtures_hold": True},
     )
 
 
@@ -214,135 +112,183 @@ def _check_reach(chain: Chain) -> None:
         )
 
 
-def _solve_exact(chain: Chain, active0, max_iter: int) -> EquilibriumResult:
+def _held_always(chain: Chain) -> np.ndarray:
+    """(N+1,) True where a stop is fused (lo == hi): a joint or an anchor stop always held."""
+    return np.concatenate([[chain.end_fixed[0]], chain.fixed, [chain.end_fixed[1]]])
+
+
+def _start_set(chain: Chain, active0, end_active0) -> np.ndarray:
+    """The first active set (N+1,): the given joints and anchor stops where their bounds are
+    finite, fused stops held; the fused stops alone when that cannot close the chain."""
     n = chain.n
-    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    side = np.zeros(n - 1, dtype=int)
-    if active0 is not None:
-        a0 = np.asarray(active0, dtype=int)
-        if a0.shape != (n - 1,) or not np.all(np.isin(a0, (-1, 0, 1))):
-            raise ValueError(f"active0 must have shape ({n - 1},) with entries -1, 0 or 1")
-        side = np.where((a0 < 0) & np.isfinite(lo), -1, np.where((a0 > 0) & np.isfinite(hi), 1, 0))
-    side = np.where(chain.fixed, -1, side)
-    if not Groups(chain, side).reachable(chain.span):
-        side = np.where(chain.fixed, -1, 0)
-        if not Groups(chain, side).reachable(chain.span):
+    act = np.zeros(n + 1, dtype=int)
+    for given, sl, size, name in ((active0, slice(1, n), n - 1, "active0"), (end_active0, [0, n], 2, "end_active0")):
+        if given is None:
+            continue
+        a0 = np.asarray(given, dtype=int)
+        if a0.shape != (size,) or not np.all(np.isin(a0, (-1, 0, 1))):
+            raise ValueError(f"{name} must have shape ({size},) with entries -1, 0 or 1")
+        act[sl] = a0
+    lo = np.concatenate([[chain.end_limits[0, 0]], chain.limits[:, 0], [chain.end_limits[1, 0]]])
+    hi = np.concatenate([[chain.end_limits[0, 1]], chain.limits[:, 1], [chain.end_limits[1, 1]]])
+    act = np.where((act < 0) & np.isfinite(lo), -1, np.where((act > 0) & np.isfinite(hi), 1, 0))
+    fused = _held_always(chain)
+    act = np.where(fused, -1, act)
+    if not ActiveSet(chain, act).feasible(chain):
+        act = np.where(fused, -1, 0)
+        if not ActiveSet(chain, act).feasible(chain):
             raise ValueError(
                 "the rigid joints (lo == hi) leave no configuration that reaches anchor B"
+                if not chain.end_fixed.any() else
+                "the rigid joints (lo == hi) and the fixed end rods leave no configuration that reaches anchor B"
             )
+    return act
 
-    lam = _initial_reaction(chain)
+
+def _exchange(chain: Chain, act: np.ndarray, max_iter: int):
+    """The active-set iteration of the dual solves, from the active set act.
+
+    Returns (status, act, theta, lam, iterations, newton iterations, hanging): status 0
+    when a KKT point was found; hanging is (ActiveSet, W) of the chain hanging freely at
+    its stops that are not fused, when it was solved on the way (else None).
+    """
+    fused = _held_always(chain)
+    lam = initial_reaction(chain)
     visited: set[bytes] = set()
-    mode = "exchange"
+    kinked: set[bytes] = set()
+    cycling = False
     nnewton = 0
     status = 1
-    used_nlp = False
     theta = None
     last = None
     hanging = None
     it = 0
     for it in range(1, max_iter + 1):
-        groups = Groups(chain, side)
-        lam_try, W, k, converged = _dual_newton(
-            groups.P, groups.Q, chain.d, lam, chain.total_length
-        )
-        nnewton += k
-        if it == 1 and not np.any(side[~chain.fixed]):
-            hanging = (groups, W)  # the chain hanging freely: a start for the descent
-        if not converged:
-            # a kink where the unloaded group just fits the gap: closure decides its angle
-            theta_k = _close_at_kink(chain, groups, W, groups.angles(W))
-            if kkt_residual(chain, theta_k, lam_try, side) < 1e-10:
-                converged = True
-        if not converged:
+        aset = ActiveSet(chain, act)
+        sol = solve_set(chain, aset, lam)
+        if sol is not None:
+            nnewton += sol.newton
+        if sol is not None and hanging is None and not np.any(act[~fused]) and sol.W is not None:
+            hanging = (aset, sol.W)  # the chain hanging freely: a start for the descent
+        if sol is None or not sol.converged:
             # the dual optimum sits on a kink: a rigid group with no net load, whose
-            # minimum lies on another branch. Step back and change one joint at a time.
-            if last is None or mode == "single":
+            # minimum lies on another branch. Step back and change one stop at a time.
+            kinked.add(act.tobytes())
+            if last is None:
                 status = 2
                 break
-            mode = "single"
-            side, theta, lam, primal, pside, dual = last
-            new = _next_active_set(chain, side, primal, pside, dual, mode)
+            act, theta, lam, primal, pside, dual = last
+            new = _next_active_set(chain, act, primal, pside, dual, "single", kinked, (theta, lam))
             if new is None:
                 status = 3
                 break
-            side = new
+            act = new
             continue
-        lam = lam_try
-        theta = _close_at_kink(chain, groups, W, groups.angles(W))
-        primal, pside, dual = violations(chain, theta, lam, side)
-        last = (side, theta, lam, primal, pside, dual)
+        lam, theta = sol.lam, sol.theta
+        primal, pside, dual = violations(chain, theta, lam, act)
+        last = (act, theta, lam, primal, pside, dual)
         if not primal.any() and not dual.any():
             status = 0
             break
-        key = side.tobytes()
-        if key in visited and mode == "exchange":
-            mode = "single"  # exchanging everything at once cycles: go one joint at a time
-            visited = set()
-        elif key in visited:
-            status = 3  # cycles one joint at a time too: fall back below
+        key = act.tobytes()
+        if key in visited and cycling:
+            status = 3  # cycles one stop at a time too: fall back below
             break
+        if key in visited:
+            cycling = True  # exchanging everything at once cycles: go one stop at a time
+            visited = set()
         visited.add(key)
-        new = _next_active_set(chain, side, primal, pside, dual, mode)
+        new = _next_active_set(chain, act, primal, pside, dual, "single" if cycling else "exchange", kinked,
+                               (theta, lam))
         if new is None:
             status = 3  # every single change leaves anchor B out of reach: fall back below
             break
-        side = new
+        act = new
+    return status, act, theta, lam, it, nnewton, hanging
 
+
+def _solve_exact(chain: Chain, active0, end_active0, max_iter: int) -> EquilibriumResult:
+    act0 = _start_set(chain, active0, end_active0)
+    status, act, theta, lam, it, nnewton, hanging = _exchange(chain, act0, max_iter)
+    hanging_set = np.where(_held_always(chain), -1, 0)
+    lasts = [theta] if theta is not None else []
     path = "exchange"
+    used_nlp = False
+    if status != 0 and not np.array_equal(act0, hanging_set):
+        # a start that ends on kinks or cycles: the equilibrium near where it got to (a rigid
+        # piece that pushes, say), else start again from the chain hanging freely
+        found = _descend_from_starts(chain, None, lasts, alone=True) if lasts else None
+        if found is not None:
+            theta, lam, act, k = found
+            nnewton += k
+            status, path = 0, "descent"
+        else:
+            status, act, theta, lam, it2, k, hanging = _exchange(chain, hanging_set, max_iter)
+            it, nnewton = it + it2, nnewton + k
+            if theta is not None:
+                lasts.append(theta)
     if status != 0:
         # a compressed rigid group or an exchange that cycles: descend over (side, branch)
-        found = _descend_from_starts(chain, hanging, theta)
+        found = _descend_from_starts(chain, hanging, lasts)
         if found is not None:
-            theta, lam, side, k = found
+            theta, lam, act, k = found
             nnewton += k
             status = 0
             path = "descent"
         else:
-            if theta is None:  # not even the first dual solve converged
-                theta = sag_guess(chain)
+            # from where the exchange from the given start got to (a start of the multi-start's
+            # reaches its own equilibrium), or the symmetric sag when no dual solve converged
+            theta = lasts[0] if lasts else sag_guess(chain)
             polished = polish_nlp(chain, theta)
             used_nlp = True
             path = "slsqp"
             if polished is not None:
-                theta, lam, side, k = polished
+                theta, lam, act, k = polished
                 nnewton += k
                 status = 0
             else:
                 status = 3
-    return _assemble(chain, theta, lam, side, status, it, nnewton, used_nlp, path)
+    return _assemble(chain, theta, lam, act, status, it, nnewton, used_nlp, path)
 
 
-def _descend_from_starts(chain: Chain, hanging, last):
+def _descend_from_starts(chain: Chain, hanging, lasts, alone: bool = False):
     """The first stable KKT point :func:`optimize.branches.descend` reaches, or None.
 
     Starts: the chain hanging freely at its joints that are not fused (``hanging``:
-    its groups and loads W from the dual solve, or None), the same shape turned upside
-    down (an arch: pieces that push), the exchange's last iterate; the symmetric sag
-    when there are not two of those.
+    its active set and loads W from the dual solve, or None), the same shape turned upside
+    down (an arch: pieces that push), the exchanges' last iterates; the symmetric sag
+    when there are not two of those; only ``lasts`` when ``alone``.
     """
+    if alone:
+        return _first_stable(chain, lasts)
     starts = []
     if hanging is None:
-        groups = Groups(chain, np.where(chain.fixed, -1, 0))
-        if groups.reachable(chain.span):
-            _, W, _, _ = _dual_newton(groups.P, groups.Q, chain.d, _initial_reaction(chain),
-                                      chain.total_length)
-            hanging = (groups, W)
+        aset = ActiveSet(chain, np.where(_held_always(chain), -1, 0))
+        if aset.reachable():
+            free = aset.free
+            _, W, _, _ = dual_newton(aset.groups.P[free], aset.groups.Q[free], aset.d, initial_reaction(chain),
+                                     chain.total_length)
+            hanging = (aset, W)
     if hanging is not None and np.all(np.isfinite(hanging[1])):
-        groups, W = hanging
-        psi = np.angle(W)
-        load = np.abs(W) / groups.chords
-        k = int(np.argmin(load))
-        if load[k] <= 1e-8 * np.max(load):
+        aset, W = hanging
+        groups, free = aset.groups, aset.free
+        psi = aset.psi_held.copy()
+        psi[free] = np.angle(W)
+        load = np.abs(W) / groups.chords[free]
+        k = int(np.flatnonzero(free)[np.argmin(load)])
+        if load.min() <= 1e-8 * np.max(load):
             # an unloaded group (the dual's kink): point it along the gap it leaves
             chords = np.conj(groups.P) * np.exp(1j * psi)
             psi[k] += np.angle((chain.d - chords.sum() + chords[k]) / chords[k])
         theta = np.unwrap(psi[groups.gid] + groups.offsets)
         starts += [theta, theta[0] - np.concatenate([[0.0], np.cumsum(np.diff(theta))])]
-    if last is not None:
-        starts.append(last)
+    starts += lasts
     if len(starts) < 2:
         starts.append(sag_guess(chain))
+    return _first_stable(chain, starts)
+
+
+def _first_stable(chain: Chain, starts):
     for start in starts:
         found = descend(chain, start, max_iter=60 + 5 * chain.n)
         if found is not None and is_stable(chain, found[0], found[1], found[2]):
@@ -350,26 +296,59 @@ def _descend_from_starts(chain: Chain, hanging, last):
     return None
 
 
-def _next_active_set(chain, side, primal, pside, dual, mode):
-    """The next active set: all violations exchanged at once, or the worst one alone."""
+def _held_moments(chain: Chain, theta: np.ndarray, lam: complex, act: np.ndarray) -> np.ndarray:
+    """(N+1,) how firmly each held stop holds: its moment times the side it pushes to (> 0
+    the right way), +inf where a stop is free or fused."""
+    mu0, mu_end, _ = multipliers(chain, theta, lam)
+    mu, fixtures, _ = fixture_moments(chain, mu0, mu_end, act)
+    m = np.concatenate([[fixtures[0]], mu, [fixtures[1]]])
+    return np.where((act != 0) & ~_held_always(chain), -act * m, np.inf)
+
+
+#: How many held stops, the least firm first, one change may let go of to make room for
+#: a stop it must hold (each try costs one O(N) check).
+RELEASE_TRIES = 8
+
+
+def _next_active_set(chain, act, primal, pside, dual, mode, kinked, point):
+    """The next active set: all violations exchanged at once, or one change: the anchor
+    stops' violations first (the fixture holds the chain's ends before its joints), then
+    the worst joint's, letting go of one of the least firm held stops (at ``point``, the
+    set's (theta, lam): :func:`_held_moments`) when the rods could not close the chain
+    otherwise; else the worst wrong-sign moment let go. Sets that can not close the chain,
+    or whose dual solve ended on a kink (``kinked``), are passed over."""
+
+    def usable(new):
+        return new.tobytes() not in kinked and ActiveSet(chain, new).feasible(chain)
+
     if mode == "exchange":
-        new = side.copy()
+        new = act.copy()
         new[dual > 0] = 0
         new[primal > 0] = pside[primal > 0]
-        if Groups(chain, new).reachable(chain.span):
+        if usable(new):
             return new
-    # one change at a time: add the worst reachable primal violator, else drop the worst dual
-    for j in np.argsort(-primal):
-        if primal[j] <= 0:
-            break
-        new = side.copy()
+    ends_first = np.lexsort((-primal, ~np.isin(np.arange(act.size), (0, act.size - 1))))
+    adds = [j for j in ends_first if primal[j] > 0]
+    for j in adds:
+        new = act.copy()
         new[j] = pside[j]
-        if Groups(chain, new).reachable(chain.span):
+        if usable(new):
             return new
-    if dual.any():
-        new = side.copy()
-        new[int(np.argmax(dual))] = 0
-        return new
+    firm = _held_moments(chain, point[0], point[1], act) if adds else np.zeros(0)
+    releases = [k for k in np.argsort(firm)[:RELEASE_TRIES] if np.isfinite(firm[k])]
+    for j in adds:
+        for k in releases:
+            new = act.copy()
+            new[j], new[k] = pside[j], 0
+            if usable(new):
+                return new
+    for j in np.argsort(-dual):
+        if dual[j] <= 0:
+            break
+        new = act.copy()
+        new[j] = 0
+        if new.tobytes() not in kinked:
+            return new
     return None
 
 
@@ -391,25 +370,32 @@ def _reach_hint(chain: Chain) -> str:
     )
 
 
-def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp, path="exchange") -> EquilibriumResult:
+def _assemble(chain, theta, lam, act, status, nit, nnewton, used_nlp, path="exchange") -> EquilibriumResult:
+    side, ends = act[1:-1], act[[0, -1]]
+    if chain.end_limited[0]:
+        theta = theta - limit_turn(theta[0], chain.end_limits[0])  # theta_0 on its limit's turn
     mult = multipliers(chain, theta, lam)
-    moments = np.where(side != 0, mult[0], 0.0)
+    mu, fixtures, _ = fixture_moments(chain, mult[0], mult[1], act)
+    moments = np.where(side != 0, mu, 0.0)
     pts = chain.points(theta)
     closure = float(np.hypot(*(pts[-1] - chain.anchor_b)))
-    kkt = kkt_residual(chain, theta, lam, side, mult)
+    kkt = kkt_residual(chain, theta, lam, act, mult)
     success = status == 0 and kkt < 1e-9
     if status == 0 and not success:
         status = 1
-    stable = is_stable(chain, theta, lam, side, mult) if status in (0, 1) else False
+    stable = is_stable(chain, theta, lam, act, mult) if status in (0, 1) else False
     message = MESSAGES[status]
     if status == 3:
         message += _reach_hint(chain)
+        if chain.end_limited.any():
+            message += " The anchor stops bound the end rods' angles too."
     if used_nlp and status == 0:
         message += " (active set found through the SLSQP fallback)"
     elif path == "descent" and status == 0:
         message += " (active set and branches found by the active-set descent)"
     reaction = np.array([lam.real, lam.imag])
     weight = chain.g * chain.total_mass
+    holds = bool(np.all((ends * fixtures <= 1e-9 * chain.moment_scale) | chain.end_fixed))
     return EquilibriumResult(
         points=pts,
         angles=theta,
@@ -427,7 +413,8 @@ def _assemble(chain, theta, lam, side, status, nit, nnewton, used_nlp, path="exc
         nit=nit,
         nnewton=nnewton,
         model="exact",
-        info={"used_nlp": used_nlp, "path": path},
+        info={"used_nlp": used_nlp, "path": path, "end_moments": np.where(ends != 0, fixtures, 0.0),
+              "end_active": ends.copy(), "fixtures_hold": holds},
     )
 
 
@@ -443,6 +430,7 @@ def solve_equilibrium(
     g: float = 9.81,
     model: str = "exact",
     active0=None,
+    end_active0=None,
     max_iter: int | None = None,
     penalty_weight: float = 1e3,
     collision_weight: float = 1.0,
@@ -467,6 +455,7 @@ def solve_equilibrium(
         model: "exact" (default; closure and limits as hard constraints) or
             "penalty" (the paper's Eq. 1-3, for comparison).
         active0: optional (N-1,) initial active set (-1 lo, 0 free, +1 hi).
+        end_active0: optional (2,) initial state of the two anchor stops (same codes).
         max_iter: cap on active-set iterations (default 10 + 4 N).
         penalty_weight: penalty model only: lambda_1 in units of total weight / total length.
         collision_weight: penalty model only: lambda_2 in units of total weight x total length.
@@ -482,23 +471,11 @@ def solve_equilibrium(
         >>> bool(r.success and abs(r.points[1, 1] + 0.8) < 1e-12)
         True
     """
-    chain = Chain.from_args(lengths, masses, anchor_a, anchor_b, com, limits, g)
+    chain = Chain.from_args(lengths, masses, anchor_a, anchor_b, com, limits, g, end_limits)
     if model not in ("exact", "penalty"):
         raise ValueError(f"model must be 'exact' or 'penalty', got {model!r}")
-    ends = as_end_limits(end_limits)
-    if ends is not None:
-        if model != "exact":
-            raise ValueError("end_limits are handled by the exact model only")
-
-        def solve(ls, ms, a, b, c, lim, first_joint=0):
-            # a starting active set applies to the joints of the shorter chains too
-            sub0 = None if active0 is None or len(ls) < 2 else \
-                np.asarray(active0, dtype=int)[first_joint:first_joint + len(ls) - 1]
-            return solve_equilibrium(ls, ms, a, b, com=c, limits=lim if len(ls) > 1 else None, g=chain.g,
-                                     max_iter=max_iter, active0=sub0)
-
-        return solve_with_end_limits(solve, chain.lengths, chain.masses, chain.anchor_a, chain.anchor_b, chain.com,
-                                     chain.limits, ends, chain.g)
+    if chain.end_limited.any() and model != "exact":
+        raise ValueError("end_limits are handled by the exact model only")
     _check_reach(chain)
     if chain.span >= chain.total_length * (1 - 1e-12):
         return _taut(chain)
@@ -506,4 +483,4 @@ def solve_equilibrium(
         return solve_penalty(chain, penalty_weight, collision_weight)
     if max_iter is None:
         max_iter = 10 + 4 * chain.n
-    return _solve_exact(chain, active0, max_iter)
+    return _solve_exact(chain, active0, end_active0, max_iter)

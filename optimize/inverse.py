@@ -159,8 +159,8 @@ def _refine(problem: InverseProblem, m0: np.ndarray, t0: float, max_nfev: int,
     if lo.size and np.all(hi - lo < 1e-12):
         return np.exp(x0), state["nfev"]
     try:
-        least_squares(  # anchor stops clamp end rods, which the analytic Jacobian does not model
-            fun, x0, jac=jac if problem.end_limits is None else "2-point", bounds=(lo, np.maximum(hi, lo + 1e-12)), method="trf",
+        least_squares(
+            fun, x0, jac=jac, bounds=(lo, np.maximum(hi, lo + 1e-12)), method="trf",
             x_scale=1.0, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=max_nfev,
         )
     except _Budget:

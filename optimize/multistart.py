@@ -57,8 +57,8 @@ def find_equilibria(
 
     Args:
         lengths, masses, anchor_a, anchor_b, com, limits, g, end_limits: as
-            :func:`solve_equilibrium` (with end limits, each start's active set applies to
-            the joints of the chain between the clamped end rods).
+            :func:`solve_equilibrium` (with end limits each start also holds the end rods
+            at random: free, or at a finite bound of their anchor stop).
         n_starts: number of starts (the first is the default start).
         seed: seed or generator for the random active sets (same seed, same result).
         tol: two equilibria are the same when no joint differs by more than
@@ -87,17 +87,25 @@ def find_equilibria(
 
     record(first)
     limited = np.zeros(max(n - 1, 0), dtype=bool) if lim is None else np.isfinite(lim).any(axis=1)
+    ends = np.array([[-np.inf, np.inf]] * 2) if end_limits is None else np.asarray(end_limits, float).reshape(2, 2)
     for _ in range(n_starts - 1):
-        if not limited.any():
+        if not limited.any() and not np.isfinite(ends).any():
             record(first)  # free joints: the equilibrium is unique, every start ends there
             continue
         p = rng.uniform(0.1, 0.9)
         active0 = np.where(rng.random(n - 1) < p, rng.choice([-1, 1], size=n - 1), 0)
         active0 = np.where(limited, active0, 0)
+        # each anchor stop free or held at one of its finite bounds, at random (no draw for
+        # a bare pin: the starts of a chain without anchor stops stay as they were)
+        end0 = [0, 0]
+        for k, e in enumerate(ends):
+            options = [0] + [s for s, bound in ((-1, e[0]), (1, e[1])) if np.isfinite(bound)]
+            if len(options) > 1:
+                end0[k] = int(rng.choice(options))
         try:
             res = solve_equilibrium(
                 lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0,
-                end_limits=end_limits,
+                end_limits=end_limits, end_active0=end0,
             )
         except ValueError:
             out.n_failed += 1

@@ -97,4 +97,4 @@ class InverseProblem:
 
     def chain(self, masses) -> Chain:
         a, b = self.anchors
-        return Chain.from_args(self.lengths, masses, a, b, self.com, self.limits, self.g)
+        return Chain.from_args(self.lengths, masses, a, b, self.com, self.limits, self.g, self.end_limits)

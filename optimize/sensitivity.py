@@ -9,7 +9,9 @@ psi_G = arg(s_G W_G), closure F = sum_G chord_G(psi_G) - (B - A) = 0 gives
 
 so d lambda / dm solves a 2 x 2 system and every joint follows by a cumulative sum.
 The derivative holds while the active set does not change (the shape is piecewise
-smooth in the masses).
+smooth in the masses). A group held by an anchor stop does not rotate (d psi_G = 0); its
+chord is a constant of the closure, so only the free groups enter the 2 x 2 system. With
+fewer than two free groups the closure alone fixes the shape: the derivative is zero.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:
 
     Args:
         chain: the problem the result solves (``Chain.from_args(...)``).
-        result: a successful :class:`EquilibriumResult` of the exact model.
+        result: a successful :class:`EquilibriumResult` of the exact model (the anchor
+            stops it holds, ``info['end_active']``, included).
 
     Returns:
         J with ``J[j, :, k] = d p_j / d m_k``; rows 0 and N (the anchors) are zero.
@@ -32,7 +35,13 @@ def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:
     n = chain.n
     if not np.all(np.isfinite(result.reaction)):
         return np.zeros((n + 1, 2, n))  # taut: the straight line does not move
+    held_ends = np.asarray((result.info or {}).get("end_active", np.zeros(2)), dtype=int)
     groups = Groups(chain, result.active)
+    free = np.ones(groups.starts.size, dtype=bool)
+    free[0] &= not held_ends[0]
+    free[-1] &= not held_ends[1]
+    if np.count_nonzero(free) < 2:
+        return np.zeros((n + 1, 2, n))
     lam = complex(*result.reaction)
     W = groups.P * lam - groups.Q
     theta = result.angles
@@ -52,9 +61,9 @@ def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:
     a = np.column_stack([ratio.imag, ratio.real])  # (n_g, 2)
     chords = np.conj(groups.P) * np.exp(1j * psi)
     c = np.column_stack([(1j * chords).real, (1j * chords).imag])  # (n_g, 2)
-    M = c.T @ a
-    dlam = np.linalg.solve(M, c.T @ b)  # (2, N)
-    dpsi = a @ dlam - b  # (n_g, N)
+    M = c[free].T @ a[free]
+    dlam = np.linalg.solve(M, c[free].T @ b[free])  # (2, N)
+    dpsi = np.where(free[:, None], a @ dlam - b, 0.0)  # (n_g, N): held groups do not turn
     dtheta = dpsi[groups.gid]  # (N rods, N masses)
     steps = (1j * chain.lengths * np.exp(1j * theta))[:, None] * dtheta
     dp = np.vstack([np.zeros((1, n), complex), np.cumsum(steps, axis=0)])

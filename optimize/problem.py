@@ -14,10 +14,14 @@ import numpy as np
 
 from optimize import validate as val
 from optimize.chain import Chain, EquilibriumResult
-from optimize.endlimits import as_end_limits
+from optimize.endlimits import as_end_limits, limit_turn
 from optimize.equilibrium import solve_equilibrium
 
-__all__ = ["InverseProblem"]
+__all__ = ["DESIGNED_TOL", "InverseProblem"]
+
+#: A target bend (or end angle) within this many radians of a limit rests on it (as
+#: :data:`optimize.statics.LIMIT_TOL`).
+DESIGNED_TOL = 1e-6
 
 
 @dataclass
@@ -88,8 +92,32 @@ class InverseProblem:
         d = np.diff(self.target, axis=0)
         return np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
 
+    def designed_active(self) -> tuple[np.ndarray, np.ndarray]:
+        """The active set of the designed state: (N-1,) per joint -1 where the target bend
+        rests on the joint's lower limit, +1 on its upper limit, 0 free (a rigid joint: -1);
+        (2,) per end rod the same for the anchor fixture's bounds on its angle."""
+        phi = np.diff(self.angles)
+        lo, hi = self.limits[:, 0], self.limits[:, 1]
+        on_hi = np.abs(phi - hi) <= DESIGNED_TOL
+        on_lo = np.abs(phi - lo) <= DESIGNED_TOL
+        joints = np.where(on_lo, -1, np.where(on_hi, 1, 0)).astype(int)
+        ends = np.zeros(2, dtype=int)
+        if self.end_limits is not None:
+            theta = self.angles
+            for k, t in enumerate((theta[0], theta[-1])):
+                lim = self.end_limits[k]
+                t = t - limit_turn(t, lim)
+                ends[k] = -1 if abs(t - lim[0]) <= DESIGNED_TOL else (1 if abs(t - lim[1]) <= DESIGNED_TOL else 0)
+        return joints, ends
+
     def simulate(self, masses, **kw) -> EquilibriumResult:
+        """The equilibrium of these masses, reached from the designed state (every joint and
+        end rod on the stop the target rests on: the chain assembled in its designed shape);
+        ``kw`` as :func:`optimize.solve_equilibrium` (``active0``/``end_active0`` override)."""
         a, b = self.anchors
+        joints, ends = self.designed_active()
+        kw.setdefault("active0", joints if self.n > 1 else None)
+        kw.setdefault("end_active0", ends if self.end_limits is not None else None)
         return solve_equilibrium(
             self.lengths, masses, a, b, com=self.com, limits=self.limits, g=self.g,
             end_limits=self.end_limits, **kw

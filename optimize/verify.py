@@ -27,12 +27,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize.chain import EquilibriumResult
-from optimize.equilibrium import solve_equilibrium
 from optimize.multistart import find_equilibria
 from optimize.problem import InverseProblem
-from optimize.statics import LIMIT_TOL, extended_bends
+from optimize.statics import extended_bends
 
-__all__ = ["Verdict", "designed_active", "extended_differences", "verify"]
+__all__ = ["Verdict", "extended_differences", "verify"]
 
 
 @dataclass
@@ -68,16 +67,6 @@ class Verdict:
     def unique(self) -> bool:
         """On target and no other stable shape found."""
         return self.on_target and not self.others
-
-
-def designed_active(problem: InverseProblem) -> np.ndarray:
-    """(N-1,) the active set of the designed state: -1 where the target bend rests on the
-    joint's lower limit, +1 on its upper limit, 0 free (a rigid joint: -1)."""
-    phi = np.diff(problem.angles)
-    lo, hi = problem.limits[:, 0], problem.limits[:, 1]
-    on_hi = np.abs(phi - hi) <= LIMIT_TOL
-    on_lo = np.abs(phi - lo) <= LIMIT_TOL
-    return np.where(on_lo, -1, np.where(on_hi, 1, 0)).astype(int)
 
 
 def extended_differences(problem: InverseProblem, eq: EquilibriumResult) -> np.ndarray:
@@ -116,13 +105,11 @@ def verify(problem: InverseProblem, masses, *, n_starts: int = 12, seed: int = 0
     a, b = problem.anchors
     size = _size(problem)
     limits = problem.limits if problem.n > 1 else None
-    active0 = designed_active(problem) if problem.n > 1 else None
     try:
-        eq = solve_equilibrium(problem.lengths, masses, a, b, com=problem.com, limits=limits, g=problem.g,
-                               end_limits=problem.end_limits, active0=active0)
+        eq = problem.simulate(masses)  # from the designed state
     except ValueError:  # no configuration reaches B from there: not this design's shape
         return Verdict(None, math.inf, size, False)
-    error = float(np.max(np.hypot(*(eq.points - problem.target).T)))
+    error = float(np.max(np.hypot(*(eq.points - problem.target).T))) if eq.success else math.inf
     on_target = bool(eq.success and eq.stable and error <= tol * size)
     others: list[EquilibriumResult] = []
     starts = 0

@@ -119,24 +119,30 @@ class ChainDesign:
 
 def check_chain(plan: ChainPlan, masses: np.ndarray, *, seed: int = 0, n_starts: int = 12,
                 g: float | None = None) -> ChainCheck:
-    """Solve the designed chain from scratch and look for other stable equilibria (multi-start)."""
+    """Solve the designed chain from its designed state (the chain assembled in its shape,
+    every joint on the stop the design puts it on) and look for other stable equilibria
+    (multi-start)."""
     p = plan.problem
     a, b = p.anchors
+    joints, ends = p.designed_active()
     return check_equilibrium(p.lengths, masses, a, b, com=p.com, limits=p.limits, g=p.g if g is None else g,
-                             seed=seed, n_starts=n_starts, end_limits=p.end_limits)
+                             seed=seed, n_starts=n_starts, end_limits=p.end_limits, active0=joints,
+                             end_active0=ends if p.end_limits is not None else None)
 
 
 def check_equilibrium(lengths: np.ndarray, masses: np.ndarray, a: np.ndarray, b: np.ndarray, *, com: np.ndarray,
                       limits: np.ndarray | None, g: float, seed: int = 0, n_starts: int = 12,
-                      end_limits: np.ndarray | None = None) -> ChainCheck:
-    """A chain solved from scratch, and a multi-start for other stable equilibria (``end_limits``:
-    the anchor fixture's bounds on the end rods' angles, rad).
+                      end_limits: np.ndarray | None = None, active0=None, end_active0=None) -> ChainCheck:
+    """A chain solved (from scratch, or from the state ``active0`` / ``end_active0``: see
+    :func:`optimize.solve_equilibrium`), and a multi-start for other stable equilibria
+    (``end_limits``: the anchor fixture's bounds on the end rods' angles, rad).
 
     Raises:
         ValueError: the anchors are out of the chain's reach.
     """
     limits = limits if len(lengths) > 1 else None
-    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=g, end_limits=end_limits)
+    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits, g=g, end_limits=end_limits,
+                           active0=active0 if limits is not None else None, end_active0=end_active0)
     multi = find_equilibria(lengths, masses, a, b, com=com, limits=limits, g=g, n_starts=n_starts, seed=seed,
                             end_limits=end_limits)
     span = float(np.hypot(*(np.asarray(b, float) - np.asarray(a, float))))

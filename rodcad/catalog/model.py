@@ -69,7 +69,10 @@ __all__ = [
     "Balls",
     "Catalog",
     "EndShape",
+    "end_reach",
     "Family",
+    "graduated",
+    "max_body_scale",
     "Fill",
     "Hinge",
     "json_digest",
@@ -197,6 +200,18 @@ class RodGeometry:
         hinge: the hinge geometry.
         first: end shape at the first joint (origin).
         second: end shape at the second joint (length, 0, 0).
+        body_height: a graduated rod's body height between its hinge ends (mm), or None:
+            ``height`` throughout. The body keeps its bottom (-y) face at -height/2, the
+            face a rod is printed on, so a body of another height changes only its top:
+            a lower body keeps the family's ``height`` within ``end_reach`` of each hinge
+            axis (the end faces and stops stay the family's, a step down behind them); a
+            higher body is higher up to its end faces (they reach higher).
+        body_thickness: a graduated rod's body thickness (mm), or None: ``thickness``
+            throughout. Within ``end_reach`` of each hinge axis the rod keeps the
+            family's ``thickness`` (the hinge layers): a thinner body at its fork end
+            (which holds the prongs), a thicker body at both ends.
+        end_reach: (first, second) how far behind each hinge axis, along the centreline,
+            the rod keeps the family's section (mm); None for a rod of one section.
     """
 
     length: float
@@ -206,6 +221,95 @@ class RodGeometry:
     hinge: Hinge
     first: EndShape
     second: EndShape
+    body_height: float | None = None
+    body_thickness: float | None = None
+    end_reach: tuple[float, float] | None = None
+
+    @property
+    def graduated(self) -> bool:
+        """Whether the body's section differs from the hinge ends' (a scaled rod)."""
+        return self.end_reach is not None and (self.body_h != self.height or self.body_t != self.thickness)
+
+    @property
+    def body_h(self) -> float:
+        """The body's height (mm)."""
+        return self.height if self.body_height is None else self.body_height
+
+    @property
+    def body_t(self) -> float:
+        """The body's thickness (mm)."""
+        return self.thickness if self.body_thickness is None else self.body_thickness
+
+    @property
+    def body_top(self) -> float:
+        """The body's top (+y) offset from the centreline (mm): -height/2 + body height."""
+        return -self.height / 2 + self.body_h
+
+    @property
+    def max_height(self) -> float:
+        """The largest section height anywhere on the rod (mm)."""
+        return max(self.height, self.body_h)
+
+    @property
+    def max_thickness(self) -> float:
+        """The largest thickness anywhere on the rod (mm)."""
+        return max(self.thickness, self.body_t)
+
+    @property
+    def stub(self) -> float:
+        """How far the raw body continues past each hinge axis before the end cuts (mm)."""
+        return 1.2 * self.max_height + 2.0
+
+    def frame(self, joint: int) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
+        """Pin position P, outward tangent u and the rod's +y normal v at a joint (0 or 1)."""
+        psi = math.radians(self.half_angle_deg)
+        if joint == 0:
+            p, fx, fy = (0.0, 0.0), math.cos(-psi), math.sin(-psi)
+            u = (-fx, -fy)
+        else:
+            p, fx, fy = (self.length, 0.0), math.cos(psi), math.sin(psi)
+            u = (fx, fy)
+        return p, u, (-fy, fx)
+
+    def end_blocks(self) -> list[tuple[tuple[float, float], ...]]:
+        """Per joint, the rectangle (4 corners, counter-clockwise or not) that holds the
+        rod's end within ``end_reach`` of that joint's axis: one side on the line across the
+        centreline ``end_reach`` behind the axis (through the arc's centre on a curved rod),
+        the rest far beyond the end. Empty for a rod of one section."""
+        if self.end_reach is None:
+            return []
+        hmax = self.max_height
+        out = []
+        k = self.curvature
+        for joint, d in ((0, self.end_reach[0]), (1, self.end_reach[1])):
+            p, u, _ = self.frame(joint)
+            if k == 0:
+                q = (p[0] - u[0] * d, p[1] - u[1] * d)
+                t = u
+            else:
+                psi = abs(math.radians(self.half_angle_deg))
+                c = (self.length / 2, math.copysign(1 / abs(k), k) * math.cos(psi))
+                beta = k * d if joint == 0 else -k * d
+                cb, sb = math.cos(beta), math.sin(beta)
+                w = (p[0] - c[0], p[1] - c[1])
+                q = (c[0] + cb * w[0] - sb * w[1], c[1] + sb * w[0] + cb * w[1])
+                t = (cb * u[0] - sb * u[1], sb * u[0] + cb * u[1])
+            e = (-t[1], t[0])
+            rl = d + 2 * self.stub + 2 * hmax
+            rw = 2 * hmax + self.stub + d
+            out.append(((q[0] + e[0] * rw, q[1] + e[1] * rw), (q[0] - e[0] * rw, q[1] - e[1] * rw),
+                        (q[0] - e[0] * rw + t[0] * rl, q[1] - e[1] * rw + t[1] * rl),
+                        (q[0] + e[0] * rw + t[0] * rl, q[1] + e[1] * rw + t[1] * rl)))
+        return out
+
+    def key_data(self) -> dict[str, Any]:
+        """Every parameter as plain data for cache keys: a rod of one section gives the
+        same data as before graduated rods existed (its shipped seeds stay valid)."""
+        data = asdict(self)
+        for k in ("body_height", "body_thickness", "end_reach"):
+            if data[k] is None:
+                del data[k]
+        return data
 
     @property
     def half_angle_deg(self) -> float:
@@ -221,7 +325,7 @@ class RodGeometry:
 
     def digest(self) -> str:
         """Stable hash of every parameter (used for disk caches)."""
-        return json_digest(asdict(self))
+        return json_digest(self.key_data())
 
 
 @dataclass(frozen=True)
@@ -378,12 +482,15 @@ class Ranges:
         stops: (min, max) stop angles the design may print at a joint (flush ends whose
             top chamfers add up to the bend), or None: the family's own ends only.
         resolution: every length a multiple of this (mm), or None: as designed.
+        scale: (min, max) scale of the body's section (graduated rods: the hinge ends stay
+            the family's, see :class:`RodGeometry`), or None: the family's section only.
     """
 
     length: tuple[float, float]
     curvature: tuple[float, float]
     stops: tuple[float, float] | None
     resolution: float | None = None
+    scale: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -405,6 +512,43 @@ class Family:
     @property
     def printed_to_order(self) -> bool:
         return self.ranges is not None
+
+
+def end_reach(g: RodGeometry, min_wall: float) -> tuple[float, float]:
+    """How far behind each hinge axis a graduated rod keeps its family's section (mm): past
+    its top end face's far corner (a lower body steps down only behind it, so the end faces
+    and stops stay whole) and past the hinge zone, plus the minimum wall."""
+    out = []
+    for e in (g.first, g.second):
+        corner = e.setback + g.height / 2 * max(math.tan(math.radians(e.top_chamfer)), 0.0)
+        out.append(max(corner, e.setback, g.hinge.zone_radius) + min_wall)
+    return (out[0], out[1])
+
+
+def graduated(g: RodGeometry, scale: float, min_wall: float) -> RodGeometry:
+    """The rod ``g`` (the family's section) with its body's section scaled by ``scale``
+    (see :class:`RodGeometry`: the hinge ends stay ``g``'s)."""
+    if scale == 1.0:
+        return g
+    return dataclasses.replace(g, body_height=g.height * scale, body_thickness=g.thickness * scale,
+                               end_reach=end_reach(g, min_wall))
+
+
+def max_body_scale(g: RodGeometry, min_wall: float) -> float:
+    """The largest body scale at which a rod of ``g``'s length, curvature and ends keeps at
+    least ``min_wall`` of top edge between its two top end faces (a higher body makes the
+    faces reach higher; on a curved rod the top side is measured as the chord of its arc)."""
+    tans = sum(math.tan(math.radians(e.top_chamfer)) for e in (g.first, g.second))
+    room = g.length - g.first.setback - g.second.setback - min_wall
+    if tans <= 0:
+        return math.inf
+    # top offset w: edge = L (1 - k w) - setbacks - w tans >= wall  (k > 0: the top is the inner side)
+    k = max(g.curvature, 0.0)
+    w = room / (tans + g.length * k)
+    scale = (w + g.height / 2) / g.height
+    if g.curvature:
+        scale = min(scale, (1 / abs(g.curvature)) / g.height)  # the radius stays above the section height
+    return scale
 
 
 def _fmt(x: float, digits: int) -> str:
@@ -480,7 +624,7 @@ class Catalog:
         """The families printed to order (with ranges), in catalog order."""
         return [f for f in self.families if f.ranges is not None]
 
-    def rod(self, family: str, length: float, curvature: float = 0.0, *,
+    def rod(self, family: str, length: float, curvature: float = 0.0, *, scale: float = 1.0,
             first_stop: float | None = None, second_stop: float | None = None,
             first_under: float | None = None, second_under: float | None = None) -> RodType:
         """A rod of a family printed to order with its own parameters.
@@ -489,21 +633,36 @@ class Catalog:
             family: the family's name (it must have ranges).
             length: pin to pin (mm).
             curvature: signed curvature (1/mm).
+            scale: scale of the body's section (a family with a ``scale`` range; 1 is the
+                family's section): height and thickness times ``scale``, the hinge ends
+                (knuckles, pins, end faces) the family's, so any rod joins any other
+                (:class:`RodGeometry`). Within :meth:`scale_range`.
             first_stop, second_stop: top chamfer (deg) of a flush stop end (setback 0) at the
                 first / second joint (the joint cannot bend further), or None.
             first_under, second_under: bottom chamfer (deg) of a flush end whose bottom
                 face stops the joint from straightening further, or None.
 
         An end without a stop is the family's own. The name encodes the parameters:
-        ``<family>-<length>[-k<curvature x 1000>][-a<first top>][-b<second top>]
+        ``<family>-<length>[-s<scale>][-k<curvature x 1000>][-a<first top>][-b<second top>]
         [-c<first bottom>][-d<second bottom>]`` (chamfers of the stop faces), rounded to
-        0.001; the rod itself keeps the exact values.
+        0.001 (no ``-s`` at scale 1); the rod itself keeps the exact values.
+
+        Raises:
+            ValueError: the family is not printed to order, or the scale is outside its range.
         """
         fam = self.family(family)
         if fam.template is None:
             raise ValueError(f"rod family {family!r} is not printed to order (it has no ranges)")
         t = fam.template
         g = t.geometry
+        scale = float(scale)
+        assert fam.ranges is not None
+        rs = fam.ranges.scale
+        if rs is None and scale != t.scale:
+            raise ValueError(f"rod family {family!r} has one scale ({t.scale:g}); give it a scale range "
+                             f"{{min, max}} for rods of scale {scale:g}")
+        if rs is not None and not rs[0] - 1e-9 <= scale <= rs[1] + 1e-9:
+            raise ValueError(f"scale {scale:g} is outside rod family {family!r}'s range {rs[0]:g} to {rs[1]:g}")
 
         def end(own: EndShape, top: float | None, under: float | None) -> EndShape:
             if top is None and under is None:
@@ -514,14 +673,36 @@ class Catalog:
         first = end(g.first, first_stop, first_under)
         second = end(g.second, second_stop, second_under)
         geom = RodGeometry(float(length), g.height, g.thickness, float(curvature), g.hinge, first, second)
+        if rs is not None and scale != 1.0:
+            geom = graduated(geom, scale, t.material.min_wall)
         name = f"{family}-{_fmt(length, 3)}"
+        if rs is not None and scale != 1.0:
+            name += f"-s{_fmt(scale, 3)}"
         if curvature:
             name += f"-k{_fmt(curvature * 1000, 3)}"
         for tag, value in (("a", first_stop), ("b", second_stop), ("c", first_under), ("d", second_under)):
             if value is not None:
                 name += f"-{tag}{_fmt(value, 3)}"
-        return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin,
-                       t.fill, t.heavier)
+        return RodType(name, family, float(length), scale if rs is not None else t.scale, float(curvature), geom,
+                       t.material, t.balls, t.origin, t.fill, t.heavier)
+
+    def scale_range(self, family: str, length: float, curvature: float = 0.0, *,
+                    first_stop: float | None = None, second_stop: float | None = None,
+                    first_under: float | None = None, second_under: float | None = None) -> tuple[float, float]:
+        """The scales a rod of these parameters can be printed at: the family's scale range,
+        above which its top end faces would leave less than the minimum wall of top edge
+        between them (:func:`max_body_scale`). (1, 1) for a family without a scale range."""
+        fam = self.family(family)
+        if fam.template is None or fam.ranges is None:
+            raise ValueError(f"rod family {family!r} is not printed to order (it has no ranges)")
+        rs = fam.ranges.scale
+        if rs is None:
+            return (fam.template.scale, fam.template.scale)
+        rod = self.rod(family, length, curvature, scale=1.0 if rs[0] <= 1 <= rs[1] else rs[0],
+                       first_stop=first_stop, second_stop=second_stop, first_under=first_under,
+                       second_under=second_under)
+        top = max_body_scale(rod.geometry, rod.material.min_wall)
+        return (rs[0], max(rs[0], min(rs[1], top)))
 
     def with_types(self, types: Sequence[RodType]) -> Catalog:
         """This catalog with rods made to order added (a name already known is kept).

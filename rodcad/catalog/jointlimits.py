@@ -65,6 +65,10 @@ class EndOutline:
         zone: hinge-zone radius.
         stub: how far the straight stub reaches ahead of the axis.
         depth: how far behind the axis the outline matters (the partner's reach).
+        top_end: the top side's offset from the centreline near the axis (default h/2).
+        top_body: the top side's offset more than ``reach`` behind the axis (a graduated
+            rod's body: :class:`rodcad.catalog.model.RodGeometry`; default ``top_end``).
+        reach: how far behind the axis (along the centreline) ``top_end`` holds.
     """
 
     height: float
@@ -75,32 +79,56 @@ class EndOutline:
     zone: float
     stub: float
     depth: float
+    top_end: float | None = None
+    top_body: float | None = None
+    reach: float = math.inf
 
     @classmethod
     def of(cls, g: RodGeometry, joint: int, depth: float) -> EndOutline:
         end = g.first if joint == 0 else g.second
+        top_end = top_body = g.height / 2
+        reach = math.inf
+        if g.graduated:
+            top_body = g.body_top
+            top_end = max(g.height / 2, top_body)
+            assert g.end_reach is not None
+            reach = g.end_reach[joint]
         return cls(g.height, g.curvature, end.setback, math.tan(math.radians(end.top_chamfer)),
-                   math.tan(math.radians(end.bottom_chamfer)), g.hinge.zone_radius, 1.2 * g.height + 2.0, depth)
+                   math.tan(math.radians(end.bottom_chamfer)), g.hinge.zone_radius, g.stub, depth,
+                   top_end, top_body, reach)
+
+    @property
+    def top(self) -> float:
+        """The top side's offset near the axis (mm)."""
+        return self.height / 2 if self.top_end is None else self.top_end
+
+    @property
+    def body(self) -> float:
+        """The top side's offset behind ``reach`` (mm)."""
+        return self.top if self.top_body is None else self.top_body
 
     def contains(self, p: np.ndarray, e: float = INSIDE_TOL) -> np.ndarray:
         """Whether points (M, 2) lie inside the outline, more than ``e`` from its edge
         (a negative ``e``: inside or within ``-e`` of the edge)."""
         x, y = p[:, 0], p[:, 1]
-        h2 = self.height / 2 - e
+        lo = -self.height / 2 + e
         face = np.where(y >= 0, x < -self.setback - y * self.tan_top - e,
                         x < -self.setback + y * self.tan_bottom - e)
         outside_zone = x * x + y * y > (self.zone + e) * abs(self.zone + e)
-        stub = (x >= 0) & (x < self.stub - e) & (np.abs(y) < h2)
+        stub = (x >= 0) & (x < self.stub - e) & (y > lo) & (y < self.top - e)
         k = self.curvature
         if k == 0:
-            behind = (x < 0) & (np.abs(y) < h2)
+            top = np.where(x >= -self.reach, self.top, self.body)
+            behind = (x < 0) & (y > lo) & (y < top - e)
         else:
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)  # the arc's centre, on the +y side for k > 0
             r = np.hypot(x, y - cy)
+            w = math.copysign(1.0, k) * (rho - r)  # offset from the centreline toward +y
             # angle travelled back along the arc from the axis, seen from the centre
             back = np.arctan2(-x, np.sign(k) * (cy - y))
-            behind = (x < 0) & (np.abs(r - rho) < h2) & (back > 0) & (back < self.depth / rho)
+            top = np.where(back <= self.reach / rho, self.top, self.body)
+            behind = (x < 0) & (w > lo) & (w < top - e) & (back > 0) & (back < self.depth / rho)
         return face & outside_zone & (stub | behind)
 
     def corners(self) -> np.ndarray:
@@ -133,7 +161,8 @@ class EndOutline:
     def _face_meets_side(self, sign: float) -> np.ndarray:
         """The face's end on the top (sign +1) or bottom (-1) surface."""
         t = self.tan_top if sign > 0 else self.tan_bottom
-        s, h2, k = self.setback, self.height / 2, self.curvature
+        s, k = self.setback, self.curvature
+        h2 = self.top if sign > 0 else self.height / 2
         if k == 0:
             return np.array([-s - h2 * t, sign * h2])
         # intersect the face line with the side arc |p - c| = rho - sign * sign(k) * h2
@@ -152,21 +181,34 @@ class EndOutline:
 
     def _side_samples(self) -> list[np.ndarray]:
         """Points along the top and bottom sides: the stub's straight sides ahead of the
-        axis, then the bar's straight sides or a curved rod's arcs behind it."""
-        k, h2 = self.curvature, self.height / 2
+        axis, then the bar's straight sides or a curved rod's arcs behind it (a graduated
+        rod's top steps to its body's ``reach`` behind the axis)."""
+        k = self.curvature
         out = []
         for sign in (1.0, -1.0):
+            near = self.top if sign > 0 else -self.height / 2
+            far = self.body if sign > 0 else near
             ahead = _steps(0.0, self.stub)
-            out += list(np.column_stack([ahead, np.full(ahead.size, sign * h2)]))
+            out += list(np.column_stack([ahead, np.full(ahead.size, near)]))
+            cut = min(self.reach, self.depth)
+            spans = [(0.0, cut, near)] + ([(cut, self.depth, far)] if cut < self.depth else [])
+            step = _steps(min(near, far), max(near, far)) if far != near and cut < self.depth else np.zeros(0)
             if k == 0:
-                back = -_steps(0.0, self.depth)
-                out += list(np.column_stack([back, np.full(back.size, sign * h2)]))
+                for a, b, w in spans:
+                    back = -_steps(a, b)
+                    out += list(np.column_stack([back, np.full(back.size, w)]))
+                out += list(np.column_stack([np.full(step.size, -cut), step]))
                 continue
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)
-            radius = rho - sign * math.copysign(1.0, k) * h2
-            ang = _steps(0.0, self.depth) / rho  # back along the arc from the axis's radial line
-            out += list(np.column_stack([-radius * np.sin(ang), cy - math.copysign(1.0, k) * radius * np.cos(ang)]))
+            sk = math.copysign(1.0, k)
+            for a, b, w in spans:
+                radius = rho - sk * w
+                ang = _steps(a, b) / rho  # back along the arc from the axis's radial line
+                out += list(np.column_stack([-radius * np.sin(ang), cy - sk * radius * np.cos(ang)]))
+            radius = rho - sk * step
+            ang = cut / rho
+            out += list(np.column_stack([-radius * math.sin(ang), cy - sk * radius * math.cos(ang)]))
         return out
 
 
@@ -195,7 +237,7 @@ class _Pair:
     """Two rods at their shared joint, the right one turned by the bend phi (rad)."""
 
     def __init__(self, left: RodGeometry, right: RodGeometry) -> None:
-        reach = max(left.length, right.length) + 1.2 * max(left.height, right.height) + 2.0
+        reach = max(left.length, right.length) + 1.2 * max(left.max_height, right.max_height) + 2.0
         self.left = EndOutline.of(left, 1, reach)
         self.right = EndOutline.of(right, 0, reach)
         self.psi_l = math.radians(left.half_angle_deg)

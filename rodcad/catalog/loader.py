@@ -36,6 +36,8 @@ from rodcad.catalog.model import (
     Origin,
     Printer,
     Ranges,
+    graduated,
+    max_body_scale,
     max_curvature,
     RodGeometry,
     RodType,
@@ -262,7 +264,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
     if printer is not None and w < printer.nozzle:
         ctx.report("material.min_wall", f"minimum wall {format_number(w)} mm is thinner than the "
                    f"printer's nozzle ({format_number(printer.nozzle)} mm)")
-    if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f:
+    if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f or isinstance(f["scale"], dict):
         return _with_fill(f, ctx, material, _expand_ranges(f, ctx, printer, material, kinds, first, second, end_key))
     if f.get("fill") is not None:
         ctx.report("fill", "a fill is for rods printed to order: give the length as a range {min, max}")
@@ -456,13 +458,22 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     make must be buildable), two reference types (shortest and longest, straight)."""
     fmt = format_number
     if not isinstance(f["length"], dict):
-        for key in ("curvature", "stops"):
+        for key in ("curvature", "stops", "scale"):
             if isinstance(f.get(key), dict):
                 ctx.report(key, f"a {key} range is for rods printed to order: give the length as a range "
                            "{min, max} too")
         return []
-    if len(f["scale"]) > 1:
-        ctx.report("scale", "a family printed to order has one scale (make one family per scale)")
+    scales: tuple[float, float] | None = None
+    if isinstance(f["scale"], dict):
+        scales = _range(ctx, f, "scale")
+        if scales is None:
+            return []
+        if f.get("fill") is not None:
+            ctx.report("scale", "graduated rods (a scale range) take balls, not a fill: give one scale")
+            return []
+    elif len(f["scale"]) > 1:
+        ctx.report("scale", "a family printed to order has one scale or a range {min, max} (graduated rods), "
+                   "not a list")
         return []
     length = _range(ctx, f, "length")
     curv: tuple[float, float] | None
@@ -481,7 +492,7 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     if length is None or curv is None:
         return []
     sec, jt = f["section"], f["joint"]
-    scale = f["scale"][0]
+    scale = 1.0 if scales is not None else f["scale"][0]
     h, t = sec["height"] * scale, sec["thickness"] * scale
     hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
                   jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
@@ -503,20 +514,81 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
             ok &= _check_printer(ctx, k_rel, RodGeometry(length[1], h, t, k_sig, hinge, first, second), printer)
     if ok and stops is not None:
         ok = _check_stops(ctx, stops, length, curv, h, t, hinge, material, first, second)
+    if ok and scales is not None:
+        ok = _check_scales(ctx, scales, length, stops, RodGeometry(length[1], h, t, 0.0, hinge, first, second),
+                           material, printer)
     if not ok:
         return []
     k0 = min(max(0.0, curv[0]), curv[1])
     origin = ctx.origin("length")
-    refs = [RodType(f"{f['name']}-{fmt(lv)}", f["name"], lv, scale, k0,
-                    RodGeometry(lv, h, t, k0, hinge, first, second), material, kinds[0] if kinds else None, origin,
-                    heavier=kinds[1:])
-            for lv in length]
+    template = RodType(f"{f['name']}-{fmt(length[0])}", f["name"], length[0], scale, k0,
+                       RodGeometry(length[0], h, t, k0, hinge, first, second), material, kinds[0] if kinds else None,
+                       origin, heavier=kinds[1:])
+    s_ref = 1.0 if scales is None else min(max(1.0, scales[0]), scales[1])
+    refs = []
+    for lv in length:
+        g = graduated(RodGeometry(lv, h, t, k0, hinge, first, second), s_ref, material.min_wall)
+        name = f"{f['name']}-{fmt(lv)}" + (f"-s{fmt(s_ref)}" if s_ref != 1.0 else "")
+        refs.append(RodType(name, f["name"], lv, s_ref if scales is not None else scale, k0, g, material,
+                            kinds[0] if kinds else None, origin, heavier=kinds[1:]))
     res = f["length"].get("resolution")
     if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:
         ctx.report("length.resolution", f"no multiple of {fmt(res)} mm lies between {fmt(length[0])} and "
                    f"{fmt(length[1])} mm")
         return []
-    return refs, Ranges(length, curv, stops, None if res is None else float(res)), refs[0]
+    return refs, Ranges(length, curv, stops, None if res is None else float(res), scales), template
+
+
+def _check_scales(ctx: _FamilyContext, scales: tuple[float, float], length: tuple[float, float],
+                  stops: tuple[float, float] | None, base: RodGeometry, material: Material,
+                  printer: Printer | None) -> bool:
+    """A scale range (graduated rods): the thinnest body still holds the hinge layers with
+    a minimum wall, the longest straight rod takes the thickest body, it fits the printer,
+    and stops at the ends of the stop range still stop at their bend between the thinnest
+    and the thickest rods (end geometry, rodcad.catalog.jointlimits)."""
+    from rodcad.catalog.jointlimits import joint_limits
+
+    fmt = format_number
+    w, hg = material.min_wall, base.hinge
+    need = hg.tongue_thickness + 2 * hg.layer_gap + 2 * w
+    thin = min(base.height, base.thickness) * scales[0]
+    if thin < need:
+        ctx.report("scale.min", f"scale {fmt(scales[0])} makes a {fmt(round(base.height * scales[0], 3))} x "
+                   f"{fmt(round(base.thickness * scales[0], 3))} mm body, thinner than the hinge needs: the tongue "
+                   f"({fmt(hg.tongue_thickness)} mm), two layer gaps and two minimum walls make "
+                   f"{fmt(round(need, 3))} mm (at least scale {fmt(round(need / min(base.height, base.thickness), 4))})")
+        return False
+    longest = graduated(base, scales[1], w)
+    top = max_body_scale(base, w)
+    if scales[1] > top + 1e-9:
+        ctx.report("scale.max", f"scale {fmt(scales[1])} is too thick for the hinge ends of a {fmt(base.length)} mm "
+                   f"rod: its top end faces reach so high that they leave less than the minimum wall "
+                   f"({fmt(w)} mm) of top edge between them (at most scale {fmt(round(top, 4))})")
+        return False
+    if printer is not None and not _check_printer(ctx, "scale.max", longest, printer):
+        return False
+    if stops is None:
+        return True
+    ok = True
+    for s in stops:
+        c = s / 2
+        for a, b in ((scales[0], scales[1]), (scales[1], scales[0]), (scales[1], scales[1])):
+            left = graduated(dataclasses.replace(base, second=EndShape(0.0, c, base.second.bottom_chamfer)), a, w)
+            right = graduated(dataclasses.replace(base, first=EndShape(0.0, c, base.first.bottom_chamfer)), b, w)
+            try:
+                got = joint_limits(left, right)[1 if s > 0 else 0] if s != 0 else joint_limits(left, right)[1]
+            except ValueError:
+                got = None
+            if got is None or abs(got - s) > STOP_CHECK_DEG:
+                where = "no stop at all" if got is None else f"a stop at {fmt(round(got, 3))} deg"
+                ctx.report("scale.max", f"a stop at {fmt(s)} deg between rods of scale {fmt(a)} and {fmt(b)} gives "
+                           f"{where}: the thicker body meets its partner before the end faces do "
+                           "(narrow the scale range)")
+                ok = False
+                break
+        if not ok:
+            break
+    return ok
 
 
 def _check_stops(ctx: _FamilyContext, stops: tuple[float, float], length: tuple[float, float],

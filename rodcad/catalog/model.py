@@ -535,20 +535,26 @@ def graduated(g: RodGeometry, scale: float, min_wall: float) -> RodGeometry:
 
 
 def max_body_scale(g: RodGeometry, min_wall: float) -> float:
-    """The largest body scale at which a rod of ``g``'s length, curvature and ends keeps at
-    least ``min_wall`` of top edge between its two top end faces (a higher body makes the
-    faces reach higher; on a curved rod the top side is measured as the chord of its arc)."""
+    """The largest body scale (at least 1) at which a rod of ``g``'s length, curvature and ends
+    keeps at least ``min_wall`` of top edge between its two top end faces (a higher body
+    makes them reach higher; on a curved rod the top side's arc), and a curved rod's radius
+    at least its body's height. A lower body keeps the family's ends: every scale up to 1."""
     tans = sum(math.tan(math.radians(e.top_chamfer)) for e in (g.first, g.second))
-    room = g.length - g.first.setback - g.second.setback - min_wall
-    if tans <= 0:
-        return math.inf
-    # top offset w: edge = L (1 - k w) - setbacks - w tans >= wall  (k > 0: the top is the inner side)
-    k = max(g.curvature, 0.0)
-    w = room / (tans + g.length * k)
-    scale = (w + g.height / 2) / g.height
+    setbacks = g.first.setback + g.second.setback
+    if g.curvature == 0:
+        arc, bend = g.length, 0.0
+    else:
+        psi = abs(math.radians(g.half_angle_deg))
+        arc, bend = 2 * psi / abs(g.curvature), math.copysign(2 * psi, g.curvature)
+    # the top side at offset w is (arc - bend w) long; the faces take setback + w tan(chamfer)
+    den = tans + bend
+    scale = math.inf
+    if den > 0:
+        w = (arc - setbacks - min_wall) / den
+        scale = (w + g.height / 2) / g.height
     if g.curvature:
-        scale = min(scale, (1 / abs(g.curvature)) / g.height)  # the radius stays above the section height
-    return scale
+        scale = min(scale, (1 / abs(g.curvature)) / g.height)
+    return max(1.0, scale)
 
 
 def _fmt(x: float, digits: int) -> str:

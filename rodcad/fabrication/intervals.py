@@ -143,7 +143,7 @@ def intervals_key(rod: RodType, seed: int) -> str:
 
     return make_key("fabint", INTERVALS_VERSION, FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION,
                     POOL_SIZE, RADIUS_FACTOR, MIN_CAVITY_RADIUS, SOLID_TOL, GAP_MERGE,
-                    asdict(rod.geometry), asdict(rod.material),
+                    rod.geometry.key_data(), asdict(rod.material),
                     rod.balls_json(), int(seed))
 
 

@@ -120,7 +120,8 @@ def end_limits_for(points: np.ndarray, ends: dict[int, int], given: np.ndarray |
 
 def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
              phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True, same: bool = False,
-             end_limits: np.ndarray | None = None, fused: frozenset[int] | set[int] = frozenset()) -> Laid:
+             end_limits: np.ndarray | None = None, fused: frozenset[int] | set[int] = frozenset(),
+             scales: np.ndarray | None = None) -> Laid:
     """The rods for given stops and their inverse problem.
 
     Args:
@@ -137,6 +138,8 @@ def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: n
         end_limits: the anchor fixtures' bounds on the end rods' angles (rad).
         fused: joints whose rods are printed as one piece: their mitre may lie beyond the
             family's stop range (no faces meet there: the rods are united).
+        scales: each rod's body scale (a graduated family, Catalog.rod's ``scale``), or None:
+            the family's section for every rod.
     """
     fam = pf.family
     r = fam.ranges
@@ -163,7 +166,8 @@ def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: n
         turn = tangent_bends()
     top = {j: turn[j] / 2 for j, (_, side) in stops.items() if side in (HI, LOCK)}
     under = {j: -turn[j] / 2 for j, (_, side) in stops.items() if side in (LO, LOCK)}
-    rods = _unique([catalog.rod(fam.name, float(lengths[i]), float(kappa[i]), first_stop=top.get(i - 1),
+    rods = _unique([catalog.rod(fam.name, float(lengths[i]), float(kappa[i]),
+                                scale=1.0 if scales is None else float(scales[i]), first_stop=top.get(i - 1),
                                 second_stop=top.get(i), first_under=under.get(i - 1), second_under=under.get(i))
                     for i in range(n)], catalog)
     lengths = np.array([t.length for t in rods])  # a rod made one with its twin: the twin's length

@@ -400,7 +400,7 @@ def _check_printer(ctx: _FamilyContext, l_rel: str, g: RodGeometry, printer: Pri
     sag = 0.0
     if g.curvature:
         sag = (1 - math.cos(math.radians(g.half_angle_deg))) / abs(g.curvature)  # arc's depth below the chord
-    extent = sorted((g.length + 2 * g.hinge.knuckle_radius, g.height + sag, g.thickness))
+    extent = sorted((g.length + 2 * g.hinge.knuckle_radius, g.max_height + sag, g.max_thickness))
     bed = sorted(printer.build_volume)
     if any(e > b for e, b in zip(extent, bed)):
         fmt = format_number

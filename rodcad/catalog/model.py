@@ -58,7 +58,8 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from rodcad.errors import Problem
+from rodcad.catalog.ends import EndShape, Hinge
+from rodcad.catalog.stock import Balls, Fill, Material, Origin, Printer
 from rodcad.yamlio import suggest
 
 __all__ = [
@@ -110,79 +111,6 @@ def max_curvature(length: float) -> float:
     """The largest |curvature| (1/mm) a rod of this length is printed with: an arc of
     2 x MAX_ARC_HALF_ANGLE_DEG through both pins."""
     return math.sin(math.radians(MAX_ARC_HALF_ANGLE_DEG)) * 2 / length
-
-
-@dataclass(frozen=True)
-class EndShape:
-    """Shape of one rod end outside the hinge zone (the part that limits bending).
-
-    The end face is two planes, one for the top (+y) half and one for the bottom
-    half of the section, each parallel to the hinge axis. Each passes through
-    the point ``setback`` mm back from the hinge axis along the rod's centreline
-    tangent and is tilted by its chamfer angle: positive tilts the face away from
-    the partner rod (cuts the corner back, more room to bend that way), negative
-    tilts it toward the partner (the corner reaches past the hinge plane, so the
-    joint stops before straight). Two facing square ends with setback s each and
-    the pin at mid-height of a section of height h collide at
-    ``2 * atan(2 s / h)``; faces with zero setback meet flush exactly at the sum
-    of their chamfers.
-
-    Attributes:
-        setback: distance from the hinge axis to the face on the centreline (mm).
-        top_chamfer: tilt of the top (+y) half face (deg).
-        bottom_chamfer: tilt of the bottom (-y) half face (deg).
-    """
-
-    setback: float
-    top_chamfer: float
-    bottom_chamfer: float
-
-
-@dataclass(frozen=True)
-class Hinge:
-    """Pinned hinge geometry shared by both ends of a rod (after scaling).
-
-    The rod's thickness (z) is split into three layers: a middle *tongue* layer
-    of ``tongue_thickness`` and two outer *fork prong* layers, separated by
-    ``layer_gap``. One end of the rod carries the tongue knuckle, the other the
-    fork (``layout``); a knuckle is a disc of ``knuckle_radius`` around the hinge
-    axis with a pin hole of ``pin_diameter + pin_clearance``. Around each hinge
-    axis, the layers the partner's knuckle occupies are cleared out to
-    ``knuckle_radius + radial_gap`` (the *hinge zone*), so nothing inside the
-    hinge zone ever collides; bending is limited by the end faces outside it.
-
-    Attributes:
-        layout: 'tongue-fork' (tongue at the first joint) or 'fork-tongue'.
-        pin_diameter: diameter of the pin, which is not part of the rods (mm).
-        pin_clearance: pin hole diameter minus pin diameter (mm).
-        knuckle_radius: outer radius of the knuckles (mm).
-        tongue_thickness: thickness of the middle layer (mm).
-        layer_gap: axial clearance between tongue and prongs (mm).
-        radial_gap: clearance around a partner's knuckle (mm).
-    """
-
-    layout: str
-    pin_diameter: float
-    pin_clearance: float
-    knuckle_radius: float
-    tongue_thickness: float
-    layer_gap: float
-    radial_gap: float
-
-    @property
-    def hole_diameter(self) -> float:
-        """Diameter of the pin hole (mm)."""
-        return self.pin_diameter + self.pin_clearance
-
-    @property
-    def zone_radius(self) -> float:
-        """Radius of the hinge zone around each axis (mm)."""
-        return self.knuckle_radius + self.radial_gap
-
-    def knuckle(self, joint: int) -> str:
-        """'tongue' or 'fork': the knuckle at the first (0) or second (1) joint."""
-        first, second = self.layout.split("-")
-        return first if joint == 0 else second
 
 
 @dataclass(frozen=True)
@@ -326,99 +254,6 @@ class RodGeometry:
     def digest(self) -> str:
         """Stable hash of every parameter (used for disk caches)."""
         return json_digest(self.key_data())
-
-
-@dataclass(frozen=True)
-class Material:
-    """Printing material.
-
-    Attributes:
-        name: e.g. 'PLA'.
-        density: g/cm^3 (PLA about 1.24).
-        min_wall: thinnest wall printed reliably, also the least plastic kept
-            around cavities and ball sockets (mm).
-    """
-
-    name: str
-    density: float
-    min_wall: float
-
-
-@dataclass(frozen=True)
-class Balls:
-    """Metal balls a rod may hold in closed sockets (inserted at a print pause).
-
-    Attributes:
-        diameter: ball diameter (mm).
-        density: g/cm^3 (steel 7.85).
-        clearance: socket diameter minus ball diameter (mm).
-        name: free text, e.g. 'steel 5 mm'.
-    """
-
-    diameter: float
-    density: float
-    clearance: float
-    name: str = ""
-
-    @property
-    def mass(self) -> float:
-        """Mass of one ball (g)."""
-        return math.pi / 6 * self.diameter**3 * self.density / 1000.0
-
-    @property
-    def socket_diameter(self) -> float:
-        """Diameter of the spherical socket holding one ball (mm)."""
-        return self.diameter + self.clearance
-
-
-@dataclass(frozen=True)
-class Fill:
-    """Loose dense shot a rod's chamber may be filled with at a print pause (rods printed to
-    order; see :mod:`rodcad.catalog.chamber`).
-
-    Attributes:
-        name: e.g. 'tungsten shot'.
-        density: of the metal (g/cm^3): tungsten 19.3, lead 11.35, steel 7.85.
-        packing: fraction of the chamber the shot fills (random loose packing of spheres
-            about 0.6).
-    """
-
-    name: str
-    density: float
-    packing: float
-
-    @property
-    def effective_density(self) -> float:
-        """Grams of shot per cm^3 of chamber (g/cm^3)."""
-        return self.density * self.packing
-
-
-@dataclass(frozen=True)
-class Printer:
-    """The printer a catalog is sized for.
-
-    Attributes:
-        build_volume: (x, y, z) of the build volume (mm).
-        nozzle: nozzle diameter (mm).
-        name: free text.
-    """
-
-    build_volume: tuple[float, float, float]
-    nozzle: float
-    name: str = ""
-
-
-@dataclass(frozen=True)
-class Origin:
-    """Where something was defined, for problems found after loading."""
-
-    file: str
-    key: str
-    line: int
-    column: int
-
-    def problem(self, message: str, key: str | None = None) -> Problem:
-        return Problem(self.file, self.line, self.column, self.key if key is None else key, message)
 
 
 @dataclass(frozen=True)

@@ -109,14 +109,19 @@ def table_lengths(family: Family) -> list[float]:
 
 
 def table_scales(family: Family) -> list[float]:
-    """The scales of a graduated family's mass table: every SCALE_STEP and the range's ends
-    ([] for a family of one scale)."""
+    """The scales of a graduated family's mass table: the range's ends, scale 1 (the family's
+    own rods, read exactly as without a scale range) and at most SCALE_STEP apart ([] for a
+    family of one scale)."""
     assert family.ranges is not None
     if family.ranges.scale is None:
         return []
     lo, hi = family.ranges.scale
-    n = max(1, math.ceil((hi - lo) / SCALE_STEP - 1e-9))
-    return [float(x) for x in np.linspace(lo, hi, n + 1)]
+    knots = [lo] + ([1.0] if lo < 1.0 < hi else []) + [hi]
+    out: list[float] = [lo]
+    for a, b in zip(knots[:-1], knots[1:]):
+        n = max(1, math.ceil((b - a) / SCALE_STEP - 1e-9))
+        out += [float(x) for x in np.linspace(a, b, n + 1)[1:]]
+    return out
 
 
 def mass_table(family: Family, *, jobs: int | None = None) -> MassTable:

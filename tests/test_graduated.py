@@ -228,3 +228,27 @@ def test_scale_range_cli_exit_2(tmp_path: Path, capsys) -> None:
     assert main(["catalog", "check", str(path)]) == 2
     err = capsys.readouterr().err
     assert f"{path}:13:" in err and "families[0].scale.max" in err
+
+
+def test_outputs_show_the_scale(cat) -> None:
+    """design.json params carry the scale (and the body's section); the previews draw each
+    rod with a line width proportional to its body's height."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rodcad.outputs.design_json import rod_params
+    from rodcad.outputs.preview import draw_rods
+
+    thin, thick = cat.rod("rod", 40.0, scale=0.6), cat.rod("rod", 40.0, scale=1.5)
+    p = rod_params(thick)
+    assert p["scale"] == 1.5 and p["body"] == {"height": 24.0, "thickness": 24.0}
+    assert p["section"] == {"height": 16.0, "thickness": 16.0}  # the hinge ends
+    assert "body" not in rod_params(cat.rod("rod", 40.0))
+    fig, ax = plt.subplots()
+    pts = np.array([[0.0, 0.0], [40.0, -10.0], [80.0, 0.0]])
+    lc, _ = draw_rods(ax, pts, [0.0, 0.0], [5.0, 20.0], [g.body_h for g in (thin.geometry, thick.geometry)])
+    w = lc.get_linewidths()
+    assert w[1] / w[0] == pytest.approx(24.0 / 9.6)
+    plt.close(fig)

@@ -221,7 +221,8 @@ def sample_pairs(catalog: Catalog, family: Family) -> list[tuple[RodType, RodTyp
         s0, s1 = r.scale
         pairs += [(graded(l1, s0), graded(l1, s1)), (graded(l1, s1), graded(l1, s0))]
         if r.stops is not None:
-            for s in (r.stops[1], r.stops[0]):
+            for s in (r.stops[1], r.stops[0] / 2):  # (a concave top stop at the range's end meets the
+                # family's bottom faces too: the joint is fused there, tried above on curved rods)
                 pairs.append((graded(l1, s1, second_stop=s / 2), graded(l1, s0, first_stop=s / 2)))
             c = -r.stops[1] / 4
             pairs.append((graded(l1, s0, second_under=c), graded(l1, s1, first_under=c)))

@@ -184,9 +184,7 @@ def _end_cuts(g: RodGeometry) -> list[Solid]:
             a = p - end.setback * u
             n = side * v
             tan_b = math.tan(math.radians(chamfer))
-            reach = (max(g.height / 2, g.body_top) if side > 0 else g.height / 2) + 1.0
-            behind = reach * max(tan_b, 0.0)
-            reach += behind**2 * abs(g.curvature) / 2 + 1.0  # covers the arc bending away
+            reach = g.cut_reach(side, tan_b)  # covers the arc bending away
             top = a + n * reach - u * reach * tan_b
             pts = [a, a + u * stub, a + u * stub + n * reach, top]
             out.append(prism_solid(pts, -t, t))

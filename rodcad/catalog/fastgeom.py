@@ -105,9 +105,7 @@ class _Outline:
             for side, chamfer in ((1, end.top_chamfer), (-1, end.bottom_chamfer)):
                 n = side * v
                 tan_b = math.tan(math.radians(chamfer))
-                reach = (max(h / 2, self.body[1]) if side > 0 else h / 2) + 1.0
-                behind = reach * max(tan_b, 0.0)
-                reach += behind**2 * abs(g.curvature) / 2 + 1.0
+                reach = g.cut_reach(side, tan_b)
                 top = a + n * reach - u * reach * tan_b
                 c = [a, a + u * far, a + u * far + n * reach, top]
                 segs += [(c[i], c[(i + 1) % 4]) for i in range(4)]

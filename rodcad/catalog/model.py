@@ -230,6 +230,20 @@ class RodGeometry:
                         (q[0] + e[0] * rw + t[0] * rl, q[1] + e[1] * rw + t[1] * rl)))
         return out
 
+    def cut_reach(self, side: int, tan_chamfer: float) -> float:
+        """How far from the centreline the prism cutting an end face reaches (mm): past the
+        side (``side`` +1 top, -1 bottom) and the arc bending away behind the face; on a
+        graduated rod whose top is the inner side of its arc (curvature > 0), up to that
+        side's height at the rod's middle, so that the two ends' cuts leave no island of it."""
+        reach = (max(self.height / 2, self.body_top) if side > 0 else self.height / 2) + 1.0
+        behind = reach * max(tan_chamfer, 0.0)
+        reach += behind**2 * abs(self.curvature) / 2 + 1.0
+        if side > 0 and self.graduated and self.curvature > 0 and tan_chamfer > 0:
+            rho = 1 / self.curvature
+            psi = abs(math.radians(self.half_angle_deg))
+            reach = max(reach, rho - (rho - self.body_top) * math.cos(psi) + 1.0)
+        return reach
+
     def key_data(self) -> dict[str, Any]:
         """Every parameter as plain data for cache keys: a rod of one section gives the
         same data as before graduated rods existed (its shipped seeds stay valid)."""
@@ -369,26 +383,31 @@ def graduated(g: RodGeometry, scale: float, min_wall: float) -> RodGeometry:
                                end_reach=end_reach(g, min_wall))
 
 
+#: A curved graduated rod's body is at most this fraction of its arc's radius high.
+CURVED_BODY = 0.8
+
+
 def max_body_scale(g: RodGeometry, min_wall: float) -> float:
     """The largest body scale (at least 1) at which a rod of ``g``'s length, curvature and ends
     keeps at least ``min_wall`` of top edge between its two top end faces (a higher body
-    makes them reach higher; on a curved rod the top side's arc), and a curved rod's radius
-    at least its body's height. A lower body keeps the family's ends: every scale up to 1."""
-    tans = sum(math.tan(math.radians(e.top_chamfer)) for e in (g.first, g.second))
+    makes them reach higher; on a curved rod the chord of the top side), and a curved rod's
+    body at most :data:`CURVED_BODY` of its radius high. A lower body keeps the family's ends: every scale up to 1."""
+    # a face leaning forward (negative chamfer) reaches over the partner as far as one leaning
+    # back cuts into the top: count both
+    tans = sum(abs(math.tan(math.radians(e.top_chamfer))) for e in (g.first, g.second))
     setbacks = g.first.setback + g.second.setback
     if g.curvature == 0:
         arc, bend = g.length, 0.0
-    else:
-        psi = abs(math.radians(g.half_angle_deg))
-        arc, bend = 2 * psi / abs(g.curvature), math.copysign(2 * psi, g.curvature)
-    # the top side at offset w is (arc - bend w) long; the faces take setback + w tan(chamfer)
+    else:  # the chord of the top side's arc (the inner side's for k > 0): shorter than its arc
+        arc, bend = g.length, g.length * g.curvature
+    # the top side at offset w spans (L - L k w); the faces take setback + w tan(chamfer)
     den = tans + bend
     scale = math.inf
     if den > 0:
         w = (arc - setbacks - min_wall) / den
         scale = (w + g.height / 2) / g.height
-    if g.curvature:
-        scale = min(scale, (1 / abs(g.curvature)) / g.height)
+    if g.curvature:  # a body higher than 0.8 of its radius leaves too tight an inner side
+        scale = min(scale, CURVED_BODY * (1 / abs(g.curvature)) / g.height)
     return max(1.0, scale)
 
 

@@ -69,6 +69,15 @@ class EndOutline:
         top_body: the top side's offset more than ``reach`` behind the axis (a graduated
             rod's body: :class:`rodcad.catalog.model.RodGeometry`; default ``top_end``).
         reach: how far behind the axis (along the centreline) ``top_end`` holds.
+        cut_top, cut_bottom: how far above / below the end's tangent the end faces cut (the
+            solid's end-cut prisms, :meth:`rodcad.catalog.model.RodGeometry.cut_reach`): a
+            strongly curved rod's far part lies beyond the face's plane but above its cut.
+        far: the centreline's length from this axis to the rod's other axis, where its body
+            ends (with its own end faces, ``far_end``).
+        far_knuckle: the knuckle radius around the other axis.
+        far_end: the other end's faces (setback, tan top, tan bottom, cut top, cut bottom),
+            or None.
+        far_reach: how far from the other axis its end keeps ``top_end`` (a graduated rod).
     """
 
     height: float
@@ -82,20 +91,59 @@ class EndOutline:
     top_end: float | None = None
     top_body: float | None = None
     reach: float = math.inf
+    cut_top: float = math.inf
+    cut_bottom: float = math.inf
+    far: float = math.inf
+    far_knuckle: float = 0.0
+    far_end: tuple[float, float, float, float, float] | None = None
+    far_reach: float = math.inf
 
     @classmethod
     def of(cls, g: RodGeometry, joint: int, depth: float) -> EndOutline:
         end = g.first if joint == 0 else g.second
         top_end = top_body = g.height / 2
-        reach = math.inf
+        reach = far_reach = math.inf
         if g.graduated:
             top_body = g.body_top
             top_end = max(g.height / 2, top_body)
             assert g.end_reach is not None
-            reach = g.end_reach[joint]
-        return cls(g.height, g.curvature, end.setback, math.tan(math.radians(end.top_chamfer)),
-                   math.tan(math.radians(end.bottom_chamfer)), g.hinge.zone_radius, g.stub, depth,
-                   top_end, top_body, reach)
+            reach, far_reach = g.end_reach[joint], g.end_reach[1 - joint]
+        tan_top, tan_bottom = math.tan(math.radians(end.top_chamfer)), math.tan(math.radians(end.bottom_chamfer))
+        return cls(g.height, g.curvature, end.setback, tan_top, tan_bottom, g.hinge.zone_radius, g.stub, depth,
+                   top_end, top_body, reach, g.cut_reach(1, tan_top), g.cut_reach(-1, tan_bottom),
+                   _arc_length(g), g.hinge.knuckle_radius, _far_end(g, 1 - joint), far_reach)
+
+    def far_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """The other end's outward tangent and the rod's +y normal there, in this frame."""
+        k = self.curvature
+        th = 0.0 if k == 0 else self.far * abs(k)
+        sk = math.copysign(1.0, k) if k else 1.0
+        return np.array([-math.cos(th), sk * math.sin(th)]), np.array([sk * math.sin(th), math.cos(th)])
+
+    def _far_cut(self, x: np.ndarray, y: np.ndarray, e: float) -> np.ndarray:
+        """Points the other end's face cuts remove (within ``e`` of them count as removed)."""
+        out = np.zeros(x.shape, dtype=bool)
+        if self.far_end is None:
+            return out
+        setback, t_top, t_bottom, c_top, c_bottom = self.far_end
+        q = self.far_axis()
+        u, v = self.far_frame()
+        a = q - setback * u
+        dx, dy = x - a[0], y - a[1]
+        xp = dx * u[0] + dy * u[1]
+        for side, t, c in ((1.0, t_top, c_top), (-1.0, t_bottom, c_bottom)):
+            yp = side * (dx * v[0] + dy * v[1])
+            out |= (yp >= -e) & (yp <= c + e) & (xp >= -yp * t - e)
+        return out
+
+    def far_axis(self) -> np.ndarray:
+        """The rod's other hinge axis in this frame."""
+        k = self.curvature
+        if k == 0:
+            return np.array([-self.far, 0.0])
+        rho = 1 / abs(k)
+        ang = self.far / rho
+        return np.array([-rho * math.sin(ang), math.copysign(rho, k) * (1 - math.cos(ang))])
 
     @property
     def top(self) -> float:
@@ -112,14 +160,14 @@ class EndOutline:
         (a negative ``e``: inside or within ``-e`` of the edge)."""
         x, y = p[:, 0], p[:, 1]
         lo = -self.height / 2 + e
-        face = np.where(y >= 0, x < -self.setback - y * self.tan_top - e,
-                        x < -self.setback + y * self.tan_bottom - e)
+        face = np.where(y >= 0, (x < -self.setback - y * self.tan_top - e) | (y > self.cut_top + e),
+                        (x < -self.setback + y * self.tan_bottom - e) | (y < -self.cut_bottom - e))
         outside_zone = x * x + y * y > (self.zone + e) * abs(self.zone + e)
         stub = (x >= 0) & (x < self.stub - e) & (y > lo) & (y < self.top - e)
         k = self.curvature
         if k == 0:
-            top = np.where(x >= -self.reach, self.top, self.body)
-            behind = (x < 0) & (y > lo) & (y < top - e)
+            top = np.where((x >= -self.reach) | (x <= self.far_reach - self.far), self.top, self.body)
+            behind = (x < 0) & (x > -self.far) & (y > lo) & (y < top - e)
         else:
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)  # the arc's centre, on the +y side for k > 0
@@ -127,9 +175,24 @@ class EndOutline:
             w = math.copysign(1.0, k) * (rho - r)  # offset from the centreline toward +y
             # angle travelled back along the arc from the axis, seen from the centre
             back = np.arctan2(-x, np.sign(k) * (cy - y))
-            top = np.where(back <= self.reach / rho, self.top, self.body)
-            behind = (x < 0) & (w > lo) & (w < top - e) & (back > 0) & (back < self.depth / rho)
-        return face & outside_zone & (stub | behind)
+            top = np.where((back <= self.reach / rho) | (back >= (self.far - self.far_reach) / rho), self.top, self.body)
+            behind = (x < 0) & (w > lo) & (w < top - e) & (back > 0) & (back < min(self.depth, self.far) / rho)
+        q = self.far_axis()
+        knuckle = (x - q[0]) ** 2 + (y - q[1]) ** 2 < (self.far_knuckle - e) * abs(self.far_knuckle - e)
+        # the body past the far axis is cut by the far end's faces; its knuckle is not
+        body = (stub | behind | self._far_stub(x, y, e)) & ~self._far_cut(x, y, e)
+        return face & outside_zone & (body | knuckle)
+
+    def _far_stub(self, x: np.ndarray, y: np.ndarray, e: float) -> np.ndarray:
+        """The straight stub past the other axis (what its faces leave of it)."""
+        if not math.isfinite(self.far) or self.far_end is None:
+            return np.zeros(x.shape, dtype=bool)
+        q = self.far_axis()
+        u, v = self.far_frame()
+        dx, dy = x - q[0], y - q[1]
+        along = dx * u[0] + dy * u[1]
+        off = dx * v[0] + dy * v[1]
+        return (along >= 0) & (along < self.stub - e) & (off > -self.height / 2 + e) & (off < self.top - e)
 
     def corners(self) -> np.ndarray:
         """Points along the outline's boundary, :data:`ARC_STEP` apart, with its corners
@@ -147,6 +210,35 @@ class EndOutline:
                 pts += list(p0 + np.outer(_steps(u0, u1), d))
             pts.append(end)
         pts += self._side_samples()
+        if math.isfinite(self.far):  # the body's far end (across the band) and the far knuckle
+            end = min(self.depth, self.far)
+            w = _steps(-self.height / 2, max(self.top, self.body))
+            k = self.curvature
+            if k == 0:
+                pts += list(np.column_stack([np.full(w.size, -end), w]))
+            else:
+                rho, sk = 1 / abs(k), math.copysign(1.0, k)
+                radius, ang = rho - sk * w, end / rho
+                pts += list(np.column_stack([-radius * math.sin(ang), sk * rho - sk * radius * math.cos(ang)]))
+            q, r = self.far_axis(), self.far_knuckle
+            ang = np.linspace(0.0, 2 * math.pi, int(2 * math.pi * r / ARC_STEP) + 2)
+            pts += list(q + r * np.column_stack([np.cos(ang), np.sin(ang)]))
+            if self.far_end is not None:  # the far faces and the far stub's sides
+                setback, t_top, t_bottom, _, _ = self.far_end
+                u, v = self.far_frame()
+                a = q - setback * u
+                hmax = max(self.top, self.height / 2) + 1.0
+                for side, t in ((1.0, t_top), (-1.0, t_bottom)):
+                    ys = _steps(0.0, hmax)
+                    pts += list(a + np.outer(-ys * t, u) + np.outer(side * ys, v))
+                    xs = _steps(0.0, self.stub)
+                    w = self.top if side > 0 else -self.height / 2
+                    pts += list(q + np.outer(xs, u) + w * v)
+        for sign, cut, t in ((1.0, self.cut_top, self.tan_top), (-1.0, self.cut_bottom, self.tan_bottom)):
+            if math.isfinite(cut):  # the end cut's far edge, where the body reaches past it
+                x0 = -self.setback - cut * t
+                xs = -_steps(-x0, self.depth) if x0 < 0 else -_steps(0.0, self.depth)
+                pts += list(np.column_stack([xs, np.full(xs.size, sign * cut)]))
         ang = np.linspace(0.0, 2 * math.pi, int(2 * math.pi * r / ARC_STEP) + 1)
         pts += list(r * np.column_stack([np.cos(ang), np.sin(ang)]))
         pts = np.array(pts, dtype=float)
@@ -190,14 +282,20 @@ class EndOutline:
             far = self.body if sign > 0 else near
             ahead = _steps(0.0, self.stub)
             out += list(np.column_stack([ahead, np.full(ahead.size, near)]))
-            cut = min(self.reach, self.depth)
-            spans = [(0.0, cut, near)] + ([(cut, self.depth, far)] if cut < self.depth else [])
-            step = _steps(min(near, far), max(near, far)) if far != near and cut < self.depth else np.zeros(0)
+            end = min(self.depth, self.far)
+            cut = min(self.reach, end)
+            spans = [(0.0, cut, near)] + ([(cut, end, far)] if cut < end else [])
+            back_cut = self.far - self.far_reach  # the far end's block (a lower body steps up to it)
+            if far != near and cut < back_cut < end:
+                spans = [(0.0, cut, near), (cut, back_cut, far), (back_cut, end, near)]
+            step = _steps(min(near, far), max(near, far)) if far != near and cut < end else np.zeros(0)
+            steps_at = [cut] + ([back_cut] if len(spans) == 3 else [])
             if k == 0:
                 for a, b, w in spans:
                     back = -_steps(a, b)
                     out += list(np.column_stack([back, np.full(back.size, w)]))
-                out += list(np.column_stack([np.full(step.size, -cut), step]))
+                for at in steps_at:
+                    out += list(np.column_stack([np.full(step.size, -at), step]))
                 continue
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)
@@ -207,9 +305,24 @@ class EndOutline:
                 ang = _steps(a, b) / rho  # back along the arc from the axis's radial line
                 out += list(np.column_stack([-radius * np.sin(ang), cy - sk * radius * np.cos(ang)]))
             radius = rho - sk * step
-            ang = cut / rho
-            out += list(np.column_stack([-radius * math.sin(ang), cy - sk * radius * math.cos(ang)]))
+            for at in steps_at:
+                ang = at / rho
+                out += list(np.column_stack([-radius * math.sin(ang), cy - sk * radius * math.cos(ang)]))
         return out
+
+
+def _far_end(g: RodGeometry, joint: int) -> tuple[float, float, float, float, float]:
+    """The end faces at ``joint`` as EndOutline.far_end."""
+    end = g.first if joint == 0 else g.second
+    t_top, t_bottom = math.tan(math.radians(end.top_chamfer)), math.tan(math.radians(end.bottom_chamfer))
+    return (end.setback, t_top, t_bottom, g.cut_reach(1, t_top), g.cut_reach(-1, t_bottom))
+
+
+def _arc_length(g: RodGeometry) -> float:
+    """The centreline's length between the two hinge axes (mm)."""
+    if g.curvature == 0:
+        return g.length
+    return 2 * abs(math.radians(g.half_angle_deg)) / abs(g.curvature)
 
 
 def _line_meets_circle(p0: np.ndarray, d: np.ndarray, centre: np.ndarray, radius: float) -> list[float]:

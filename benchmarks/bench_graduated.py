@@ -36,11 +36,11 @@ def _rod(cat, rng, stop_end=None):
     length = float(rng.uniform(*r.length))
     kmax = min(max(abs(r.curvature[0]), abs(r.curvature[1])), max_curvature(length))
     k = float(rng.choice([0.0, rng.uniform(-kmax, kmax)]))
-    s0, s1 = cat.scale_range("rod", length, k)
-    scale = float(rng.uniform(s0, s1))
     ends = {}
     if stop_end is not None:
         ends[stop_end] = float(rng.uniform(-40, 40))
+    s0, s1 = cat.scale_range("rod", length, k, **ends)
+    scale = float(rng.uniform(s0, s1))
     return length, k, scale, ends
 
 
@@ -57,6 +57,10 @@ def main() -> None:
     for _ in range(args.rods):
         length, k, scale, ends = _rod(cat, rng, rng.choice([None, "first_stop", "second_under"]))
         g = cat.rod("rod", length, k, scale=scale, **ends).geometry
+        try:  # the family's own rod of these parameters (scale 1) may make no solid either
+            build_rod(cat.rod("rod", length, k, **ends).geometry)
+        except GeometryError:
+            continue
         t0 = time.perf_counter()
         vol, com = rod_mass_properties(g)
         t1 = time.perf_counter()

@@ -357,6 +357,10 @@ class _Pair:
         self.psi_r = math.radians(right.half_angle_deg)
         self.left_pts = self.left.corners()
         self.right_pts = self.right.corners()
+        # each outline's bounding box (its boundary samples, 1 mm wider): a point outside it
+        # is outside the outline, without the full test
+        self.left_box = (self.left_pts.min(axis=0) - 1.0, self.left_pts.max(axis=0) + 1.0)
+        self.right_box = (self.right_pts.min(axis=0) - 1.0, self.right_pts.max(axis=0) + 1.0)
 
     def _axes(self, phi: float) -> tuple[np.ndarray, np.ndarray]:
         """(left frame, right frame) as 2x2 matrices whose rows are the local x and y axes
@@ -371,10 +375,16 @@ class _Pair:
         left, right = self._axes(math.radians(phi_deg))
         # right corners into the left frame, and left corners into the right frame
         r_in_l = (self.right_pts @ right) @ left.T
-        if self.left.contains(r_in_l).any():
+        if _inside(self.left, self.left_box, r_in_l):
             return True
         l_in_r = (self.left_pts @ left) @ right.T
-        return bool(self.right.contains(l_in_r).any())
+        return _inside(self.right, self.right_box, l_in_r)
+
+
+def _inside(outline: EndOutline, box: tuple[np.ndarray, np.ndarray], pts: np.ndarray) -> bool:
+    """Whether any of the points lies inside the outline (only those in its box are tested)."""
+    near = pts[((pts >= box[0]) & (pts <= box[1])).all(axis=1)]
+    return bool(near.size and outline.contains(near).any())
 
 
 def _contact(pair: _Pair, start: float, direction: float, bound: float) -> float | None:

@@ -67,8 +67,9 @@ def _arclength_resample(pts: np.ndarray, n: int) -> np.ndarray:
 
 def _open_at_top(closed: np.ndarray, gap: float, top: np.ndarray) -> np.ndarray:
     """A closed outline (counter-clockwise or not, first point anywhere) cut open at the
-    point nearest ``top``: the part within ``gap/2`` of it (along the outline) removed, the
-    rest as a polyline from the left end (A) to the right end (B)."""
+    point nearest ``top``: the two ends go as far from it along the outline, either way, as
+    puts them ``gap`` mm apart (the anchors, a fixture apart), the rest a polyline from the
+    left end (A) to the right end (B)."""
     pts = np.asarray(closed, float)
     if np.allclose(pts[0], pts[-1]):
         pts = pts[:-1]
@@ -76,12 +77,17 @@ def _open_at_top(closed: np.ndarray, gap: float, top: np.ndarray) -> np.ndarray:
     ring = np.vstack([pts[k:], pts[:k], pts[k:k + 1]])  # from the top round back to it
     d = np.hypot(*np.diff(ring, axis=0).T)
     s = np.concatenate([[0.0], np.cumsum(d)])
-    keep = (s >= gap / 2) & (s <= s[-1] - gap / 2)
 
     def at(t: float) -> np.ndarray:
         return np.array([np.interp(t, s, ring[:, 0]), np.interp(t, s, ring[:, 1])])
 
-    out = np.vstack([at(gap / 2), ring[keep], at(s[-1] - gap / 2)])
+    lo, hi = 0.0, s[-1] / 4  # half the cut, along the outline: the ends' distance grows with it
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if np.hypot(*(at(mid) - at(s[-1] - mid))) < gap else (lo, mid)
+    cut = hi
+    keep = (s > cut) & (s < s[-1] - cut)
+    out = np.vstack([at(cut), ring[keep], at(s[-1] - cut)])
     if out[0, 0] > out[-1, 0]:  # A on the left
         out = out[::-1]
     return out

@@ -105,7 +105,7 @@ def find_equilibria(
         try:
             res = solve_equilibrium(
                 lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0,
-                end_limits=end_limits, end_active0=end0,
+                end_limits=end_limits, end_active0=end0, nlp_fallback=False,
             )
         except ValueError:
             out.n_failed += 1

@@ -35,7 +35,7 @@ from optimize import (
 from optimize.discretize import MAX_RODS
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
-from rodcad.cad.pieces import PieceRefused, fuse_pieces
+from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
 from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
 from rodcad.cad.printfile import PrintProfile, write_print_files
 from rodcad.cad.rods import (
@@ -349,7 +349,7 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
                 except PieceRefused as err:
                     raise InputError([design.problem("constraints.fuse", str(err))]) from None
         with progress.step("as-built check (masses and centres of mass from the solids)"):
-            result.as_built = as_built(fab.rods, result.lengths, result.limits, design.anchors,
+            result.as_built = as_built(as_printed_rods(fab), result.lengths, result.limits, design.anchors,
                                        result.target_points, design.g, result.end_limits)
         if result.end_limits is not None:
             with progress.step("the anchor fixture (stops for the end rods), checked against the rods at rest"):

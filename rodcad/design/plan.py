@@ -454,8 +454,8 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     if problems:
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
-    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None, "end_limits": c.end_limits,
-            "fuse": c.fuse_mode, "report": report}
+    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None and _fixture_fits(curve, pf),
+            "end_limits": c.end_limits, "fuse": c.fuse_mode, "report": report}
     try:
         if c.rods is not None:
             lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)
@@ -470,6 +470,14 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     except ValueError as err:  # the rods cannot be laid on this target: a limit, not the file's mistake
         raise DesignLimit(f"{who}cannot lay rods of {span} on this target: {err}") from None
     return _from_printed(curve, lp)
+
+
+def _fixture_fits(curve: np.ndarray, pf: PrintedFamily) -> bool:
+    """Whether the anchors are far enough apart for the anchor fixture's two knuckles (one
+    piece, a wall between them): else the planner uses bare pins."""
+    t = pf.family.template
+    hg = t.geometry.hinge
+    return float(np.hypot(*(curve[-1] - curve[0]))) >= hg.zone_radius + hg.knuckle_radius + t.material.min_wall
 
 
 def _from_printed(curve: np.ndarray, lp: PrintedPlan) -> ChainPlan:

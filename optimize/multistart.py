@@ -15,6 +15,13 @@ import numpy as np
 from optimize.equilibrium import EquilibriumResult, solve_equilibrium
 
 
+#: Random starts of chains up to this many rods that the exchange and the descent cannot
+#: finish are polished by SLSQP (milliseconds at this size: an arch leaning the other way is
+#: found that way); longer chains' such starts count as failed (SLSQP there takes seconds
+#: a start, and the descent already covers what it would find).
+NLP_RODS = 16
+
+
 @dataclass
 class MultiStartResult:
     """Distinct stable equilibria found from several starts.
@@ -105,7 +112,7 @@ def find_equilibria(
         try:
             res = solve_equilibrium(
                 lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0,
-                end_limits=end_limits, end_active0=end0, nlp_fallback=False,
+                end_limits=end_limits, end_active0=end0, nlp_fallback=n <= NLP_RODS,
             )
         except ValueError:
             out.n_failed += 1

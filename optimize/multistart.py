@@ -75,7 +75,9 @@ def find_equilibria(
         MultiStartResult.
     """
     rng = np.random.default_rng(seed)
-    first = solve_equilibrium(lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, end_limits=end_limits)
+    n_rods = np.asarray(lengths).size
+    first = solve_equilibrium(lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, end_limits=end_limits,
+                              nlp_fallback=n_rods <= NLP_RODS)
     n = first.angles.size
     lim = np.asarray(limits, dtype=float) if limits is not None else None
     span = max(float(np.hypot(*(np.asarray(anchor_b, float) - np.asarray(anchor_a, float)))), 1e-300)

@@ -41,10 +41,14 @@ from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
 from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
 
-__all__ = ["Allowed", "Decision", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
+__all__ = ["Allowed", "Decision", "EXTRA_ROUNDS", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
 
 #: Rounds of holding more joints both ways before the planner settles for what it has.
 MAX_ROUNDS = 10
+
+#: Rounds of holding one more joint once a design is accepted (on target, stable, nothing
+#: lower) but the multi-start still finds other, higher shapes.
+EXTRA_ROUNDS = 2
 
 #: A bend below this (rad) is straight: only a stop holds it.
 STRAIGHT_TOL = 1e-9
@@ -94,6 +98,7 @@ class Decision:
         notes: what the planner did and why, in words.
         feasible: some choice of stops balances the target within the mass ranges.
         history: per round, the joints held both ways so far and the solver's verdict.
+        masses: the masses the verdict is for (None when not checked).
     """
 
     laid: Laid
@@ -107,6 +112,7 @@ class Decision:
     notes: list[str] = field(default_factory=list)
     feasible: bool = True
     history: list[tuple[list[int], Verdict | None]] = field(default_factory=list)
+    masses: np.ndarray | None = None
 
     @property
     def accepted(self) -> bool:
@@ -147,7 +153,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     def printable(j: int) -> bool:
         return stop_range is not None and stop_range[0] - 1e-9 <= deg[j] <= stop_range[1] + 1e-9
 
-    free_lim = free_limits(catalog, pf, lengths, kappa) if n > 1 else np.zeros((0, 2))
+    free_lim = free_limits(catalog, pf, lengths, kappa, deg) if n > 1 else np.zeros((0, 2))
     can_fuse = allowed.fuse != "never" and allowed.stops
     forced, fused, beyond = [], set(), []
     for j in range(n - 1):
@@ -168,6 +174,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     best: Decision | None = None
     notes: list[str] = []
     history: list[tuple[list[int], Verdict | None]] = []
+    settled = 0
     for rnd in range(MAX_ROUNDS + 1):
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
@@ -191,7 +198,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                 _symmetrize(stops, ends, n, deg, printable)
         laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, limits=True, same=same,
                         end_limits=end_limits_for(points, ends, end_limits), fused=fused)
-        verdict = None
+        verdict = masses = None
         if allowed.verify and n > 1:
             if report is not None:
                 report(f"checking the stops with the solver (round {rnd + 1}"
@@ -200,7 +207,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             verdict = verify(laid.problem, masses, n_starts=n_starts, seed=seed, tol=ON_TARGET)
         history.append((sorted(locks), verdict))
         d = Decision(laid, stops, ends, set(fused), list(beyond), verdict, rnd, sorted(locks), notes, feasible,
-                     history)
+                     history, masses)
         if best is None or _better(d, best):
             best = d
         if verdict is None or d.accepted and not verdict.others or not feasible:
@@ -209,8 +216,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) ({budget_s:g} s)")
             break
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
-        if d.accepted:  # other shapes exist, all higher: hold a joint more only if it is cheap
-            new = new[:1]
+        if d.accepted:  # other shapes exist, all higher: hold one joint more, for a few rounds
+            settled += 1
+            new = new[:1] if settled <= EXTRA_ROUNDS else []
         if not new:
             break
         for j in new:
@@ -250,10 +258,11 @@ def _to_hold(culprits: list[int], n: int, held: set[int], printable, can_fuse: b
 
 
 def _score(d: Decision) -> tuple:
+    """Accepted first, then on target, then the only stable shape found, then the error."""
     v = d.verdict
     if v is None:
-        return (1, 0.0, 0)
-    return (0 if d.accepted else 1, 0 if v.on_target else 1, v.error / max(v.size, 1e-300))
+        return (1, 1, 1, 0.0)
+    return (0 if d.accepted else 1, 0 if v.on_target else 1, 1 if v.others else 0, v.error / max(v.size, 1e-300))
 
 
 def _better(a: Decision, b: Decision) -> bool:

@@ -67,6 +67,8 @@ class ChainPlan:
         rods: the rods made to order (rods printed to order), in chain order; empty for a
             catalog's fixed menu.
         fused: rods printed as one rigid piece, (first, last) rod indices.
+        verified: (masses, :class:`optimize.verify.Verdict`) the planner checked for this
+            very problem, or None.
     """
 
     curve: np.ndarray
@@ -80,6 +82,7 @@ class ChainPlan:
     added_stops: list[int] = field(default_factory=list)
     rods: list[RodType] = field(default_factory=list)
     fused: list[tuple[int, int]] = field(default_factory=list)
+    verified: tuple[np.ndarray, object] | None = None
 
 
 @dataclass(frozen=True)
@@ -485,7 +488,8 @@ def _from_printed(curve: np.ndarray, lp: PrintedPlan) -> ChainPlan:
     mismatch = np.zeros(max(n - 1, 0))
     mismatch[lp.unmet] = np.inf
     return ChainPlan(np.asarray(curve, float), lp.discretization, [t.name for t in lp.rods], lp.problem, 0.0,
-                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods), list(lp.fused))
+                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods), list(lp.fused),
+                     lp.verified)
 
 
 def _apply_fixed(p: ChainPlan, fixed: Sequence[FixedRod], arrays: CatalogArrays,

@@ -107,3 +107,16 @@ def test_accepted_designs_settle_back_in_mujoco(tmp_path):
         kinds |= {"stops"} if r.plan.added_stops else set()
         assert _settles_back(r, rng) <= 1e-4, shape.name
     assert kinds >= {"fused", "two-sided", "anchor stops", "stops"}, kinds
+
+
+def test_a_target_the_rods_cannot_be_laid_on_is_a_design_limit_not_bad_input(tmp_path, capsys):
+    """A zig-zag of 7 mm segments with a corner at every vertex: no rod of 20 mm or more fits
+    between two corners. The file is valid: exit 1 (not 2), one line saying why, no output."""
+    path = tmp_path / "zz.yaml"
+    path.write_text("design: 1\nname: zz\nanchors: [[0, 0], [30, 0]]\ntarget: {form: polyline, points: "
+                    "[[0, 0], [5, -5], [10, 0], [15, -5], [20, 0], [25, -5], [30, 0]]}\n", encoding="utf-8")
+    assert main(["build", str(path), "-o", str(tmp_path / "out"), "--no-cad"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot lay rods of 20 to 60 mm on this target" in err[0] and "shorter rods" in err[0]
+    assert str(path) not in err[0]  # not pointed at the file as its mistake
+    assert not (tmp_path / "out").exists() and not (tmp_path / "out.best-fit").exists()

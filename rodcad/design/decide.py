@@ -175,7 +175,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     notes: list[str] = []
     history: list[tuple[list[int], Verdict | None]] = []
     settled = 0
+    last = 0.0  # how long the last round took (s)
     for rnd in range(MAX_ROUNDS + 1):
+        t_round = time.perf_counter()
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
                         end_limits=end_limits, fused=fused)
@@ -212,8 +214,10 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             best = d
         if verdict is None or d.accepted and not verdict.others or not feasible:
             break
-        if time.perf_counter() - t0 > budget_s:
-            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) ({budget_s:g} s)")
+        last = time.perf_counter() - t_round
+        if time.perf_counter() - t0 + last > budget_s:  # another round would overrun the budget
+            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) (its {budget_s:g} s "
+                         "budget)")
             break
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
         if d.accepted:  # other shapes exist, all higher: hold one joint more, for a few rounds

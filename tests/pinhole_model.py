@@ -1,0 +1,136 @@
+"""Independent model of a chain whose pins sit in their holes with play.
+
+Uses *no* rodcad / optimize code. Every pin is a free point, every hole a disc of radius
+c/2 (diametral clearance c) that the pin's centre must stay inside, every rod a rigid body
+(first hole's centre and body angle); anchors A and B are pins fixed in the first and last
+rods' holes. The potential energy g sum m_i y(com_i) is minimised by SLSQP over all of them
+(5N - 2 unknowns) from a given start, with the stops between rod bodies and the anchor stops
+as linear inequalities. Centres of mass are given in the hole frame (origin at the first
+hole's centre, x toward the second's).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize
+
+__all__ = ["hang_pins_in_holes"]
+
+
+def hang_pins_in_holes(spacings, masses, a, b, clearance, com, start_holes, start_angles, *,
+                       limits=None, end_limits=None, g=9.81, ftol=1e-16, maxiter=3000) -> dict:
+    """Minimise the potential energy of rods on pins in holes.
+
+    Args:
+        spacings, masses: (N,) hole spacings and masses; a, b: (2,) anchor pins.
+        clearance: (N+1,) diametral clearance at each pin (anchors included), > 0.
+        com: (N, 2) centres of mass in the hole frame.
+        start_holes: (N, 2) the first holes' centres to start from; start_angles: (N,).
+        limits: (N-1, 2) bounds on the relative body angles (radians, +-inf free).
+        end_limits: (2, 2) bounds on the first and last body angles.
+
+    Returns:
+        dict: points (N+1, 2) pins (the anchors at the ends), holes (N, 2, 2), angles (N,),
+        energy, success, message, nit, max_violation (largest disc violation, length).
+    """
+    s = np.asarray(spacings, float)
+    m = np.asarray(masses, float)
+    c = np.asarray(clearance, float)
+    com = np.asarray(com, float)
+    n = s.size
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    r = 0.5 * c
+    scale = float(s.sum())
+
+    def unpack(x):
+        h0 = x[: 2 * n].reshape(n, 2) * scale
+        ang = x[2 * n: 3 * n]
+        pins = x[3 * n:].reshape(n - 1, 2) * scale
+        u = np.column_stack([np.cos(ang), np.sin(ang)])
+        h1 = h0 + s[:, None] * u
+        return h0, ang, pins, u, h1
+
+    def energy(x):
+        h0, ang, _, _, _ = unpack(x)
+        y = h0[:, 1] + com[:, 0] * np.sin(ang) + com[:, 1] * np.cos(ang)
+        return g * float(m @ y) / (g * m.sum() * scale)
+
+    def energy_grad(x):
+        _, ang, _, _, _ = unpack(x)
+        gr = np.zeros_like(x)
+        gr[1: 2 * n: 2] = m * scale
+        gr[2 * n: 3 * n] = m * (com[:, 0] * np.cos(ang) - com[:, 1] * np.sin(ang))
+        return g * gr / (g * m.sum() * scale)
+
+    # disc constraints: 1 - |pin - hole|^2 / r^2 >= 0, one per (pin, hole)
+    pairs = [(-1, 0, 0)]  # (pin index into pins or -1 = A / -2 = B, rod, which hole)
+    for j in range(1, n):
+        pairs += [(j - 1, j - 1, 1), (j - 1, j, 0)]
+    pairs.append((-2, n - 1, 1))
+    radius = np.array([r[0]] + [r[j] for j in range(1, n) for _ in (0, 1)] + [r[n]])
+
+    def discs(x):
+        h0, _, pins, _, h1 = unpack(x)
+        out = np.empty(len(pairs))
+        for k, (p, rod, hole) in enumerate(pairs):
+            pin = a if p == -1 else b if p == -2 else pins[p]
+            h = h0[rod] if hole == 0 else h1[rod]
+            out[k] = 1.0 - np.sum((pin - h) ** 2) / radius[k] ** 2
+        return out
+
+    def discs_jac(x):
+        h0, ang, pins, u, h1 = unpack(x)
+        J = np.zeros((len(pairs), x.size))
+        for k, (p, rod, hole) in enumerate(pairs):
+            pin = a if p == -1 else b if p == -2 else pins[p]
+            h = h0[rod] if hole == 0 else h1[rod]
+            dv = -2.0 * (pin - h) / radius[k] ** 2  # d/d(pin)
+            J[k, 2 * rod: 2 * rod + 2] = -dv * scale
+            if hole == 1:
+                dh = s[rod] * np.array([-np.sin(ang[rod]), np.cos(ang[rod])])
+                J[k, 2 * n + rod] = -dv @ dh
+            if p >= 0:
+                J[k, 3 * n + 2 * p: 3 * n + 2 * p + 2] = dv * scale
+        return J
+
+    rows, rhs = [], []
+    if limits is not None:
+        for j, (lo, hi) in enumerate(np.asarray(limits, float)):
+            e = np.zeros(5 * n - 2)
+            e[2 * n + j + 1], e[2 * n + j] = 1.0, -1.0
+            if np.isfinite(lo):
+                rows.append(e), rhs.append(lo)
+            if np.isfinite(hi):
+                rows.append(-e), rhs.append(-hi)
+    if end_limits is not None:
+        for k, (lo, hi) in zip((0, n - 1), np.asarray(end_limits, float)):
+            e = np.zeros(5 * n - 2)
+            e[2 * n + k] = 1.0
+            if np.isfinite(lo):
+                rows.append(e), rhs.append(lo)
+            if np.isfinite(hi):
+                rows.append(-e), rhs.append(-hi)
+    cons = [{"type": "ineq", "fun": discs, "jac": discs_jac}]
+    if rows:
+        A, lb = np.array(rows), np.array(rhs)
+        cons.append({"type": "ineq", "fun": lambda x: A @ x - lb, "jac": lambda x: A})
+
+    h0s = np.asarray(start_holes, float)
+    ang0 = np.asarray(start_angles, float)
+    u0 = np.column_stack([np.cos(ang0), np.sin(ang0)])
+    h1s = h0s + s[:, None] * u0
+    pins0 = 0.5 * (h1s[:-1] + h0s[1:])
+    x0 = np.concatenate([h0s.ravel() / scale, ang0, pins0.ravel() / scale])
+    res = minimize(energy, x0, jac=energy_grad, constraints=cons, method="SLSQP",
+                   options={"ftol": ftol, "maxiter": maxiter})
+    h0, ang, pins, _, h1 = unpack(res.x)
+    return {
+        "points": np.vstack([a, pins, b]),
+        "holes": np.stack([h0, h1], axis=1),
+        "angles": ang,
+        "energy": res.fun,
+        "success": bool(res.success),
+        "message": res.message,
+        "nit": res.nit,
+        "max_violation": float(max(0.0, -np.min(discs(res.x) * radius ** 2) / (2 * radius.min()))),
+    }

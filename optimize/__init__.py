@@ -3,10 +3,12 @@
 numpy/scipy only; this package never imports rodcad or build123d.
 """
 
+from optimize.compensate import PinCompensation, compensate_pin_play
 from optimize.distance import ShapeDistance, shape_distance
 from optimize.equilibrium import MESSAGES, EquilibriumResult, solve_equilibrium
 from optimize.inverse import METHODS, InverseProblem, InverseResult, design
 from optimize.multistart import MultiStartResult, find_equilibria
+from optimize.pinplay import PinPlayResult, joint_forces, solve_pin_play
 
 __all__ = [
     "EquilibriumResult",
@@ -15,9 +17,14 @@ __all__ = [
     "MESSAGES",
     "METHODS",
     "MultiStartResult",
+    "PinCompensation",
+    "PinPlayResult",
     "ShapeDistance",
+    "compensate_pin_play",
     "design",
     "find_equilibria",
+    "joint_forces",
     "shape_distance",
     "solve_equilibrium",
+    "solve_pin_play",
 ]

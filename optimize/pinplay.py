@@ -49,14 +49,14 @@ from optimize.chain import ANGLE_TOL, MOMENT_TOL, Chain, Groups, stable_on_closu
 from optimize.endlimits import as_end_limits, limit_turn
 from optimize.equilibrium import dual_newton, initial_reaction, solve_equilibrium
 
-__all__ = ["PinPlayResult", "PLAY_MESSAGES", "solve_pin_play"]
+__all__ = ["PinPlayResult", "PLAY_MESSAGES", "joint_forces", "solve_pin_play"]
 
 #: Status codes of :func:`solve_pin_play`.
 PLAY_MESSAGES = {
     0: "Equilibrium with pin play found: closure exact, stops respected, KKT conditions satisfied.",
     1: "Active-set iteration limit reached before the KKT conditions held.",
     2: "The fixed point over the chain without play did not converge.",
-    3: "No configuration satisfies the stops and reaches anchor B.",
+    3: "The active-set exchange found no equilibrium (method 'dual': no fallback).",
 }
 
 
@@ -128,6 +128,21 @@ class PinPlayResult:
         return np.diff(self.angles)
 
 
+def joint_forces(reaction, masses, *, g: float = 9.81) -> np.ndarray:
+    """The force at every pin, (N+1, 2): what the part of the chain right of pin j exerts on
+    the part left of it, ``F_j = (H, V - g S_j)`` with ``S_j`` the mass of rods j..N-1 and
+    (H, V) the reaction at B. Pin 0 is A (``-F_0`` is A's reaction), pin N is B.
+
+    Args:
+        reaction: (2,) the support reaction (H, V) at B (force: mass x the unit of ``g``).
+        masses: (N,) rod masses. g: gravitational acceleration, along -y.
+    """
+    m = np.asarray(masses, dtype=float).reshape(-1)
+    after = np.concatenate([np.cumsum(m[::-1])[::-1], [0.0]])
+    h, v = np.asarray(reaction, dtype=float).reshape(2)
+    return np.column_stack([np.full(after.size, h), v - g * after])
+
+
 class _Play:
     """The chain of rod bodies and the links at its pins (see the module docstring)."""
 
@@ -149,7 +164,8 @@ class _Play:
 
     # --- the reaction's consequences -------------------------------------------------
     def forces(self, lam: complex) -> np.ndarray:
-        return lam - 1j * self.chain.g * self.after
+        F = joint_forces((lam.real, lam.imag), self.chain.masses, g=self.chain.g)
+        return F[:, 0] + 1j * F[:, 1]
 
     def links(self, lam: complex) -> np.ndarray:
         """(N+1,) complex gap vectors, hole to hole (anchor to hole at A, hole to anchor at B)."""
@@ -441,6 +457,7 @@ def solve_pin_play(
     g: float = 9.81,
     active0=None,
     max_iter: int | None = None,
+    method: str = "auto",
 ) -> PinPlayResult:
     """Static equilibrium of a chain whose pins sit in their holes with play.
 
@@ -459,6 +476,9 @@ def solve_pin_play(
         g: gravitational acceleration, along -y.
         active0: optional (N-1,) starting active set (-1 lo, 0 free, +1 hi).
         max_iter: cap on active-set iterations (default 10 + 4 N).
+        method: "auto" (the dual with the links, the fixed point where its active-set
+            exchange fails), "dual" (no fallback) or "fixed-point" (only the fixed point over
+            :func:`optimize.solve_equilibrium`; slower, for comparison).
 
     Returns:
         PinPlayResult; with ``clearance = 0`` its points are those of
@@ -472,6 +492,8 @@ def solve_pin_play(
         >>> bool(r.success and r.kkt_residual < 1e-12)
         True
     """
+    if method not in ("auto", "dual", "fixed-point"):
+        raise ValueError(f"method must be 'auto', 'dual' or 'fixed-point', got {method!r}")
     chain = Chain.from_args(spacings, masses, anchor_a, anchor_b, com, limits, g)
     clear = val.as_clearance(clearance, chain.n)
     ends = as_end_limits(end_limits)
@@ -488,12 +510,15 @@ def solve_pin_play(
         max_iter = 10 + 4 * chain.n
     side, eside, lam, theta0 = _start(play, chain.lengths, chain.masses, chain.anchor_a, chain.anchor_b,
                               chain.com, chain.limits, ends, chain.g, active0)
-    found = _exchange(play, side, eside, lam, theta0, max_iter)
+    found = None if method == "fixed-point" else _exchange(play, side, eside, lam, theta0, max_iter)
     path = "exchange"
     status = 0
     nit = nnewton = 0
     if found is not None:
         theta, lam, side, eside, nit, nnewton = found
+    elif method == "dual":
+        status = 3
+        theta = theta0 if theta0 is not None else np.full(chain.n, np.angle(chain.d))
     else:
         path = "fixed-point"
         fp = _fixed_point(play, chain.lengths, chain.masses, chain.com, chain.limits, ends, lam)

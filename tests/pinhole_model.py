@@ -62,35 +62,37 @@ def hang_pins_in_holes(spacings, masses, a, b, clearance, com, start_holes, star
         gr[2 * n: 3 * n] = m * (com[:, 0] * np.cos(ang) - com[:, 1] * np.sin(ang))
         return g * gr / (g * m.sum() * scale)
 
-    # disc constraints: 1 - |pin - hole|^2 / r^2 >= 0, one per (pin, hole)
-    pairs = [(-1, 0, 0)]  # (pin index into pins or -1 = A / -2 = B, rod, which hole)
-    for j in range(1, n):
-        pairs += [(j - 1, j - 1, 1), (j - 1, j, 0)]
-    pairs.append((-2, n - 1, 1))
-    radius = np.array([r[0]] + [r[j] for j in range(1, n) for _ in (0, 1)] + [r[n]])
+    # disc constraints: 1 - |pin - hole|^2 / r^2 >= 0, one per (pin, hole): rows in the order
+    # (A, rod 0 first), then per inner pin j (rod j-1 second, rod j first), then (B, rod N-1 second)
+    k = np.arange(1, n)
+    rod = np.concatenate([[0], np.column_stack([k - 1, k]).ravel(), [n - 1]])
+    second = np.concatenate([[False], np.tile([True, False], n - 1), [True]])
+    pin = np.concatenate([[-1], np.repeat(k - 1, 2), [-2]])  # -1 = A, -2 = B
+    radius = np.concatenate([[r[0]], np.repeat(r[1:n], 2), [r[n]]])
+    rows_n = rod.size
+
+    def geometry(x):
+        h0, ang, pins, u, h1 = unpack(x)
+        pts = np.vstack([pins, b, a])  # index -1 -> a, -2 -> b
+        gap = pts[pin] - np.where(second[:, None], h1[rod], h0[rod])
+        return gap, ang
 
     def discs(x):
-        h0, _, pins, _, h1 = unpack(x)
-        out = np.empty(len(pairs))
-        for k, (p, rod, hole) in enumerate(pairs):
-            pin = a if p == -1 else b if p == -2 else pins[p]
-            h = h0[rod] if hole == 0 else h1[rod]
-            out[k] = 1.0 - np.sum((pin - h) ** 2) / radius[k] ** 2
-        return out
+        gap, _ = geometry(x)
+        return 1.0 - np.sum(gap ** 2, axis=1) / radius ** 2
 
     def discs_jac(x):
-        h0, ang, pins, u, h1 = unpack(x)
-        J = np.zeros((len(pairs), x.size))
-        for k, (p, rod, hole) in enumerate(pairs):
-            pin = a if p == -1 else b if p == -2 else pins[p]
-            h = h0[rod] if hole == 0 else h1[rod]
-            dv = -2.0 * (pin - h) / radius[k] ** 2  # d/d(pin)
-            J[k, 2 * rod: 2 * rod + 2] = -dv * scale
-            if hole == 1:
-                dh = s[rod] * np.array([-np.sin(ang[rod]), np.cos(ang[rod])])
-                J[k, 2 * n + rod] = -dv @ dh
-            if p >= 0:
-                J[k, 3 * n + 2 * p: 3 * n + 2 * p + 2] = dv * scale
+        gap, ang = geometry(x)
+        dv = -2.0 * gap / radius[:, None] ** 2  # d/d(pin)
+        J = np.zeros((rows_n, x.size))
+        idx = np.arange(rows_n)
+        J[idx, 2 * rod] = -dv[:, 0] * scale
+        J[idx, 2 * rod + 1] = -dv[:, 1] * scale
+        dh = s[rod, None] * np.column_stack([-np.sin(ang[rod]), np.cos(ang[rod])])
+        J[idx, 2 * n + rod] = np.where(second, -np.sum(dv * dh, axis=1), 0.0)
+        inner = pin >= 0
+        J[idx[inner], 3 * n + 2 * pin[inner]] = dv[inner, 0] * scale
+        J[idx[inner], 3 * n + 2 * pin[inner] + 1] = dv[inner, 1] * scale
         return J
 
     rows, rhs = [], []

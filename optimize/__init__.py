@@ -9,6 +9,7 @@ from optimize.equilibrium import MESSAGES, EquilibriumResult, solve_equilibrium
 from optimize.inverse import METHODS, InverseProblem, InverseResult, design
 from optimize.multistart import MultiStartResult, find_equilibria
 from optimize.pinplay import PinPlayResult, joint_forces, solve_pin_play
+from optimize.tolerance import MassBand, mass_band
 
 __all__ = [
     "EquilibriumResult",
@@ -16,6 +17,7 @@ __all__ = [
     "InverseResult",
     "MESSAGES",
     "METHODS",
+    "MassBand",
     "MultiStartResult",
     "PinCompensation",
     "PinPlayResult",
@@ -24,6 +26,7 @@ __all__ = [
     "design",
     "find_equilibria",
     "joint_forces",
+    "mass_band",
     "shape_distance",
     "solve_equilibrium",
     "solve_pin_play",

@@ -5,6 +5,7 @@ numpy/scipy only; this package never imports rodcad or build123d.
 
 from optimize.compensate import PinCompensation, compensate_pin_play
 from optimize.distance import ShapeDistance, shape_distance
+from optimize.friction import FrictionBand, friction_band, friction_capacity
 from optimize.equilibrium import MESSAGES, EquilibriumResult, solve_equilibrium
 from optimize.inverse import METHODS, InverseProblem, InverseResult, design
 from optimize.multistart import MultiStartResult, find_equilibria
@@ -13,6 +14,7 @@ from optimize.tolerance import MassBand, mass_band
 
 __all__ = [
     "EquilibriumResult",
+    "FrictionBand",
     "InverseProblem",
     "InverseResult",
     "MESSAGES",
@@ -25,6 +27,8 @@ __all__ = [
     "compensate_pin_play",
     "design",
     "find_equilibria",
+    "friction_band",
+    "friction_capacity",
     "joint_forces",
     "mass_band",
     "shape_distance",

@@ -205,18 +205,19 @@ def _lp_support(direction, A, V, v0, tau):
     return -res.fun, res.x
 
 
-def _polygon_max(A, c, V, v0, tau, rel_tol=1e-9):
+def _polygon_max(A, c, V, v0, tau, toward=0.0, rel_tol=1e-9):
     """Largest norm over the image {A m + c} (a polygon) of the polytope {|m| <= tau,
     V m + v0 >= 0}: support points (vertices) in sorted directions; between two directions the
     polygon lies within the two support lines, so where their crossing is no further out than
     the best vertex the interval is done, else the segment's normal is queried (one more vertex,
-    or the segment is an edge). Exact to ``rel_tol``; returns (norm, m) or None (empty)."""
+    or the segment is an edge). Starts from four directions, the first ``toward`` (rad).
+    Exact to ``rel_tol``; returns (norm, m) or None (empty)."""
     def support(angle):
         d = np.array([np.cos(angle), np.sin(angle)])
         got = _lp_support(d, A, V, v0, tau)
         return None if got is None else (angle, A @ got[1] + c, got[1])
 
-    pts = [support(t) for t in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
+    pts = [support(toward + t) for t in np.arange(4) * np.pi / 2]
     if any(p is None for p in pts):
         return None
     best = max(pts, key=lambda p: np.hypot(*p[1]))
@@ -322,7 +323,11 @@ def friction_band(
                 bound, m = _zonotope_max(A, tau, c)
                 if bound <= per[j]:
                     continue
-                got = (bound, m) if np.all(V @ m + v0 >= -vtol) else _polygon_max(A, c, V, v0, tau)
+                if np.all(V @ m + v0 >= -vtol):
+                    got = (bound, m)
+                else:
+                    far = A @ m + c
+                    got = _polygon_max(A, c, V, v0, tau, toward=float(np.arctan2(far[1], far[0])))
                 if got is not None and got[0] > per[j]:
                     per[j], ext_m[j] = got
         method = (f"linearised statics with {cells} cells of holding stops: per joint and cell "

@@ -441,7 +441,8 @@ def _fixed_point(play: _Play, spacings, masses, com, limits, end_limits, lam, ma
     else:
         return None
     eside = np.asarray(r.info.get("end_active", np.zeros(2, dtype=int)), dtype=int)
-    return r.angles, lam, np.asarray(r.active, dtype=int), eside, it
+    theta = r.angles[0] + np.concatenate([[0.0], np.cumsum(np.angle(np.exp(1j * np.diff(r.angles))))])
+    return theta, lam, np.asarray(r.active, dtype=int), eside, it
 
 
 def solve_pin_play(

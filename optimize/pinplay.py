@@ -219,7 +219,20 @@ class _Play:
             W0 = P[:nfree] * lam - Q[:nfree]
             signs[:nfree] = np.where((np.exp(1j * psi0) * np.conj(W0)).real < 0, -1.0, 1.0)
         if np.all(signs > 0):
-            lam, W, k, converged = dual_newton(P, Q, d_eff, lam, self.length)
+            lam1, W, k, converged = dual_newton(P, Q, d_eff, lam, self.length)
+            if not converged and nfree:
+                # the dual's minimum on a group's kink (no load on it): that group pushes
+                # (e.g. a rod wedged between its pins); solve with it on the other branch
+                g = int(np.argmin(np.abs(W[:nfree]) / np.maximum(np.abs(P[:nfree]), 1e-300)))
+                signs[g] = -1.0
+                step = abs(lam1) + self.chain.g * self.chain.total_mass
+                for shift in np.array([-1, 1, -1j, 1j]) * step * 0.1:  # off the kink, each way
+                    lam2, W, k2, converged = branch_newton(P, Q, d_eff, signs, lam1 + shift, self.length)
+                    k += k2
+                    if converged:
+                        lam1 = lam2
+                        break
+            lam = lam1
         else:
             lam, W, k, converged = branch_newton(P, Q, d_eff, signs, lam, self.length)
         if not converged:
@@ -427,8 +440,11 @@ def _fixed_point(play: _Play, spacings, masses, com, limits, end_limits, lam, ma
         a2 = a + np.array([v[0].real, v[0].imag])
         d2 = d - v.sum()
         b2 = a2 + np.array([d2.real, d2.imag])
-        r = solve_equilibrium(spacings, masses, a2, b2, com=com, limits=limits, end_limits=end_limits,
-                              g=chain.g, active0=active0)
+        try:
+            r = solve_equilibrium(spacings, masses, a2, b2, com=com, limits=limits, end_limits=end_limits,
+                                  g=chain.g, active0=active0)
+        except ValueError:  # the gaps leave the rods unable to reach: no fixed point here
+            return None
         if not (r.success and np.all(np.isfinite(r.reaction))):
             return None
         new = complex(*r.reaction)

@@ -256,3 +256,17 @@ def test_examples_compensated_against_independent_model(name):
     r = solve_pin_play(ch["l"], ch["m"], ch["a"], ch["b"], clearance=c, com=ch["com"],
                        limits=ch["lim"], end_limits=ch["ends"])
     np.testing.assert_allclose(ref_u["points"], r.points, atol=1e-6 * size)
+
+
+def test_a_rod_wedged_between_its_pins():
+    """One rod longer than the anchors are apart, held only because its holes let the pins
+    in: it pushes (the pins bear on the inner sides of its holes). The dual's minimum sits on
+    the rod's kink; the solver takes the rod on the other branch and agrees with the
+    independent model."""
+    r = solve_pin_play([1.0], [1.0], (0, 0), (0.95, 0.1), clearance=0.2)
+    assert r.success and r.stable
+    ref = hang_pins_in_holes([1.0], [1.0], np.zeros(2), np.array([0.95, 0.1]), np.full(2, 0.2), [[0.5, 0.0]],
+                             [[0.0, -0.05]], [0.0], ftol=1e-14)
+    np.testing.assert_allclose(ref["holes"], r.holes, atol=1e-6)
+    axis = r.holes[0, 1] - r.holes[0, 0]
+    assert axis @ r.forces[1] < 0  # the force at B pushes back along the rod: compression

@@ -9,7 +9,8 @@ from optimize.friction import FrictionBand, friction_band, friction_capacity
 from optimize.equilibrium import MESSAGES, EquilibriumResult, solve_equilibrium
 from optimize.inverse import METHODS, InverseProblem, InverseResult, design
 from optimize.multistart import MultiStartResult, find_equilibria
-from optimize.pinplay import PinPlayResult, joint_forces, solve_pin_play
+from optimize.pinplay import solve_pin_play
+from optimize.pins import PinPlayResult, joint_forces
 from optimize.tolerance import MassBand, mass_band
 
 __all__ = [

@@ -2,7 +2,7 @@
 
 Under load every pin bears on the far side of both holes it passes through
 (:mod:`optimize.pinplay`): pin j sits ``c_j / 2`` from each of its hole centres, along the
-force ``F_j`` it carries (:func:`optimize.pinplay.joint_forces`). So for the pins to sit on the
+force ``F_j`` it carries (:func:`optimize.pins.joint_forces`). So for the pins to sit on the
 designed joints ``p_j``, with the design's forces (the same masses and centres of mass in the
 world, hence the same reaction and joint forces, every rod loaded along the same lines of
 action through the pins), rod i's holes go at::
@@ -34,7 +34,7 @@ import numpy as np
 
 from optimize import validate as val
 from optimize.endlimits import as_end_limits
-from optimize.pinplay import joint_forces
+from optimize.pins import joint_forces
 
 __all__ = ["PinCompensation", "compensate_pin_play"]
 
@@ -78,7 +78,7 @@ def compensate_pin_play(points, masses, reaction, *, clearance, com=None, limits
         points: (N+1, 2) the designed equilibrium's joints (p_0 = A, p_N = B).
         masses: (N,) rod masses.
         reaction: (2,) the designed equilibrium's reaction (H, V) at B (it fixes every joint's
-            force, :func:`optimize.pinplay.joint_forces`).
+            force, :func:`optimize.pins.joint_forces`).
         clearance: diametral pin clearance, a number or (N+1,) per pin (anchors included).
         com: (N, 2) the design's centres of mass (along, perp) in the pivot frame (origin
             p_i, x along p_i -> p_{i+1}); None = the chord midpoints.

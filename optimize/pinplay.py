@@ -45,7 +45,8 @@ from optimize import validate as val
 from optimize.branches import branch_newton
 from optimize.chain import ANGLE_TOL, MOMENT_TOL, Chain, Groups, stable_on_closure
 from optimize.endlimits import as_end_limits, limit_turn
-from optimize.equilibrium import dual_newton, initial_reaction, solve_equilibrium
+from optimize.dual import dual_newton, initial_reaction
+from optimize.equilibrium import solve_equilibrium
 from optimize.pins import PLAY_MESSAGES, PinPlayResult, joint_forces
 
 __all__ = ["PinPlayResult", "PLAY_MESSAGES", "joint_forces", "solve_pin_play"]

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from rodcad.outputs.printed import as_printed_lines
 from rodcad import __version__
 from rodcad.fabrication.layers import LayerGrid
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
@@ -87,6 +88,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         add(f"- Joints: {_joints_text(r)}")
     if "as_built" in data:
         add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
+    if getattr(r, "as_printed", None) is not None:
+        size = float(data["curve"]["size_mm"]) if "curve" in data else float(d.span)
+        for line in as_printed_lines(r.as_printed, size):
+            add(line)
     if "inverse" in data:
         inv = data["inverse"]
         add(f"- Inverse design: {'exact' if inv['exact'] else 'best fit within the mass bounds'}; "

@@ -17,8 +17,8 @@ designed chain (numbers in mm, g, radians) into what a ruler will measure:
   equilibrium (linearised; the play moves it by a fraction of a per cent):
   :func:`optimize.friction_band` with the catalog's ``joint.friction`` and the pins' radii,
   :func:`optimize.mass_band` with ``print.mass_tolerance``.
-* :func:`sensitive_joints`: the joints whose band exceeds what the tolerance leaves: where a
-  robust design (design option ``robust``) would rather have a stop.
+* :func:`sensitive_joints`, :func:`loose_joints`: the joints whose band exceeds what the
+  tolerance allows: where a robust design (design option ``robust``) holds the bend both ways.
 
 Frames: a rod's *rod frame* is its solid's (hinge axes at (0, 0) and (length, 0)); its *hole
 frame* has its origin at the first hole's centre and x toward the second's (design.json's
@@ -45,8 +45,10 @@ from optimize import (
 )
 from optimize.distance import ShapeDistance
 from rodcad.catalog.model import RodType
+from rodcad.design.fit import DEFAULT_TOLERANCE
+from rodcad.design.shell import curve_size
 
-__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "hole_frame", "hole_plan", "pins_of",
+__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "hole_frame", "hole_plan", "loose_joints", "pins_of", "robust_option",
            "plan_holes", "printed_chain", "sensitive_joints"]
 
 #: Draws of the mass band (about 1 % sampling error on its 95th percentile).
@@ -302,3 +304,42 @@ def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted:
                       target=chain.target_points, limits=chain.limits, end_limits=chain.end_limits,
                       design_equilibrium=chain.equilibrium, design_masses=chain.masses, design_com=chain.com,
                       pin_radius=radius, mu=mu, mass_tolerance=tol, g=chain.design.g, seed=chain.seed)
+
+
+def loose_joints(problem, masses, *, allowance: float, mu: float, pin_radius: float,
+                 mass_tolerance: float, seed: int = 0) -> list[int]:
+    """The joints of a verified design whose friction or mass band exceeds ``allowance``.
+
+    For design option ``robust`` (the planner, :func:`rodcad.design.decide.decide`, holds
+    them both ways in its next round: a two-sided stop, or a fused piece).
+
+    Args:
+        problem: the design's :class:`optimize.InverseProblem` (mm, radians).
+        masses: (N,) its masses (g).
+        allowance: the largest band (mm) a joint may have, e.g. the tolerance x the size.
+        mu, pin_radius: pin friction (coefficient; mm). mass_tolerance: relative, 95 %.
+
+    Returns:
+        Bend indices j (0..N-2, the joint between rods j and j+1) in chain order; [] where
+        the equilibrium is not found or the bands cannot be computed.
+    """
+    eq = problem.simulate(masses)
+    if not (eq.success and eq.stable) or problem.n < 2:
+        return []
+    a, b = problem.anchors
+    kw = dict(com=problem.com, limits=problem.limits, end_limits=problem.end_limits, g=problem.g, result=eq)
+    try:
+        fb = friction_band(problem.lengths, masses, a, b, mu=mu, pin_radius=pin_radius, **kw).per_joint
+        mb = mass_band(problem.lengths, masses, a, b, tol=mass_tolerance, n_samples=4000, seed=seed, **kw).per_joint
+    except (ValueError, np.linalg.LinAlgError):
+        return []
+    return [j - 1 for j in sensitive_joints(np.maximum(fb, mb), allowance)]
+
+
+def robust_option(curve, pf, catalog) -> tuple[float, float, float, float]:
+    """The planner's ``robust`` setting (:attr:`rodcad.design.decide.Allowed.robust`) for a
+    family printed to order: (allowance mm = the default tolerance x the target's size, the
+    family's friction coefficient, its pin radius mm, the catalog's mass tolerance)."""
+    t = pf.family.template
+    return (DEFAULT_TOLERANCE * curve_size(np.asarray(curve, float)), float(t.friction),
+            t.geometry.hinge.pin_diameter / 2, float(catalog.print_settings.get("mass_tolerance", 0.03)))

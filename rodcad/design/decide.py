@@ -39,6 +39,7 @@ from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
+from rodcad.design.asprinted import loose_joints
 from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
 
 __all__ = ["Allowed", "Decision", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
@@ -69,12 +70,17 @@ class Allowed:
             of stopped joints is printed as one piece too).
         verify: check the result against the solver and hold more joints where it fails
             (off for one shell of rods, whose stops are fixed by the shell).
+        robust: (allowance mm, mu, pin radius mm, mass tolerance) for design option ``robust``:
+            an accepted design whose friction or mass band exceeds the allowance at a joint
+            gets that joint held both ways in one more round (:func:`rodcad.design.asprinted.
+            loose_joints`); None: off.
     """
 
     stops: bool = True
     anchor_stops: bool = True
     fuse: str = "auto"
     verify: bool = True
+    robust: tuple[float, float, float, float] | None = None
 
 
 @dataclass
@@ -168,6 +174,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     best: Decision | None = None
     notes: list[str] = []
     history: list[tuple[list[int], Verdict | None]] = []
+    robust: list[int] | None = None  # the joints the robust round holds (None: not yet asked)
     for rnd in range(MAX_ROUNDS + 1):
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
@@ -201,9 +208,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         history.append((sorted(locks), verdict))
         d = Decision(laid, stops, ends, set(fused), list(beyond), verdict, rnd, sorted(locks), notes, feasible,
                      history)
-        if best is None or _better(d, best):
+        if best is None or _better(d, best) or robust and d.accepted:
             best = d
-        if verdict is None or d.accepted and not verdict.others or not feasible:
+        if verdict is None or (d.accepted and not verdict.others and allowed.robust is None) or not feasible:
             break
         if time.perf_counter() - t0 > budget_s:
             notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) ({budget_s:g} s)")
@@ -211,6 +218,14 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
         if d.accepted:  # other shapes exist, all higher: hold a joint more only if it is cheap
             new = new[:1]
+        if d.accepted and not new and allowed.robust is not None and robust is None:
+            allow, mu, radius, tol = allowed.robust  # bands beyond the allowance: hold those joints
+            robust = [j for j in loose_joints(laid.problem, masses, allowance=allow, mu=mu, pin_radius=radius,
+                                              mass_tolerance=tol, seed=seed) if j not in locks | fused]
+            new = robust
+            if new:
+                notes.append(f"robust: joint(s) {new} held both ways, where pin friction or the print's mass "
+                             f"tolerance would move the chain more than {allow:.3g} mm")
         if not new:
             break
         for j in new:

@@ -7,14 +7,19 @@ rods' holes. The potential energy g sum m_i y(com_i) is minimised by SLSQP over 
 (5N - 2 unknowns) from a given start, with the stops between rod bodies and the anchor stops
 as linear inequalities. Centres of mass are given in the hole frame (origin at the first
 hole's centre, x toward the second's).
+
+For a built chain: :func:`step_holes` measures a rod's pin holes on its STEP file (build123d
+reads it; the cylinders' axes) and :func:`hang_built` hangs the rods of a design.json with them.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from scipy.optimize import minimize
 
-__all__ = ["hang_pins_in_holes"]
+__all__ = ["hang_built", "hang_pins_in_holes", "step_holes"]
 
 
 def hang_pins_in_holes(spacings, masses, a, b, clearance, com, start_holes, start_angles, *,
@@ -136,3 +141,69 @@ def hang_pins_in_holes(spacings, masses, a, b, clearance, com, start_holes, star
         "nit": res.nit,
         "max_violation": float(max(0.0, -np.min(discs(res.x) * radius ** 2) / (2 * radius.min()))),
     }
+
+
+def _rad(pair):
+    if pair is None:
+        return [-np.inf, np.inf]
+    return [-np.inf if pair[0] is None else np.radians(pair[0]), np.inf if pair[1] is None else np.radians(pair[1])]
+
+
+def step_holes(path: Path, print_matrix, hole_radius: float, length: float) -> np.ndarray:
+    """(2, 2) the pin holes' centres (rod frame) measured on a rod's STEP file: the axes of its
+    cylindrical faces of the hole's radius, the one near x = 0 first."""
+    from build123d import GeomType, import_step
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+
+    inv = np.linalg.inv(np.asarray(print_matrix, float))
+    found = []
+    for face in import_step(str(path)).faces():
+        if face.geom_type != GeomType.CYLINDER:
+            continue
+        cyl = BRepAdaptor_Surface(face.wrapped).Cylinder()
+        if abs(cyl.Radius() - hole_radius) > 1e-6:
+            continue
+        loc = cyl.Location()
+        found.append((inv @ np.array([loc.X(), loc.Y(), loc.Z(), 1.0]))[:2])
+    found = np.array(found)
+    first = found[found[:, 0] < length / 2]
+    second = found[found[:, 0] >= length / 2]
+    if not (len(first) and len(second)) or max(np.ptp(g, axis=0).max() for g in (first, second)) > 1e-6:
+        raise ValueError(f"{path}: not two pin holes, each on one axis")
+    return np.array([first[0], second[0]])
+
+
+def hang_built(d: dict, holes: np.ndarray) -> np.ndarray:
+    """A built chain (``d``: its design.json) hung by the independent model: holes (N, 2, 2) in
+    the rod frames (e.g. measured by :func:`step_holes`), the B-rep's masses and centres of
+    mass (design.json ``fabrication``), the design's stops on the rod bodies. Returns the pins."""
+    rods = d["rods"]
+    n = len(rods)
+    mass = np.array([r["fabrication"]["mass"] for r in rods])
+    com = np.array([r["fabrication"]["com"] for r in rods])  # rod frame, from the B-rep
+    axis = holes[:, 1] - holes[:, 0]
+    spacing = np.hypot(axis[:, 0], axis[:, 1])
+    turn = np.arctan2(axis[:, 1], axis[:, 0])
+    rel = com - holes[:, 0]
+    com_h = np.column_stack([np.cos(turn) * rel[:, 0] + np.sin(turn) * rel[:, 1],
+                             -np.sin(turn) * rel[:, 0] + np.cos(turn) * rel[:, 1]])
+    lim = np.array([_rad(r["limits_deg"]) for r in rods[:-1]]) + np.diff(turn)[:, None]
+    ends = np.array([_rad(p) for p in d["anchor_limits_deg"]]) + np.array([[turn[0]], [turn[-1]]])
+    clearance = np.array([r["params"]["pin_clearance"] for r in rods] + [rods[-1]["params"]["pin_clearance"]])
+    pts = np.array(d["simulated"]["points"])
+    theta = np.arctan2(*np.diff(pts, axis=0).T[::-1])
+    start = pts[:-1] + np.column_stack([np.cos(theta) * holes[:, 0, 0] - np.sin(theta) * holes[:, 0, 1],
+                                        np.sin(theta) * holes[:, 0, 0] + np.cos(theta) * holes[:, 0, 1]])
+    windows = ends.copy()  # anchor stops on the turn of the start (one bound: its half turn)
+    for e, t in ((0, theta[0] + turn[0]), (1, theta[-1] + turn[-1])):
+        lo, hi = windows[e]
+        if np.isinf(lo) and np.isinf(hi):
+            continue
+        windows[e] = [hi - np.pi if np.isinf(lo) else lo, lo + np.pi if np.isinf(hi) else hi]
+        windows[e] += 2 * np.pi * np.round((t - windows[e].mean()) / (2 * np.pi))
+    a, b = np.array(d["anchors"], float)
+    ref = hang_pins_in_holes(spacing, mass, a, b, clearance, com_h, start, theta + turn,
+                             limits=lim if n > 1 else None, end_limits=windows, ftol=1e-14)
+    if ref["max_violation"] > 1e-9:
+        raise RuntimeError(f"the independent model left a pin {ref['max_violation']:.2e} outside its hole")
+    return ref["points"]

@@ -20,77 +20,12 @@ import pytest
 
 from optimize import solve_equilibrium
 from optimize.problem import InverseProblem
-from pinhole_model import hang_pins_in_holes
+from pinhole_model import hang_built, step_holes
 from rodcad.cli import main
 from rodcad.design.asprinted import HolePlan, as_printed, hole_plan, loose_joints, sensitive_joints
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).parent / "data" / "example_chains.json"
-
-
-def _rad(pair):
-    if pair is None:
-        return [-np.inf, np.inf]
-    return [-np.inf if pair[0] is None else np.radians(pair[0]), np.inf if pair[1] is None else np.radians(pair[1])]
-
-
-def step_holes(path: Path, print_matrix, hole_radius: float, length: float) -> np.ndarray:
-    """(2, 2) the pin holes' centres (rod frame) measured on a rod's STEP file: the axes of its
-    cylindrical faces of the hole's radius, the one near x = 0 first."""
-    from build123d import GeomType, import_step
-    from OCP.BRepAdaptor import BRepAdaptor_Surface
-
-    inv = np.linalg.inv(np.asarray(print_matrix, float))
-    found = []
-    for face in import_step(str(path)).faces():
-        if face.geom_type != GeomType.CYLINDER:
-            continue
-        cyl = BRepAdaptor_Surface(face.wrapped).Cylinder()
-        if abs(cyl.Radius() - hole_radius) > 1e-6:
-            continue
-        loc = cyl.Location()
-        found.append((inv @ np.array([loc.X(), loc.Y(), loc.Z(), 1.0]))[:2])
-    found = np.array(found)
-    first = found[found[:, 0] < length / 2]
-    second = found[found[:, 0] >= length / 2]
-    assert len(first) and len(second)
-    for group in (first, second):  # every face of one hole on one axis
-        assert np.ptp(group, axis=0).max() < 1e-6
-    return np.array([first[0], second[0]])
-
-
-def independent_hang(d: dict, holes: np.ndarray) -> np.ndarray:
-    """The built chain hung by the independent model: measured holes (N, 2, 2), the B-rep's
-    masses and centres of mass, the design's stops on the rod bodies. Returns the pins."""
-    rods = d["rods"]
-    n = len(rods)
-    mass = np.array([r["fabrication"]["mass"] for r in rods])
-    com = np.array([r["fabrication"]["com"] for r in rods])  # rod frame, from the B-rep
-    axis = holes[:, 1] - holes[:, 0]
-    spacing = np.hypot(axis[:, 0], axis[:, 1])
-    turn = np.arctan2(axis[:, 1], axis[:, 0])
-    rel = com - holes[:, 0]
-    com_h = np.column_stack([np.cos(turn) * rel[:, 0] + np.sin(turn) * rel[:, 1],
-                             -np.sin(turn) * rel[:, 0] + np.cos(turn) * rel[:, 1]])
-    lim = np.array([_rad(r["limits_deg"]) for r in rods[:-1]]) + np.diff(turn)[:, None]
-    ends = np.array([_rad(p) for p in d["anchor_limits_deg"]]) + np.array([[turn[0]], [turn[-1]]])
-    clearance = np.array([r["params"]["pin_clearance"] for r in rods] + [rods[-1]["params"]["pin_clearance"]])
-    pts = np.array(d["simulated"]["points"])
-    theta = np.arctan2(*np.diff(pts, axis=0).T[::-1])
-    start = pts[:-1] + np.column_stack([np.cos(theta) * holes[:, 0, 0] - np.sin(theta) * holes[:, 0, 1],
-                                        np.sin(theta) * holes[:, 0, 0] + np.cos(theta) * holes[:, 0, 1]])
-    windows = ends.copy()  # anchor stops on the turn of the start (one bound: its half turn)
-    for e, t in ((0, theta[0] + turn[0]), (1, theta[-1] + turn[-1])):
-        lo, hi = windows[e]
-        if np.isinf(lo) and np.isinf(hi):
-            continue
-        windows[e] = [hi - np.pi if np.isinf(lo) else lo, lo + np.pi if np.isinf(hi) else hi]
-        windows[e] += 2 * np.pi * np.round((t - windows[e].mean()) / (2 * np.pi))
-    a, b = np.array(d["anchors"], float)
-    ref = hang_pins_in_holes(spacing, mass, a, b, clearance, com_h, start, theta + turn,
-                             limits=lim if n > 1 else None, end_limits=windows, ftol=1e-14)
-    assert ref["max_violation"] < 1e-9
-    return ref["points"]
 
 
 @pytest.fixture(scope="module")
@@ -121,9 +56,9 @@ def test_printed_semicircle_hangs_on_its_target(printed_semicircle):
         plain.append(axes)
     target = np.array(d["target"]["points"])
     size = d["curve"]["size_mm"]
-    pins = independent_hang(d, np.array(holes))
+    pins = hang_built(d, np.array(holes))
     err = np.hypot(*(pins - target).T).max()
-    err_plain = np.hypot(*(independent_hang(d, np.array(plain)) - target).T).max()
+    err_plain = np.hypot(*(hang_built(d, np.array(plain)) - target).T).max()
     print(f"semicircle as printed: {err:.2e} mm ({100 * err / size:.2e} %), holes on the axes "
           f"{err_plain:.3f} mm ({100 * err_plain / size:.3f} %)")
     assert err < 5e-4 * size
@@ -154,6 +89,12 @@ def test_design_json_and_report_as_printed(printed_semicircle):
     text = (out / "report.md").read_text()
     assert "Pins in their holes" in text and "Pin friction" in text and "tap it" in text
     assert "Print tolerance" in text
+
+
+def _rad(pair):
+    if pair is None:
+        return [-np.inf, np.inf]
+    return [-np.inf if pair[0] is None else np.radians(pair[0]), np.inf if pair[1] is None else np.radians(pair[1])]
 
 
 def _example(name):

@@ -42,7 +42,7 @@ def starts_beyond_band(fb, base, rng, count):
 
 
 CHAINS = [("random", ("stops", 1)), ("random", ("ends", 2)), ("random", ("free", 3)),
-          ("example", "garland"), pytest.param(("example", "heart"), marks=pytest.mark.slow)]
+          ("example", "garland-rise"), pytest.param(("example", "heart"), marks=pytest.mark.slow)]
 
 
 @pytest.mark.parametrize("case", CHAINS, ids=lambda c: str(c[1]))

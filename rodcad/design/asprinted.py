@@ -48,7 +48,7 @@ from rodcad.catalog.model import RodType
 from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.shell import curve_size
 
-__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "hole_frame", "hole_plan", "loose_joints", "pins_of", "robust_option",
+__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "hole_frame", "hole_plan", "loose_joints", "pins_of", "plan_of", "robust_option",
            "plan_holes", "printed_chain", "sensitive_joints"]
 
 #: Draws of the mass band (about 1 % sampling error on its 95th percentile).
@@ -139,6 +139,14 @@ def _pins(clearance, limits: np.ndarray, n: int) -> np.ndarray:
     if n > 1:
         c[1:-1][limits[:, 0] == limits[:, 1]] = 0.0
     return c
+
+
+def plan_of(offsets, clearance, limits=None) -> HolePlan:
+    """The holes a build printed (design.json ``rods[].holes_mm``, (N, 2, 2) mm) with each pin's
+    clearance ((N+1,) or a number; 0 where the limits fuse a joint)."""
+    off = np.asarray(offsets, float).reshape(-1, 2, 2)
+    n = off.shape[0]
+    return HolePlan(_pins(clearance, _limits(limits, n), n), off, bool(np.any(off != 0)))
 
 
 def hole_plan(points, masses, reaction, *, clearance, com, limits=None, end_limits=None, g: float = 9.81,

@@ -15,7 +15,7 @@ from optimize.discretize import centerline, curve_distance
 from rodcad.design.asprinted import AsPrinted, hole_frame
 from rodcad.design.shell import curve_size
 
-__all__ = ["as_printed_json", "as_printed_lines", "draw_bands", "printed_rod_fields"]
+__all__ = ["as_printed_json", "as_printed_lines", "draw_bands", "printed_rod_fields", "printed_summary"]
 
 
 def _f(x: float) -> float | None:
@@ -66,6 +66,21 @@ def as_printed_json(ap: AsPrinted, curve: np.ndarray | None, curvature, span: fl
         },
     }
     return {"as_printed": out, **bands}
+
+
+def printed_summary(ap: AsPrinted, span: float) -> str:
+    """One line for the terminal: pins in holes, and the two bands (mm, % of the span)."""
+    def mm(v: float) -> str:
+        return f"{v:.3g} mm ({100 * v / span:.3g} %)"
+
+    out = f"pins in their holes {mm(ap.distance.max)}"
+    if ap.uncompensated is not None:
+        out += f" (holes on the axes: {mm(ap.uncompensated.max)})"
+    if ap.friction is not None:
+        out += f"; friction band {mm(ap.friction.band)}"
+    if ap.mass_band is not None:
+        out += f"; mass band (95 %) {mm(ap.mass_band.band)}"
+    return out
 
 
 def _worst(per_joint) -> int:

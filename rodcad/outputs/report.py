@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from rodcad.outputs.printed import as_printed_lines
+from rodcad.outputs.printed import as_printed_lines, printed_summary
 from rodcad import __version__
 from rodcad.fabrication.layers import LayerGrid
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
@@ -293,6 +293,8 @@ def summary_text(r, outdir: Path | None) -> str:
             L.append(f"  joints        {_joints_text(r)}")
     if r.as_built is not None:
         L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
+    if getattr(r, "as_printed", None) is not None:
+        L.append(f"  as printed    {printed_summary(r.as_printed, r.design.span)}")
     eq = r.equilibrium
     L.append(f"  equilibrium   {'stable' if eq.stable else 'NOT STABLE'}, "
              f"{'unique' if r.unique else str(r.n_stable) + ' stable shapes found'}, "

@@ -68,10 +68,10 @@ def as_printed_json(ap: AsPrinted, curve: np.ndarray | None, curvature, span: fl
     return {"as_printed": out, **bands}
 
 
-def printed_summary(ap: AsPrinted, span: float) -> str:
-    """One line for the terminal: pins in holes, and the two bands (mm, % of the span)."""
+def printed_summary(ap: AsPrinted, size: float) -> str:
+    """One line for the terminal: pins in holes, and the two bands (mm, % of the target's size)."""
     def mm(v: float) -> str:
-        return f"{v:.3g} mm ({100 * v / span:.3g} %)"
+        return f"{v:.3g} mm ({100 * v / size:.3g} %)"
 
     out = f"pins in their holes {mm(ap.distance.max)}"
     if ap.uncompensated is not None:

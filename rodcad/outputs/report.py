@@ -294,7 +294,8 @@ def summary_text(r, outdir: Path | None) -> str:
     if r.as_built is not None:
         L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
     if getattr(r, "as_printed", None) is not None:
-        L.append(f"  as printed    {printed_summary(r.as_printed, r.design.span)}")
+        size = float(cv["size_mm"]) if r.plan is not None else float(r.design.span)
+        L.append(f"  as printed    {printed_summary(r.as_printed, size)}")
     eq = r.equilibrium
     L.append(f"  equilibrium   {'stable' if eq.stable else 'NOT STABLE'}, "
              f"{'unique' if r.unique else str(r.n_stable) + ' stable shapes found'}, "

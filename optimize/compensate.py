@@ -71,7 +71,7 @@ class PinCompensation:
 
 
 def compensate_pin_play(points, masses, reaction, *, clearance, com=None, limits=None,
-                        end_limits=None, g: float = 9.81) -> PinCompensation:
+                        end_limits=None, g: float = 9.81, pinned=None) -> PinCompensation:
     """The printed pin spacings, centres of mass and stops that put the loaded pins on the design.
 
     Args:
@@ -85,6 +85,8 @@ def compensate_pin_play(points, masses, reaction, *, clearance, com=None, limits
         limits: (N-1, 2) the design's bend limits [lo, hi] (radians) on phi_j, or None.
         end_limits: (2, 2) the design's anchor stops on theta_0 and theta_{N-1}, or None.
         g: gravitational acceleration (the unit of the reaction).
+        pinned: optional (N-1,) bool: joints with lo == hi that keep their pin (a two-sided
+            stop), as for :func:`optimize.pinplay.solve_pin_play`; the others are one piece.
 
     Returns:
         PinCompensation. Feeding its spacings, com, limits and end_limits to
@@ -106,7 +108,7 @@ def compensate_pin_play(points, masses, reaction, *, clearance, com=None, limits
     lim = val.as_limits(limits, n)
     ends = as_end_limits(end_limits)
     c = val.as_clearance(clearance, n)
-    c[1:-1][lim[:, 0] == lim[:, 1]] = 0.0  # a fused joint has no pin
+    c[1:-1][(lim[:, 0] == lim[:, 1]) & ~val.as_pinned(pinned, n)] = 0.0  # a fused joint has no pin
     F = joint_forces(reaction, m, g=val.as_gravity(g))
     Fz = F[:, 0] + 1j * F[:, 1]
     size = np.abs(Fz)

@@ -34,7 +34,9 @@ the fixed point of solving the chain without play between anchors moved by the l
 (:func:`optimize.solve_equilibrium`, which handles every case), iterated to round-off.
 With ``c = 0`` everywhere this is :func:`optimize.solve_equilibrium`.
 
-A fused joint (lo == hi) is one printed piece: it has no pin and no play there.
+A fused joint (lo == hi) is one printed piece: it has no pin and no play there, unless the
+caller says it keeps its pin (``pinned``: a two-sided stop, whose pin carries the force with its
+play while the stops hold the bodies' relative angle).
 """
 
 from __future__ import annotations
@@ -55,11 +57,11 @@ __all__ = ["PinPlayResult", "PLAY_MESSAGES", "joint_forces", "solve_pin_play"]
 class _Play:
     """The chain of rod bodies and the links at its pins (see the module docstring)."""
 
-    def __init__(self, chain: Chain, clearance: np.ndarray, ends: np.ndarray | None):
+    def __init__(self, chain: Chain, clearance: np.ndarray, ends: np.ndarray | None, pinned=None):
         self.chain = chain
         self.ends = ends
         c = clearance.copy()
-        c[1:-1][chain.fixed] = 0.0  # a fused joint has no pin
+        c[1:-1][chain.fixed & ~val.as_pinned(pinned, chain.n)] = 0.0  # a fused joint has no pin
         self.clearance = c
         self.cl = c.copy()  # link lengths: c at a pin between rods, c/2 at A and B
         self.cl[[0, -1]] *= 0.5
@@ -384,6 +386,7 @@ def solve_pin_play(
     active0=None,
     max_iter: int | None = None,
     method: str = "auto",
+    pinned=None,
 ) -> PinPlayResult:
     """Static equilibrium of a chain whose pins sit in their holes with play.
 
@@ -402,6 +405,9 @@ def solve_pin_play(
         g: gravitational acceleration, along -y.
         active0: optional (N-1,) starting active set (-1 lo, 0 free, +1 hi).
         max_iter: cap on active-set iterations (default 10 + 4 N).
+        pinned: optional (N-1,) bool: joints with lo == hi that keep their pin and its play
+            (a two-sided stop: the stops hold the bodies' angle, the pin still carries the
+            force); the others with lo == hi are printed as one piece (no pin). None: none.
         method: "auto" (the dual with the links, the fixed point where its active-set
             exchange fails), "dual" (no fallback) or "fixed-point" (only the fixed point over
             :func:`optimize.solve_equilibrium`; slower, for comparison).
@@ -423,7 +429,7 @@ def solve_pin_play(
     chain = Chain.from_args(spacings, masses, anchor_a, anchor_b, com, limits, g)
     clear = val.as_clearance(clearance, chain.n)
     ends = as_end_limits(end_limits)
-    play = _Play(chain, clear, ends)
+    play = _Play(chain, clear, ends, pinned)
     reach = chain.total_length + float(play.cl.sum())
     if chain.span >= reach * (1 - 1e-12):
         raise ValueError(f"anchors are too far apart for the chain with its play (|B - A| = "

@@ -132,3 +132,17 @@ def as_clearance(value, n: int) -> np.ndarray:
     if bad.size:
         raise ValueError(f"clearance[{bad[0]}] must be finite and >= 0, got {arr[bad[0]]}")
     return arr
+
+
+def as_pinned(value, n: int) -> np.ndarray:
+    """(N-1,) bool: joints with lo == hi that keep their pin (a two-sided stop); None: none.
+
+    Raises:
+        ValueError: not N-1 booleans.
+    """
+    if value is None:
+        return np.zeros(max(n - 1, 0), dtype=bool)
+    arr = np.asarray(value)
+    if arr.shape != (max(n - 1, 0),) or arr.dtype.kind not in "bi":
+        raise ValueError(f"pinned must be {max(n - 1, 0)} booleans (one per joint), got shape {arr.shape}")
+    return arr.astype(bool)

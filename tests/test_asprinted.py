@@ -158,3 +158,27 @@ def test_robust_finds_the_joints_beyond_the_allowance():
     assert everywhere == [j - 1 for j in range(1, n) if band[j] > 0]
     mid = float(np.median(band[1:-1]))
     assert loose_joints(prob, ch["m"], allowance=mid, **kw) == [j - 1 for j in sensitive_joints(band, mid)]
+
+
+def test_robust_holds_the_joints_friction_would_move_too_far(tmp_path):
+    """With pins that grip (friction 1.0) the semicircle's friction band exceeds the default 1 %
+    tolerance at its free joints: robust (the default) holds those joints both ways, and the
+    chain it prints has a smaller band than the same design with ``robust: false``."""
+    text = (ROOT / "catalogs" / "pla-parametric.yaml").read_text()
+    assert "    pin_clearance: 0.2" in text
+    (tmp_path / "grippy.yaml").write_text(text.replace("name: pla-parametric", "name: grippy").replace(
+        "    pin_clearance: 0.2", "    pin_clearance: 0.2\n    friction: 1.0"))
+    base = "design: 1\nname: semicircle\ncatalog: grippy.yaml\nanchors: [[0, 0], [200, 0]]\ntarget: {form: semicircle}\n"
+    out = {}
+    for robust in (True, False):
+        (tmp_path / "d.yaml").write_text(base + f"robust: {'true' if robust else 'false'}\n")
+        assert main(["build", str(tmp_path / "d.yaml"), "-o", str(tmp_path / f"out-{robust}"), "--no-cad", "-q"]) == 0
+        out[robust] = json.loads((tmp_path / f"out-{robust}" / "design.json").read_text())
+    loose, firm = out[False], out[True]
+    size = loose["curve"]["size_mm"]
+    assert loose["bands"]["friction"]["mu"] == 1.0
+    assert loose["friction_band_mm"] > 0.01 * size  # the case robust is for
+    assert not any(n.startswith("robust") for n in loose["notes"])
+    assert any(n.startswith("robust: joint(s)") for n in firm["notes"])
+    assert firm["friction_band_mm"] < loose["friction_band_mm"]
+    assert firm["as_printed"]["curve"]["rel_size"] < 0.01  # and it still hangs on the curve

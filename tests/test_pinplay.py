@@ -272,3 +272,36 @@ def test_a_rod_wedged_between_its_pins():
     np.testing.assert_allclose(ref["holes"], r.holes, atol=1e-6)
     axis = r.holes[0, 1] - r.holes[0, 0]
     assert axis @ r.forces[1] < 0  # the force at B pushes back along the rod: compression
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_two_sided_stop_keeps_its_pin(seed):
+    """A joint held both ways by stops (lo == hi) but still pinned (``pinned``): the stops fix
+    the bodies' relative angle, the pin still bears in its holes with its play. Against the
+    independent model with that joint's stops as two inequalities; it differs from the same
+    joint fused (no pin there) by about the clearance; the compensation with ``pinned`` puts
+    the loaded pins on the design."""
+    ch = random_chain(seed, "free")
+    n = ch["l"].size
+    free = solve_equilibrium(ch["l"], ch["m"], ch["a"], ch["b"], com=ch["com"])
+    j = n // 2 - 1
+    lim = np.tile([-np.inf, np.inf], (n - 1, 1))
+    lim[j] = free.bends[j] * 0.8
+    pinned = np.zeros(n - 1, dtype=bool)
+    pinned[j] = True
+    size = size_of(free.points, ch["a"], ch["b"])
+    r = solve_pin_play(ch["l"], ch["m"], ch["a"], ch["b"], clearance=ch["c"], com=ch["com"], limits=lim,
+                       pinned=pinned)
+    assert r.success and r.stable and r.kkt_residual < 1e-10
+    assert abs(r.bends[j] - lim[j, 0]) < 1e-9  # the bodies held at the stop
+    ref = reference(ch, ch["l"], ch["com"], lim, None, ch["c"])
+    np.testing.assert_allclose(ref["points"], r.points, atol=1e-6 * size)
+    fused = solve_pin_play(ch["l"], ch["m"], ch["a"], ch["b"], clearance=ch["c"], com=ch["com"], limits=lim)
+    assert np.abs(fused.points - r.points).max() > 0.05 * ch["c"][j + 1]
+    st = solve_equilibrium(ch["l"], ch["m"], ch["a"], ch["b"], com=ch["com"], limits=lim)
+    comp = compensate_pin_play(st.points, ch["m"], st.reaction, clearance=ch["c"], com=ch["com"], limits=lim,
+                               pinned=pinned)
+    assert comp.clearance[j + 1] == ch["c"][j + 1]
+    back = solve_pin_play(comp.spacings, ch["m"], ch["a"], ch["b"], clearance=ch["c"], com=comp.com,
+                          limits=comp.limits, pinned=pinned)
+    np.testing.assert_allclose(back.points, st.points, atol=1e-10 * size)

@@ -29,7 +29,7 @@ from optimize.distance import ShapeDistance
 from rodcad.check.built import BuiltChain, load_built
 from rodcad.check.measure import JointOverlap, RodReading, joint_overlaps, read_rods
 from rodcad.check.types import ChainTypes, chain_types
-from rodcad.design.asprinted import AsPrinted, as_printed, plan_of
+from rodcad.design.asprinted import AsPrinted, as_printed, fused_joints, plan_of
 from rodcad.errors import InputError, Problem
 from rodcad.progress import Progress
 
@@ -104,7 +104,8 @@ def printed(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) ->
         clear = [float(r["params"]["pin_clearance"]) for r in rods]
     except (KeyError, TypeError):
         return None
-    plan = plan_of(offsets, clear + clear[-1:], built.limits if built.n > 1 else None)
+    runs = built.data.get("fused") or []
+    plan = plan_of(offsets, clear + clear[-1:], built.limits if built.n > 1 else None, fused_joints(runs, built.n))
     return as_printed(lengths=built.lengths, masses=masses, com=com, plan=plan, anchors=built.anchors,
                       target=built.target, limits=built.limits if built.n > 1 else None,
                       end_limits=built.end_limits, g=g)

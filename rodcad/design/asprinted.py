@@ -48,7 +48,7 @@ from rodcad.catalog.model import RodType
 from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.shell import curve_size
 
-__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "hole_frame", "hole_plan", "loose_joints", "pins_of", "plan_of", "robust_option",
+__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "fused_joints", "hole_frame", "hole_plan", "loose_joints", "pins_of", "plan_of", "robust_option",
            "plan_holes", "printed_chain", "sensitive_joints"]
 
 #: Draws of the mass band (about 1 % sampling error on its 95th percentile).
@@ -133,24 +133,41 @@ def _limits(limits, n: int) -> np.ndarray:
     return np.tile([-np.inf, np.inf], (max(n - 1, 0), 1)) if limits is None else np.asarray(limits, float)
 
 
-def _pins(clearance, limits: np.ndarray, n: int) -> np.ndarray:
-    """(N+1,) clearance per pin, 0 at fused joints (one printed piece: no pin)."""
+def fused_joints(runs: Sequence[Sequence[int]], n: int) -> np.ndarray:
+    """(N-1,) bool: the joints inside fused runs of rods (first, last), printed as one piece."""
+    out = np.zeros(max(n - 1, 0), dtype=bool)
+    for a, b in runs:
+        out[int(a):int(b)] = True
+    return out
+
+
+def _pins(clearance, fused, limits: np.ndarray, n: int) -> np.ndarray:
+    """(N+1,) clearance per pin, 0 at fused joints (one printed piece: no pin); ``fused`` None:
+    every joint whose limits are lo == hi."""
     c = np.broadcast_to(np.asarray(clearance, float), (n + 1,)).copy()
     if n > 1:
-        c[1:-1][limits[:, 0] == limits[:, 1]] = 0.0
+        c[1:-1][limits[:, 0] == limits[:, 1] if fused is None else np.asarray(fused, bool)] = 0.0
     return c
 
 
-def plan_of(offsets, clearance, limits=None) -> HolePlan:
+def _pinned(plan: HolePlan, limits: np.ndarray | None) -> np.ndarray | None:
+    """Joints held both ways (lo == hi) that keep a pin: two-sided stops, not fused pieces."""
+    if limits is None or len(limits) == 0:
+        return None
+    return (limits[:, 0] == limits[:, 1]) & (plan.clearance[1:-1] > 0)
+
+
+def plan_of(offsets, clearance, limits=None, fused=None) -> HolePlan:
     """The holes a build printed (design.json ``rods[].holes_mm``, (N, 2, 2) mm) with each pin's
-    clearance ((N+1,) or a number; 0 where the limits fuse a joint)."""
+    clearance ((N+1,) or a number; 0 at the ``fused`` joints, (N-1,) bool, default those whose
+    limits are lo == hi)."""
     off = np.asarray(offsets, float).reshape(-1, 2, 2)
     n = off.shape[0]
-    return HolePlan(_pins(clearance, _limits(limits, n), n), off, bool(np.any(off != 0)))
+    return HolePlan(_pins(clearance, fused, _limits(limits, n), n), off, bool(np.any(off != 0)))
 
 
 def hole_plan(points, masses, reaction, *, clearance, com, limits=None, end_limits=None, g: float = 9.81,
-              compensate: bool = True) -> HolePlan:
+              compensate: bool = True, fused=None) -> HolePlan:
     """The pin holes that put the loaded pins on the designed joints.
 
     Args:
@@ -162,15 +179,18 @@ def hole_plan(points, masses, reaction, *, clearance, com, limits=None, end_limi
         limits, end_limits: the design's stops (radians), as for :func:`optimize.solve_equilibrium`.
         g: the gravity the reaction was solved with.
         compensate: False: every hole on its hinge axis.
+        fused: (N-1,) bool, the joints printed as one piece (no pin; :func:`fused_joints`);
+            None: every joint with lo == hi. A joint with lo == hi that is not fused is a
+            two-sided stop: it keeps its pin and its play.
     """
     p = np.asarray(points, float)
     n = p.shape[0] - 1
     lim = _limits(limits, n)
-    c = _pins(clearance, lim, n)
+    c = _pins(clearance, fused, lim, n)
     if not compensate or not np.any(c > 0) or not np.all(np.isfinite(reaction)):
         return HolePlan(c, np.zeros((n, 2, 2)), False)
     comp = compensate_pin_play(p, masses, reaction, clearance=c, com=com, limits=lim if n > 1 else None,
-                               end_limits=end_limits, g=g)
+                               end_limits=end_limits, g=g, pinned=(lim[:, 0] == lim[:, 1]) & (c[1:-1] > 0))
     chord = np.diff(p, axis=0)
     theta = np.arctan2(chord[:, 1], chord[:, 0])
     rot = np.stack([np.stack([np.cos(theta), np.sin(theta)], -1), np.stack([-np.sin(theta), np.cos(theta)], -1)], 1)
@@ -205,11 +225,12 @@ def hole_frame(lengths, com, offsets, limits=None, end_limits=None):
     return spacings, com_h, lim, ends, turn
 
 
-def _solve(lengths, masses, com, offsets, clearance, anchors, limits, end_limits, g):
+def _solve(lengths, masses, com, offsets, clearance, anchors, limits, end_limits, g, pinned=None):
     spacings, com_h, lim, ends, _ = hole_frame(lengths, com, offsets, limits, end_limits)
     a, b = np.asarray(anchors, float)
     res = solve_pin_play(spacings, masses, a, b, clearance=clearance, com=com_h,
-                         limits=lim if len(spacings) > 1 else None, end_limits=ends, g=g)
+                         limits=lim if len(spacings) > 1 else None, end_limits=ends, g=g,
+                         pinned=pinned if len(spacings) > 1 else None)
     return spacings, com_h, res
 
 
@@ -236,13 +257,15 @@ def as_printed(*, lengths, masses, com, plan: HolePlan, anchors, target, limits=
     """
     n = len(lengths)
     lim = None if limits is None or n < 2 else np.asarray(limits, float)
-    spacings, com_h, res = _solve(lengths, masses, com, plan.offsets, plan.clearance, anchors, lim, end_limits, g)
+    pinned = _pinned(plan, lim)
+    spacings, com_h, res = _solve(lengths, masses, com, plan.offsets, plan.clearance, anchors, lim, end_limits, g,
+                                  pinned)
     tgt = np.asarray(target, float)
     unc = None
     if plan.compensated:
         try:
             unc = shape_distance(tgt, _solve(lengths, masses, com, np.zeros_like(plan.offsets), plan.clearance,
-                                             anchors, lim, end_limits, g)[2].points)
+                                             anchors, lim, end_limits, g, pinned)[2].points)
         except ValueError:
             unc = None
     notes: list[str] = []
@@ -289,6 +312,8 @@ class DesignedChain(Protocol):
     equilibrium: Any  # optimize.EquilibriumResult
     as_built: Any  # .masses, .com of the solids, or None
     holes: HolePlan | None
+    plan: Any  # .fused: runs (first, last) printed as one piece; None for an explicit chain
+    notes: list[str]
 
 
 def plan_holes(rods: Sequence[RodType], chain: DesignedChain) -> HolePlan:
@@ -296,22 +321,30 @@ def plan_holes(rods: Sequence[RodType], chain: DesignedChain) -> HolePlan:
     compensated where its equilibrium was found."""
     clearance, _, _ = pins_of(rods)
     eq = chain.equilibrium
+    runs = chain.plan.fused if chain.plan is not None else []
     return hole_plan(eq.points, chain.masses, eq.reaction, clearance=clearance, com=chain.com, limits=chain.limits,
-                     end_limits=chain.end_limits, g=chain.design.g, compensate=bool(eq.success))
+                     end_limits=chain.end_limits, g=chain.design.g, compensate=bool(eq.success),
+                     fused=fused_joints(runs, len(chain.masses)) if chain.plan is not None else None)
 
 
-def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted:
+def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted | None:
     """:func:`as_printed` for a designed chain of catalog rods with its :attr:`holes`: the
     as-built solids' masses and centres of mass where built, else the design's; the catalog's
-    friction, pin radii and ``print.mass_tolerance``."""
+    friction, pin radii and ``print.mass_tolerance``. None (and a note in ``chain.notes``)
+    where the chain with its play reaches no configuration (a taut chain)."""
     _, radius, mu = pins_of(rods)
     b = chain.as_built
     hung_m, hung_c = (chain.masses, chain.com) if b is None else (b.masses, b.com)
     tol = float(chain.design.catalog.print_settings.get("mass_tolerance", 0.03))
-    return as_printed(lengths=chain.lengths, masses=hung_m, com=hung_c, plan=chain.holes, anchors=chain.design.anchors,
-                      target=chain.target_points, limits=chain.limits, end_limits=chain.end_limits,
-                      design_equilibrium=chain.equilibrium, design_masses=chain.masses, design_com=chain.com,
-                      pin_radius=radius, mu=mu, mass_tolerance=tol, g=chain.design.g, seed=chain.seed)
+    try:
+        return as_printed(lengths=chain.lengths, masses=hung_m, com=hung_c, plan=chain.holes,
+                          anchors=chain.design.anchors, target=chain.target_points, limits=chain.limits,
+                          end_limits=chain.end_limits, design_equilibrium=chain.equilibrium, design_masses=chain.masses,
+                          design_com=chain.com, pin_radius=radius, mu=mu, mass_tolerance=tol, g=chain.design.g,
+                          seed=chain.seed)
+    except ValueError as err:
+        chain.notes.append(f"the chain as printed (every pin bearing in its holes) was not solved: {err}")
+        return None
 
 
 def loose_joints(problem, masses, *, allowance: float, mu: float, pin_radius: float,

@@ -48,8 +48,10 @@ from rodcad.catalog.model import RodType
 from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.shell import curve_size
 
-__all__ = ["AsPrinted", "DesignedChain", "HolePlan", "anchor_holes", "as_printed", "fused_joints", "hole_frame", "hole_plan", "loose_joints", "pins_of", "plan_of", "robust_option",
-           "plan_holes", "printed_chain", "sensitive_joints"]
+__all__ = ["anchor_holes", "as_printed", "AsPrinted", "DesignedChain", "fused_joints",
+           "hole_frame", "hole_plan", "HolePlan", "joint_bands", "loose_joints", "narrower",
+           "pins_of", "plan_holes", "plan_of", "printed_chain", "robust_option",
+           "sensitive_joints", "too_wide"]
 
 #: Draws of the mass band (about 1 % sampling error on its 95th percentile).
 MASS_SAMPLES = 20000
@@ -347,35 +349,49 @@ def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted | 
         return None
 
 
-def loose_joints(problem, masses, *, allowance: float, mu: float, pin_radius: float,
-                 mass_tolerance: float, seed: int = 0) -> list[int]:
-    """The joints of a verified design whose friction or mass band exceeds ``allowance``.
-
-    For design option ``robust`` (the planner, :func:`rodcad.design.decide.decide`, holds
-    them both ways in its next round: a two-sided stop, or a fused piece).
+def joint_bands(problem, masses, robust: tuple[float, float, float, float], *, seed: int = 0) -> np.ndarray | None:
+    """Per chain joint (N+1,), the larger of its friction band and its 95 % mass band (mm), for
+    design option ``robust`` (:attr:`rodcad.design.decide.Allowed.robust`: allowance, mu, pin
+    radius, mass tolerance).
 
     Args:
         problem: the design's :class:`optimize.InverseProblem` (mm, radians).
         masses: (N,) its masses (g).
-        allowance: the largest band (mm) a joint may have, e.g. the tolerance x the size.
-        mu, pin_radius: pin friction (coefficient; mm). mass_tolerance: relative, 95 %.
+        seed: the mass band's draws (4000 of them: a few per cent of sampling error).
 
     Returns:
-        Bend indices j (0..N-2, the joint between rods j and j+1) in chain order; [] where
-        the equilibrium is not found or the bands cannot be computed.
+        The bands, or None where the equilibrium is not found, not stable, or a band cannot be
+        computed.
     """
+    _, mu, radius, tol = robust
     eq = problem.simulate(masses)
     if not (eq.success and eq.stable) or problem.n < 2:
-        return []
+        return None
     a, b = problem.anchors
     kw = dict(com=problem.com, limits=problem.limits, end_limits=problem.end_limits, g=problem.g, result=eq)
     try:
-        fb = friction_band(problem.lengths, masses, a, b, mu=mu, pin_radius=pin_radius, **kw).per_joint
-        mb = mass_band(problem.lengths, masses, a, b, tol=mass_tolerance, n_samples=4000, seed=seed, **kw).per_joint
+        fb = friction_band(problem.lengths, masses, a, b, mu=mu, pin_radius=radius, **kw).per_joint
+        mb = mass_band(problem.lengths, masses, a, b, tol=tol, n_samples=4000, seed=seed, **kw).per_joint
     except (ValueError, np.linalg.LinAlgError):
-        return []
-    return [j - 1 for j in sensitive_joints(np.maximum(fb, mb), allowance)]
+        return None
+    return np.maximum(fb, mb)
 
+
+def too_wide(bands: np.ndarray | None, allowance: float) -> list[int]:
+    """The bends (j = 0..N-2, between rods j and j+1) whose joint's band exceeds ``allowance`` (mm)."""
+    return [] if bands is None else [j - 1 for j in sensitive_joints(bands, allowance)]
+
+
+def narrower(bands: np.ndarray | None, than: np.ndarray | None) -> bool:
+    """Is the largest of ``bands`` below the largest of ``than`` (None: not computed)?"""
+    return bands is not None and (than is None or float(bands.max()) < float(than.max()))
+
+
+def loose_joints(problem, masses, *, allowance: float, mu: float, pin_radius: float,
+                 mass_tolerance: float, seed: int = 0) -> list[int]:
+    """The bends (j = 0..N-2) of a verified design whose friction or mass band exceeds
+    ``allowance`` (mm): :func:`joint_bands` and :func:`too_wide`."""
+    return too_wide(joint_bands(problem, masses, (allowance, mu, pin_radius, mass_tolerance), seed=seed), allowance)
 
 def robust_option(curve, pf, catalog) -> tuple[float, float, float, float]:
     """The planner's ``robust`` setting (:attr:`rodcad.design.decide.Allowed.robust`) for a

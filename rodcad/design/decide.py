@@ -39,7 +39,7 @@ from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
-from rodcad.design.asprinted import loose_joints
+from rodcad.design.asprinted import joint_bands, narrower, too_wide
 from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
 
 __all__ = ["Allowed", "Decision", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
@@ -174,7 +174,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     best: Decision | None = None
     notes: list[str] = []
     history: list[tuple[list[int], Verdict | None]] = []
-    robust: list[int] | None = None  # the joints the robust round holds (None: not yet asked)
+    robust = None  # (the first accepted design, its bands) once design option robust looked at it
     for rnd in range(MAX_ROUNDS + 1):
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
@@ -196,6 +196,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                     stops[j] = (float(deg[j]), side)
             if mirrored:
                 _symmetrize(stops, ends, n, deg, printable)
+        if robust is not None:  # design option robust: the accepted design's stops stay, the held joints added
+            stops.update({j: v for j, v in robust[0].stops.items() if j not in stops})
+            ends.update({k: v for k, v in robust[0].ends.items() if k not in ends})
         laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, limits=True, same=same,
                         end_limits=end_limits_for(points, ends, end_limits), fused=fused)
         verdict = None
@@ -208,7 +211,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         history.append((sorted(locks), verdict))
         d = Decision(laid, stops, ends, set(fused), list(beyond), verdict, rnd, sorted(locks), notes, feasible,
                      history)
-        if best is None or _better(d, best) or robust and d.accepted:
+        if best is None or _better(d, best):
             best = d
         if verdict is None or (d.accepted and not verdict.others and allowed.robust is None) or not feasible:
             break
@@ -218,14 +221,18 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
         if d.accepted:  # other shapes exist, all higher: hold a joint more only if it is cheap
             new = new[:1]
-        if d.accepted and not new and allowed.robust is not None and robust is None:
-            allow, mu, radius, tol = allowed.robust  # bands beyond the allowance: hold those joints
-            robust = [j for j in loose_joints(laid.problem, masses, allowance=allow, mu=mu, pin_radius=radius,
-                                              mass_tolerance=tol, seed=seed) if j not in locks | fused]
-            new = robust
-            if new:
-                notes.append(f"robust: joint(s) {new} held both ways, where pin friction or the print's mass "
-                             f"tolerance would move the chain more than {allow:.3g} mm")
+        if d.accepted and not new and allowed.robust is not None:
+            bands = joint_bands(laid.problem, masses, allowed.robust, seed=seed)
+            if robust is None:  # the first accepted design: hold the joints whose band is too wide
+                robust = (d, bands)
+                new = [j for j in too_wide(bands, allowed.robust[0]) if j not in locks | fused]
+            else:  # the design that holds them, kept where its bands are narrower
+                best = d if narrower(bands, robust[1]) else robust[0]
+                notes.append(f"robust: joint(s) {sorted(set(best.held) - set(robust[0].held))} held both ways, "
+                             "where pin friction or the print's mass tolerance moved the chain more than "
+                             f"{allowed.robust[0]:.3g} mm" if best is d else "robust: holding the joints whose "
+                             "bands exceed the tolerance does not narrow them here; the design keeps them free")
+                break
         if not new:
             break
         for j in new:

@@ -330,8 +330,9 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     kind = rod.ball_kinds[plan.ball_kind] if len(socks) else None
     com = meas.com
     if holes != NO_SHIFT:  # measured again: the plan's solid had its holes on the axes
+        metal = kind.mass * len(socks) if kind else 0.0
         c = np.array(props.center[:2]) * volume * rho + (kind.mass * socks.sum(axis=0)[:2] if kind else 0.0)
-        com = (float(c[0] / meas.mass), float(c[1] / meas.mass))
+        com = (float(c[0] / (volume * rho + metal)), float(c[1] / (volume * rho + metal)))
     pm = print_matrix(solid)
     roofs: list[float] = []
     for z in sorted(socks @ UP + plan.socket_top + pm[2, 3]):  # rod +y is bed +Z

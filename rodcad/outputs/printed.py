@@ -84,7 +84,9 @@ def printed_summary(ap: AsPrinted, size: float) -> str:
 
 
 def _worst(per_joint) -> int:
-    return int(np.argmax(per_joint))
+    """The joint (numbered as the report's joints: 0 between rods 0 and 1) whose band is widest,
+    from per-joint bands over p_0..p_N."""
+    return int(np.argmax(per_joint)) - 1
 
 
 def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:

@@ -68,7 +68,7 @@ def plot_chain(r, *paths: Path) -> None:
         if r.as_built is not None:
             title += f", as built {100 * r.as_built.distance.max_rel_span:.3g} %"
         if getattr(r, "as_printed", None) is not None:
-            title += f", as printed {100 * r.as_printed.distance.max_rel_span:.3g} %"
+            title += f"\nas printed (pins in their holes) {100 * r.as_printed.distance.max_rel_span:.3g} %"
     finish_figure(fig, ax, lc, d.anchors, title, paths)
 
 

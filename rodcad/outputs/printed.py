@@ -120,8 +120,8 @@ def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
         lines.append(
             f"- **Print tolerance**: with every rod's mass within +-{100 * ap.mass_tolerance:g} % (95 %; the "
             f"catalog's print.mass_tolerance), 95 % of printed chains hang within {mb.band:.3g} mm "
-            f"({mb.band * pct:.3g} % of its size) of the design, most at joint {j}. Weigh the printed rods: "
-            "`rodcad check` re-simulates with edited rods, `--rebalance` re-designs the others.")
+            f"({mb.band * pct:.3g} % of its size) of the design, most at joint {j}. Weigh the printed rods "
+            "against the masses below: one further off than that is worth printing again.")
     lines += [f"- note: {n}" for n in ap.notes]
     return lines
 

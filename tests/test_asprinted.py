@@ -65,6 +65,17 @@ def test_printed_semicircle_hangs_on_its_target(printed_semicircle):
     assert err < 1e-5 * size  # what is left: the as-built masses' error
     assert 2e-3 * size < err_plain < 1e-2 * size
     np.testing.assert_allclose(d["as_printed"]["points"], pins, atol=1e-6 * size)
+    # the anchor fixture's pin holes sit opposite the end rods' holes: the loaded pins on A and B
+    a, b = np.array(d["anchors"], float)
+    sim = np.array(d["simulated"]["points"])
+    rh = (rods[0]["params"]["pin_diameter"] + rods[0]["params"]["pin_clearance"]) / 2
+    found = step_holes(out / "fixture.step", np.eye(4), rh, float(np.hypot(*(b - a))))  # A's, then B's
+    for k, (anchor, p, q, off) in enumerate(((a, sim[0], sim[1], rods[0]["holes_mm"][0]),
+                                             (b, sim[-2], sim[-1], rods[-1]["holes_mm"][1]))):
+        t = np.arctan2(q[1] - p[1], q[0] - p[0])
+        world = np.array([np.cos(t) * off[0] - np.sin(t) * off[1], np.sin(t) * off[0] + np.cos(t) * off[1]])
+        np.testing.assert_allclose(found[k], anchor - world, atol=1e-6)
+    assert d["fixture"]["anchor_pins"]["holes_mm"] is not None
     assert abs(d["as_printed"]["uncompensated_error"]["max_mm"] - err_plain) < 1e-6 * size
     assert d["as_printed"]["curve"]["rel_size"] < 0.01
 

@@ -16,6 +16,7 @@ from optimize.discretize import centerline, curve_distance
 from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
+from rodcad.design.asprinted import anchor_holes
 from rodcad.outputs.printed import as_printed_json, printed_rod_fields
 
 __all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
@@ -249,7 +250,9 @@ def fixture_json(r) -> dict[str, Any]:
     return {"file": "fixture.step", "stl": "fixture.stl", "volume_mm3": volume,
             "filament_g": volume * mat.density / 1000.0,
             "anchor_pins": {"count": 2, "diameter_mm": rods[0].geometry.hinge.pin_diameter,
-                            "length_mm": round(fixture_width(rods[0], rods[-1]), 2)},
+                            "length_mm": round(fixture_width(rods[0], rods[-1]), 2),
+                            "holes_mm": None if getattr(r, "holes", None) is None else  # centre minus A, B
+                            [[float(v) for v in row] for row in anchor_holes(r.holes, r.equilibrium.points)]},
             "stops": [k for k in (0, 1) if np.any(np.isfinite(np.asarray(r.end_limits)[k]))],
             "mount": "a 5 mm hanging hole above the anchors' midpoint",
             "print": "lying on its back face, with supports under the front cheek's slots",

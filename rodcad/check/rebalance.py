@@ -83,6 +83,14 @@ class Rebalanced:
         return bool(eq.success and eq.stable and self.vs_target.max_rel_span <= self.allowed)
 
 
+def _holes(built, which: list[int]):
+    """The pin holes the build printed those rods with (design.json ``holes_mm``), or None."""
+    try:
+        return [tuple(tuple(float(v) for v in end) for end in built.data["rods"][i]["holes_mm"]) for i in which]
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
 def _allowed(res: CheckResult) -> float:
     data = res.built.data
     err = (data.get("error") or {}).get("max_rel_span")
@@ -140,7 +148,7 @@ def rebalance(res: CheckResult, *, jobs: int | None = None, progress: Progress |
     if redesigned:
         with progress.step(f"building {len(redesigned)} re-designed rods (cavities, ball sockets, exact B-rep)") as st:
             fab = fabricate_chain([types.rods[i] for i in redesigned], [float(new[i]) for i in redesigned], seed=seed,
-                                  jobs=jobs, progress=st.count)
+                                  jobs=jobs, progress=st.count, holes=_holes(built, redesigned))
         for i, r in zip(redesigned, fab.rods):
             fabricated[i] = dataclasses.replace(r, index=i, file_stem=built.rods[i].stem)
         notes += fab.problems

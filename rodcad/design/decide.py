@@ -39,6 +39,7 @@ from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
+from rodcad.design.asprinted import joint_bands, narrower, too_wide
 from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
 
 __all__ = ["Allowed", "Decision", "EXTRA_ROUNDS", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
@@ -73,12 +74,17 @@ class Allowed:
             of stopped joints is printed as one piece too).
         verify: check the result against the solver and hold more joints where it fails
             (off for one shell of rods, whose stops are fixed by the shell).
+        robust: (allowance mm, mu, pin radius mm, mass tolerance) for design option ``robust``:
+            an accepted design whose friction or mass band exceeds the allowance at a joint
+            gets that joint held both ways in one more round (:func:`rodcad.design.asprinted.
+            loose_joints`); None: off.
     """
 
     stops: bool = True
     anchor_stops: bool = True
     fuse: str = "auto"
     verify: bool = True
+    robust: tuple[float, float, float, float] | None = None
 
 
 @dataclass
@@ -176,6 +182,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     history: list[tuple[list[int], Verdict | None]] = []
     settled = 0
     last = 0.0  # how long the last round took (s)
+    robust = None  # (the first accepted design, its bands) once design option robust looked at it
     for rnd in range(MAX_ROUNDS + 1):
         t_round = time.perf_counter()
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
@@ -198,6 +205,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                     stops[j] = (float(deg[j]), side)
             if mirrored:
                 _symmetrize(stops, ends, n, deg, printable)
+        if robust is not None:  # design option robust: the accepted design's stops stay, the held joints added
+            stops.update({j: v for j, v in robust[0].stops.items() if j not in stops})
+            ends.update({k: v for k, v in robust[0].ends.items() if k not in ends})
         laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, limits=True, same=same,
                         end_limits=end_limits_for(points, ends, end_limits), fused=fused)
         verdict = masses = None
@@ -212,7 +222,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                      history, masses)
         if best is None or _better(d, best):
             best = d
-        if verdict is None or d.accepted and not verdict.others or not feasible:
+        if verdict is None or (d.accepted and not verdict.others and allowed.robust is None) or not feasible:
             break
         last = time.perf_counter() - t_round
         if time.perf_counter() - t0 + last > budget_s:  # another round would overrun the budget
@@ -223,6 +233,18 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         if d.accepted:  # other shapes exist, all higher: hold one joint more, for a few rounds
             settled += 1
             new = new[:1] if settled <= EXTRA_ROUNDS else []
+        if d.accepted and not new and allowed.robust is not None:
+            bands = joint_bands(laid.problem, masses, allowed.robust, seed=seed)
+            if robust is None:  # the first accepted design: hold the joints whose band is too wide
+                robust = (d, bands)
+                new = [j for j in too_wide(bands, allowed.robust[0]) if j not in locks | fused]
+            else:  # the design that holds them, kept where its bands are narrower
+                best = d if narrower(bands, robust[1]) else robust[0]
+                notes.append(f"robust: joint(s) {sorted(set(best.held) - set(robust[0].held))} held both ways, "
+                             "where pin friction or the print's mass tolerance moved the chain more than "
+                             f"{allowed.robust[0]:.3g} mm" if best is d else "robust: holding the joints whose "
+                             "bands exceed the tolerance does not narrow them here; the design keeps them free")
+                break
         if not new:
             break
         for j in new:

@@ -30,6 +30,7 @@ from rodcad.catalog.limits import all_pair_limits
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
 from rodcad.catalog.printed import mass_table
+from rodcad.design.asprinted import robust_option
 from rodcad.design.model import Constraints, FixedRod
 from rodcad.design.printed import (
     PrintedFamily,
@@ -458,7 +459,8 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
     ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None and _fixture_fits(curve, pf),
-            "end_limits": c.end_limits, "fuse": c.fuse_mode, "report": report}
+            "end_limits": c.end_limits, "fuse": c.fuse_mode, "report": report,
+            "robust": robust_option(curve, pf, arrays.catalog) if c.robust else None}
     try:
         if c.rods is not None:
             lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)

@@ -150,7 +150,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
                  end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0,
-                 report=None):
+                 report=None, robust: tuple[float, float, float, float] | None = None):
     """Lay rods printed to order on a target (see the module's docstring); how each joint
     holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 
@@ -170,6 +170,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             fits the catalog's printer).
         n_starts, seed: the multi-start of the planner's checks.
         report: called with a line of progress now and then (or None).
+        robust: design option ``robust`` (:attr:`rodcad.design.decide.Allowed.robust`), or None.
 
     Returns:
         The :class:`PrintedPlan`.
@@ -188,7 +189,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     phi = np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0])))
     deg = np.degrees(phi)
     allowed = Allowed(stops=stops_allowed and r.stops is not None, anchor_stops=anchor_stops,
-                      fuse=fuse, verify=not same_shell)
+                      fuse=fuse, verify=not same_shell, robust=robust)
     dec = decide(catalog, pf, points, lengths, kappa, phi, allowed=allowed, end_limits=end_limits,
                  mirrored=_is_mirror_symmetric(points), same=same_shell, n_starts=n_starts, seed=seed,
                  report=report)

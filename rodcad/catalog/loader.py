@@ -304,7 +304,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
                 if multi_curv:
                     name += f"-k{format_number(curv)}"
                 out.append(RodType(name, f["name"], length, scale, curv, geom, material, kinds[0] if kinds else None,
-                                   ctx.origin(l_rel), heavier=kinds[1:]))
+                                   ctx.origin(l_rel), heavier=kinds[1:], friction=jt["friction"]))
     return out if ok else []
 
 
@@ -415,14 +415,14 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     origin = ctx.origin("length")
     template = RodType(f"{f['name']}-{fmt(length[0])}", f["name"], length[0], scale, k0,
                        RodGeometry(length[0], h, t, k0, hinge, first, second), material, kinds[0] if kinds else None,
-                       origin, heavier=kinds[1:])
+                       origin, heavier=kinds[1:], friction=jt["friction"])
     s_ref = 1.0 if scales is None else min(max(1.0, scales[0]), scales[1])
     refs = []
     for lv in length:
         g = graduated(RodGeometry(lv, h, t, k0, hinge, first, second), s_ref, material.min_wall)
         name = f"{f['name']}-{fmt(lv)}" + (f"-s{fmt(s_ref)}" if s_ref != 1.0 else "")
         refs.append(RodType(name, f["name"], lv, s_ref if scales is not None else scale, k0, g, material,
-                            kinds[0] if kinds else None, origin, heavier=kinds[1:]))
+                            kinds[0] if kinds else None, origin, heavier=kinds[1:], friction=jt["friction"]))
     res = f["length"].get("resolution")
     if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:
         ctx.report("length.resolution", f"no multiple of {fmt(res)} mm lies between {fmt(length[0])} and "

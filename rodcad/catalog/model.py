@@ -288,6 +288,8 @@ class RodType:
         heavier: further ball kinds, in the catalog's order of preference after ``balls``:
             a rod uses one kind, a later one only where the kinds before cannot make it
             heavy enough (see :attr:`ball_kinds`).
+        friction: friction coefficient of the pins in its holes (the catalog's
+            ``joint.friction``; the friction band, :mod:`rodcad.design.asprinted`).
     """
 
     name: str
@@ -301,6 +303,7 @@ class RodType:
     origin: Origin = field(compare=False, repr=False)
     fill: Fill | None = None
     heavier: tuple[Balls, ...] = ()
+    friction: float = 0.3
 
     @property
     def ball_kinds(self) -> tuple[Balls, ...]:
@@ -544,7 +547,7 @@ class Catalog:
             if value is not None:
                 name += f"-{tag}{_fmt(value, 3)}"
         return RodType(name, family, float(length), scale if rs is not None else t.scale, float(curvature), geom,
-                       t.material, t.balls, t.origin, t.fill, t.heavier)
+                       t.material, t.balls, t.origin, t.fill, t.heavier, t.friction)
 
     def scale_range(self, family: str, length: float, curvature: float = 0.0, *,
                     first_stop: float | None = None, second_stop: float | None = None,

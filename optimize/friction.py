@@ -50,6 +50,12 @@ __all__ = ["FrictionBand", "friction_band", "friction_capacity"]
 #: lower bound (``FrictionBand.exhaustive`` False).
 MAX_CELLS = 64
 
+#: Polygon searches (each some ten support linear programs) at most; past them a joint's
+#: largest displacement over a cell is the bound of the cell's affine map over the whole box
+#: (never below the exact value: ``FrictionBand.tight`` False). Counted, not timed: the same
+#: chain gives the same band on every machine.
+MAX_POLYGONS = 150
+
 
 @dataclass
 class FrictionBand:
@@ -68,6 +74,8 @@ class FrictionBand:
         cells: how many cells (sets of holding stops) the band spans; 1 = a zonotope.
         exhaustive: every cell the box of friction moments meets was explored.
         method: how the band was computed.
+        tight: every joint's value is its exact maximum (False: some are upper bounds, past
+            :data:`MAX_POLYGONS` polygon searches).
     """
 
     band: float
@@ -79,6 +87,7 @@ class FrictionBand:
     cells: int
     exhaustive: bool
     method: str
+    tight: bool = True
 
 
 def friction_capacity(reaction, masses, *, mu: float, pin_radius, g: float = 9.81) -> np.ndarray:
@@ -305,6 +314,7 @@ def friction_band(
     regular = bool(np.all(v0 - np.abs(V) @ tau >= -tol))
     per = np.zeros(n + 1)
     ext_m = np.zeros((n + 1, n + 1))
+    tight = True
     if regular:
         for j in range(1, n):
             per[j], ext_m[j] = _zonotope_max(response[j], tau)
@@ -314,6 +324,7 @@ def friction_band(
     else:
         explored = _explore(lin, S0, tau)
         cells, exhaustive = len(explored), len(explored) < MAX_CELLS
+        searches = 0
         for S, (V, v0, Gm, q0) in explored:
             vtol = 1e-10 * max(1.0, float(np.abs(v0).max(initial=0.0)))
             for j in range(1, n):
@@ -325,18 +336,22 @@ def friction_band(
                     continue
                 if np.all(V @ m + v0 >= -vtol):
                     got = (bound, m)
+                elif searches >= MAX_POLYGONS:  # the work's bound: the cell's map over the whole box
+                    got, tight = (bound, m), False
                 else:
+                    searches += 1
                     far = A @ m + c
                     got = _polygon_max(A, c, V, v0, tau, toward=float(np.arctan2(far[1], far[0])))
                 if got is not None and got[0] > per[j]:
                     per[j], ext_m[j] = got
         method = (f"linearised statics with {cells} cells of holding stops: per joint and cell "
                   "the zonotope vertex where it lies in the cell, else support linear programs "
-                  "to the exact polygon vertices")
+                  "to the exact polygon vertices" + ("" if tight else f"; past {MAX_POLYGONS} polygon searches, "
+                                                     "upper bounds (the cells' maps over the whole box)"))
     shapes = result.points[None] + np.stack([_shape(lin, ext_m[j], S0) for j in range(n + 1)])
     return FrictionBand(band=float(per.max()), per_joint=per, capacity=tau, extreme_moments=ext_m,
                         extreme_shapes=shapes, response=response, cells=cells, exhaustive=exhaustive,
-                        method=method)
+                        method=method, tight=tight)
 
 
 def _shape(lin: _Linear, m: np.ndarray, S0: np.ndarray) -> np.ndarray:

@@ -197,7 +197,11 @@ def test_a_held_chain_is_built_with_its_fixture(tmp_path, capsys):
     capsys.readouterr()
     assert main(["check", str(out), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
-    assert report["error_vs_design"]["max_rel_span"] < 1e-6
+    # the same chain as the build's as-built one (the solids' masses and centres of mass:
+    # balls at their sockets' layers may move a rod's centre of mass off the design's)
+    built = np.asarray(data["as_built"]["points"], float)
+    assert np.abs(np.asarray(report["simulated"]["points"]) - built).max() < 1e-6 * 150
+    assert report["error_vs_design"]["max_rel_span"] < 1e-3
 
 
 def test_fused_pieces_replace_runs_of_stops(tmp_path, capsys):

@@ -62,7 +62,9 @@ def test_printed_semicircle_hangs_on_its_target(printed_semicircle):
     print(f"semicircle as printed: {err:.2e} mm ({100 * err / size:.2e} %), holes on the axes "
           f"{err_plain:.3f} mm ({100 * err_plain / size:.3f} %)")
     assert err < 5e-4 * size
-    assert err < 1e-5 * size  # what is left: the as-built masses' error
+    # what is left is the as-built chain's own distance (the solids' masses and centres of mass:
+    # balls at their sockets' layers move a graduated rod's centre of mass by ~0.1 mm)
+    assert err <= d["as_built"]["error"]["max_mm"] + 1e-5 * size
     assert 2e-3 * size < err_plain < 1e-2 * size
     np.testing.assert_allclose(d["as_printed"]["points"], pins, atol=1e-6 * size)
     # the anchor fixture's pin holes sit opposite the end rods' holes: the loaded pins on A and B

@@ -24,6 +24,8 @@ from mesh_accuracy import measure
 from optimize import solve_equilibrium
 from rodcad.cli import main
 
+ROOT = Path(__file__).resolve().parents[1]
+
 DESIGN = """\
 design: 1
 name: roundtrip
@@ -103,8 +105,15 @@ def _check(args: list[str], capsys) -> tuple[int, dict | None, str]:
 
 
 @pytest.fixture(scope="module")
-def built(build_design):
-    return build_design(DESIGN, "roundtrip", "--jobs", "2")
+def built(build_design, tmp_path_factory):
+    # the default catalog's family at one section: a re-balance keeps each rod's scale, and
+    # at a graduated rod's scale the next ball count may lie beyond the mass an edit needs
+    root = tmp_path_factory.mktemp("one-scale")
+    text = (ROOT / "catalogs" / "pla-parametric.yaml").read_text(encoding="utf-8")
+    text = text.replace("name: pla-parametric\n", "name: pla-parametric-one-scale\n", 1).replace(
+        "    scale: {min: 0.55, max: 1.6}\n", "")
+    (root / "one-scale.yaml").write_text(text, encoding="utf-8")
+    return build_design(DESIGN + f"catalog: {root / 'one-scale.yaml'}\n", "roundtrip", "--jobs", "2")
 
 
 @pytest.fixture(scope="module")

@@ -178,3 +178,29 @@ def test_bad_input_raises(heart):
     with pytest.raises(GeometryError, match="sweep over anchor B"):
         b = anchors[0] + 30 * np.array([math.cos(lim[0, 1]), math.sin(lim[0, 1])])
         fixture_solid(np.array([anchors[0], b]), rods[0], rods[-1], lim)
+
+
+@pytest.mark.parametrize("scale", [0.6, 1.5], ids=["lower-body", "higher-body"])
+def test_stops_hold_graduated_end_rods(scale):
+    """End rods of a graduated family, thinner or thicker than their hinge ends: the fixture
+    clears them at rest (its rods' layer as thick as the body), its pegs touch their bodies'
+    own side faces at the bounds, and a degree further the peg is in the way."""
+    from rodcad.catalog.loader import load_catalog
+
+    cat = load_catalog("pla-parametric")
+    first = cat.rod("rod", 50.0, 0.004, scale=scale)
+    last = cat.rod("rod", 50.0, 0.004, scale=scale)
+    t0, t1 = math.radians(-50.0), math.radians(50.0)  # a U: the rods hang down from the anchors
+    a = np.array([0.0, 0.0])
+    b = np.array([150.0, 0.0])
+    lim = np.array([[-math.inf, t0], [t1, math.inf]])  # the fixture keeps them from swinging in
+    fixture = fixture_solid(np.array([a, b]), first, last, lim)
+    assert is_valid_solid(fixture)
+    near = DistanceTo(fixture)
+    rest = [_turned(np.array([a, b]), [first, last], k, th) for k, th in ((0, t0), (1, t1))]
+    assert check_fixture(fixture, [(rest[0], "rod_00"), (rest[1], "rod_01")], anchors=np.array([a, b]),
+                         end_limits=lim) == []
+    for k, (th, past) in enumerate(((t0, +1), (t1, -1))):
+        assert 0 < near(rest[k]) < 0.05
+        further = _turned(np.array([a, b]), [first, last], k, th + past * math.radians(1.0))
+        assert _overlap(fixture, further) > 0.5

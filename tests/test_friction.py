@@ -187,3 +187,22 @@ def test_capacity_is_mu_force_radius():
     np.testing.assert_allclose(np.diff(F, axis=0), np.column_stack([0 * ch["m"], 9.81 * ch["m"]]),
                                atol=1e-12 * np.abs(F).max())
     np.testing.assert_allclose(-F[0], st.reaction_a, rtol=1e-12)
+
+
+@pytest.mark.parametrize("case", CHAINS[:2] + CHAINS[3:4], ids=lambda c: str(c[1]))
+def test_band_past_its_work_budget_is_an_upper_bound(case, monkeypatch):
+    """With no polygon searches allowed, every cell's joints take the bound of the cell's map
+    over the whole box: never below the exact band, and flagged as not tight."""
+    import optimize.friction as F
+
+    kind, what = case
+    ch = load_example(what) if kind == "example" else random_chain(what[1], what[0])
+    st = solve_equilibrium(ch["l"], ch["m"], ch["a"], ch["b"], com=ch["com"], limits=ch["lim"])
+    args = dict(mu=0.3, pin_radius=1.5, com=ch["com"], limits=ch["lim"], result=st)
+    exact = friction_band(ch["l"], ch["m"], ch["a"], ch["b"], **args)
+    monkeypatch.setattr(F, "MAX_POLYGONS", 0)
+    bound = friction_band(ch["l"], ch["m"], ch["a"], ch["b"], **args)
+    assert np.all(bound.per_joint >= exact.per_joint * (1 - 1e-9))
+    assert exact.tight and (bound.tight or exact.cells > 1)  # a zonotope needs no search
+    if bound.tight:
+        np.testing.assert_allclose(bound.per_joint, exact.per_joint, rtol=1e-9, atol=1e-12)

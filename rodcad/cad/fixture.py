@@ -147,13 +147,19 @@ def fixture_stops(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
             side = (1 if bound == "hi" else -1) * (1 if k == 0 else -1)
             end = g.first if k == 0 else g.second
             chamfer = end.top_chamfer if side > 0 else end.bottom_chamfer
-            dist = end.setback + g.height / 2 * max(math.tan(math.radians(chamfer)), 0.0) + stop_radius + 1.0
+            # the side face's offset from the centreline: a graduated body's top is its own
+            face = g.body_top if side > 0 and g.graduated else g.height / 2
+            # past the end face (its chamfer rises to the face's height; a lower body steps
+            # down behind the end blocks' reach)
+            dist = end.setback + max(face, g.height / 2) * max(math.tan(math.radians(chamfer)), 0.0) + stop_radius + 1
+            if face < g.height / 2:
+                dist = max(dist, float(g.end_reach[k]) + stop_radius + 1.0)
             if dist > 0.8 * g.length:
                 raise GeometryError(f"rod {rod.name!r} is too short for a stop beside its end face")
             c, n = _face(rod, k, dist, side)
             m = end_rod_matrix(a, k, rod, float(theta))
-            center = m[:2, :2] @ (c + n * (g.height / 2 + stop_gap + stop_radius)) + m[:2, 3]
-            touch = m[:2, :2] @ (c + n * g.height / 2) + m[:2, 3]
+            center = m[:2, :2] @ (c + n * (face + stop_gap + stop_radius)) + m[:2, 3]
+            touch = m[:2, :2] @ (c + n * face) + m[:2, 3]
             out.append(FixtureStop(k, bound, float(theta), (float(center[0]), float(center[1])),
                                    float(stop_radius), (float(touch[0]), float(touch[1]))))
     return out
@@ -170,7 +176,7 @@ def _half_width(rod: RodType) -> float:
     cheek = (g.thickness - h.tongue_thickness) / 2 - h.layer_gap
     if cheek <= 0:
         raise GeometryError(f"rod {rod.name!r}: the hinge leaves no room for fork prongs")
-    return g.thickness / 2 + h.layer_gap + cheek
+    return g.max_thickness / 2 + h.layer_gap + cheek  # a graduated body may be thicker than its ends
 
 
 def _extent(rod: RodType, joint: int) -> tuple[float, float, float]:
@@ -350,7 +356,7 @@ def fixture_solid(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
     for k, rod in enumerate(rods):
         g = rod.geometry
         h = g.hinge
-        layer = g.thickness / 2 + h.layer_gap
+        layer = g.max_thickness / 2 + h.layer_gap  # the rod's layer: its ends and its (graduated) body
         at = h.tongue_thickness / 2
         if h.knuckle(k) == "tongue":  # the fixture's fork: room for the rod's tongue
             cuts.append(cylinder_solid(a[k], h.zone_radius, -at - h.layer_gap, at + h.layer_gap))

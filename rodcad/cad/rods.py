@@ -262,7 +262,7 @@ def _key(rod: RodType, target: float, seed: int, roof: float | None = None) -> s
 
     raised = () if roof is None else (round(float(roof), 9),)
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
-                    asdict(rod.geometry), asdict(rod.material),
+                    rod.geometry.key_data(), asdict(rod.material),
                     rod.balls_json(), round(float(target), 9), int(seed), *raised)
 
 

@@ -98,31 +98,22 @@ def one_solid(shape: object, step: str) -> Solid:
 
 def _frame(g: RodGeometry, joint: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pin position P, outward tangent u and the rod's +y normal v at a joint."""
-    psi = math.radians(g.half_angle_deg)
-    if joint == 0:
-        p = np.array([0.0, 0.0])
-        forward = np.array([math.cos(-psi), math.sin(-psi)])
-        u = -forward
-    else:
-        p = np.array([g.length, 0.0])
-        forward = np.array([math.cos(psi), math.sin(psi)])
-        u = forward
-    v = np.array([-forward[1], forward[0]])
-    return p, u, v
+    p, u, v = g.frame(joint)
+    return np.array(p), np.array(u), np.array(v)
 
 
 def _stub_length(g: RodGeometry) -> float:
     """How far the raw body continues past each hinge axis before the end cut."""
-    return 1.2 * g.height + 2.0
+    return g.stub
 
 
-def _body(g: RodGeometry) -> Solid:
-    """The raw bar: centreline segment or arc plus straight stubs past the axes."""
-    h, t, L = g.height, g.thickness, g.length
+def _band(g: RodGeometry, lo: float, hi: float, z0: float, z1: float) -> Solid:
+    """The raw bar between offsets ``lo`` and ``hi`` (mm, toward +y) from the centreline,
+    from z0 to z1: a straight bar, or the band around the arc, plus straight stubs past the axes."""
+    L = g.length
     stub = _stub_length(g)
-    z0 = -t / 2
     if g.curvature == 0:
-        return Solid.make_box(L + 2 * stub, h, t, Plane((-stub, -h / 2, z0)))
+        return Solid.make_box(L + 2 * stub, hi - lo, z1 - z0, Plane((-stub, lo, z0)))
     # one outline (stub, arc, stub on each side) extruded once: no seam where the arc meets
     # its stubs, which a cut through the hinge axis would otherwise leave as a sliver
     rho = 1 / abs(g.curvature)
@@ -139,18 +130,60 @@ def _body(g: RodGeometry) -> Solid:
     for side in (1, -1):
         a, b = (p0, p1) if side > 0 else (p1, p0)
         ua, va, ub, vb = (u0, v0, u1, v1) if side > 0 else (u1, v1, u0, v0)
-        off = side * h / 2
+        off, other = (hi, lo) if side > 0 else (lo, hi)
         mid = np.array([L / 2, mid_y + off])
         edges.append(Edge.make_line(pt(a + ua * stub + va * off), pt(a + va * off)))
         edges.append(Edge.make_three_point_arc(pt(a + va * off), pt(mid), pt(b + vb * off)))
         edges.append(Edge.make_line(pt(b + vb * off), pt(b + ub * stub + vb * off)))
-        edges.append(Edge.make_line(pt(b + ub * stub + vb * off), pt(b + ub * stub - vb * off)))
-    return one_solid(Solid.extrude(Face(Wire(edges)), Vector(0, 0, t)), "the curved body")
+        edges.append(Edge.make_line(pt(b + ub * stub + vb * off), pt(b + ub * stub + vb * other)))
+    return one_solid(Solid.extrude(Face(Wire(edges)), Vector(0, 0, z1 - z0)), "the curved body")
+
+
+def _blocks(g: RodGeometry, joints: Sequence[int], z0: float, z1: float) -> list[Solid]:
+    """Prisms holding the rod's ends within ``end_reach`` of the given joints' axes."""
+    rects = g.end_blocks()
+    return [prism_solid(rects[j], z0, z1) for j in joints]
+
+
+def _outline(g: RodGeometry, z0: float, z1: float, blocks: Sequence[int] = (0, 1)) -> Solid:
+    """The body's outline in the chain plane (before the end cuts) from z0 to z1: a rod of
+    one section is its band; a lower body is its band plus the family's band within the end
+    blocks of ``blocks``; a higher body its band."""
+    lo = -g.height / 2
+    body = _band(g, lo, max(g.body_top, g.height / 2) if g.body_h > g.height else g.body_top, z0, z1)
+    if g.body_h >= g.height or not blocks:
+        return body
+    fam = _band(g, lo, g.height / 2, z0, z1)
+    ends = [one_solid(fam.intersect(b), "the family's section at a hinge end") for b in _blocks(g, blocks, z0, z1)]
+    return one_solid(body.fuse(*ends).clean(), "joining a graduated body to its hinge ends")
+
+
+def _body(g: RodGeometry) -> Solid:
+    """The raw bar (every layer), before the end cuts."""
+    t = g.thickness
+    if not g.graduated:
+        return _band(g, -g.height / 2, g.height / 2, -t / 2, t / 2)
+    bt = g.body_t
+    m = min(t, bt) / 2
+    core = _outline(g, -m, m)
+    if bt == t:
+        return core
+    hg = g.hinge
+    extra = []
+    for z0, z1 in ((m, max(t, bt) / 2), (-max(t, bt) / 2, -m)):
+        if bt < t:  # the family's thickness at the fork ends (they hold the prongs)
+            forks = [j for j in (0, 1) if hg.knuckle(j) == "fork"]
+            fam = _band(g, -g.height / 2, g.height / 2, z0, z1)
+            extra += [one_solid(fam.intersect(b), "a fork end's layers") for b in _blocks(g, forks, z0, z1)]
+        else:  # a thicker body clear of both hinge ends
+            part = _outline(g, z0, z1)
+            extra.append(one_solid(part.cut(*_blocks(g, (0, 1), z0, z1)), "a thicker body's outer layers"))
+    return one_solid(core.fuse(*extra).clean(), "layering a graduated body")
 
 
 def _end_cuts(g: RodGeometry) -> list[Solid]:
     """Prisms removing everything beyond the end faces (top and bottom, both ends)."""
-    h, t = g.height, g.thickness
+    t = g.max_thickness
     out = []
     for joint, end in ((0, g.first), (1, g.second)):
         p, u, v = _frame(g, joint)
@@ -159,9 +192,7 @@ def _end_cuts(g: RodGeometry) -> list[Solid]:
             a = p - end.setback * u
             n = side * v
             tan_b = math.tan(math.radians(chamfer))
-            reach = h / 2 + 1.0
-            behind = reach * max(tan_b, 0.0)
-            reach += behind**2 * abs(g.curvature) / 2 + 1.0  # covers the arc bending away
+            reach = g.cut_reach(side, tan_b)  # covers the arc bending away
             top = a + n * reach - u * reach * tan_b
             pts = [a, a + u * stub, a + u * stub + n * reach, top]
             out.append(prism_solid(pts, -t, t))
@@ -186,6 +217,7 @@ def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
         GeometryError: when a step gives no single valid solid.
     """
     t = g.thickness
+    tm = g.max_thickness
     hg = g.hinge
     a = hg.tongue_thickness / 2
     gap = hg.layer_gap
@@ -207,11 +239,12 @@ def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
         p, _, _ = _frame(g, joint)
         r = hg.zone_radius
         if hg.knuckle(joint) == "tongue":  # room for the partner's fork prongs
-            clear.append(cylinder_solid(p, r, a, t / 2 + 1))
-            clear.append(cylinder_solid(p, r, -t / 2 - 1, -a))
+            clear.append(cylinder_solid(p, r, a, tm / 2 + 1))
+            clear.append(cylinder_solid(p, r, -tm / 2 - 1, -a))
         else:  # slot for the partner's tongue
             clear.append(cylinder_solid(p, r, -a - gap, a + gap))
-        clear.append(cylinder_solid(p + np.asarray(holes[joint], float), hg.hole_diameter / 2, -t / 2 - 1, t / 2 + 1))
+        clear.append(cylinder_solid(p + np.asarray(holes[joint], float), hg.hole_diameter / 2, -tm / 2 - 1,
+                                    tm / 2 + 1))
     for cut in clear:
         body = one_solid(body.cut(cut), "clearing the hinge zones and pin holes")
     body = one_solid(body.clean(), "cleaning up")
@@ -228,7 +261,7 @@ def rod_solid(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
 def hinge_zone(g: RodGeometry, joint: int) -> Solid:
     """The full-thickness cylinder of the hinge zone around a joint's axis."""
     p, _, _ = _frame(g, joint)
-    t = g.thickness
+    t = g.max_thickness
     return cylinder_solid(p, g.hinge.zone_radius, -t, t)
 
 

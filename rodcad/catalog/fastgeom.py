@@ -57,8 +57,15 @@ class _Outline:
         h, L, hg = g.height, g.length, g.hinge
         self.g = g
         self.h2 = h / 2
-        self.stub = 1.2 * h + 2.0  # rodcad.cad.solids._stub_length
+        self.stub = g.stub  # rodcad.cad.solids._stub_length
         self.straight = g.curvature == 0
+        grad = g.graduated
+        lo = -h / 2
+        #: the body's band (lo, hi) and, for a lower body, the family's band kept in the end blocks
+        self.body = (lo, g.body_top if grad else h / 2)
+        self.thin = grad and g.body_h < h
+        self.fam = (lo, h / 2)
+        offsets = sorted({lo, self.body[1], *((h / 2,) if self.thin else ())})
         psi_s = math.radians(g.half_angle_deg)
         self.frames = []  # (pin P, outward tangent u, +y normal v), as rodcad.cad.solids._frame
         for p, fwd, sgn in (((0.0, 0.0), -psi_s, -1.0), ((L, 0.0), psi_s, 1.0)):
@@ -67,20 +74,30 @@ class _Outline:
         segs: list[tuple[np.ndarray, np.ndarray]] = []
         arcs: list[tuple[float, float, float, float, float]] = []  # cx, cy, r, start, sweep
         if self.straight:
-            c = [(-self.stub, -self.h2), (L + self.stub, -self.h2), (L + self.stub, self.h2), (-self.stub, self.h2)]
-            segs += [(np.array(c[i]), np.array(c[(i + 1) % 4])) for i in range(4)]
+            x0, x1 = -self.stub, L + self.stub
+            segs += [(np.array((x0, w)), np.array((x1, w))) for w in offsets]
+            for w0, w1 in zip(offsets[:-1], offsets[1:]):
+                segs += [(np.array((x0, w0)), np.array((x0, w1))), (np.array((x1, w0)), np.array((x1, w1)))]
         else:
             self.rho = 1 / abs(g.curvature)
-            sigma = 1 if g.curvature > 0 else -1
+            self.sigma = sigma = 1 if g.curvature > 0 else -1
             psi = abs(psi_s)
             self.centre = np.array([L / 2, sigma * self.rho * math.cos(psi)])
             start = math.radians(-90.0 if sigma > 0 else 90.0) - psi
-            for r in (self.rho + self.h2, self.rho - self.h2):
-                arcs.append((*self.centre, r, start, 2 * psi))
-            for p, u, v in self.frames:
-                a, b = p - v * self.h2, p + v * self.h2
-                c = [a, a + u * self.stub, b + u * self.stub, b]
-                segs += [(c[i], c[i + 1]) for i in range(3)]  # not the edge the band continues
+            for w in offsets:
+                arcs.append((*self.centre, self.rho - sigma * w, start, 2 * psi))
+            for p, u, v in self.frames:  # the stubs' sides and far ends (not the edge the band continues)
+                segs += [(p + v * w, p + v * w + u * self.stub) for w in offsets]
+                segs += [(p + v * w0 + u * self.stub, p + v * w1 + u * self.stub)
+                         for w0, w1 in zip(offsets[:-1], offsets[1:])]
+        #: the end blocks (rectangles: corner, unit edge directions, lengths) of a graduated rod
+        self.blocks = []
+        for rect in g.end_blocks():
+            c = [np.array(q) for q in rect]
+            segs += [(c[i], c[(i + 1) % 4]) for i in range(4)]
+            e1, e2 = c[1] - c[0], c[3] - c[0]
+            self.blocks.append((c[0], e1 / np.hypot(*e1), float(np.hypot(*e1)), e2 / np.hypot(*e2),
+                                float(np.hypot(*e2))))
         self.wedges = []  # (corner A, u, n, tan, reach, far): as rodcad.cad.solids._end_cuts
         for (p, u, v), end in zip(self.frames, (g.first, g.second)):
             a = p - end.setback * u
@@ -88,9 +105,7 @@ class _Outline:
             for side, chamfer in ((1, end.top_chamfer), (-1, end.bottom_chamfer)):
                 n = side * v
                 tan_b = math.tan(math.radians(chamfer))
-                reach = h / 2 + 1.0
-                behind = reach * max(tan_b, 0.0)
-                reach += behind**2 * abs(g.curvature) / 2 + 1.0
+                reach = g.cut_reach(side, tan_b)
                 top = a + n * reach - u * reach * tan_b
                 c = [a, a + u * far, a + u * far + n * reach, top]
                 segs += [(c[i], c[(i + 1) % 4]) for i in range(4)]
@@ -99,8 +114,6 @@ class _Outline:
         for r in self.radii:
             for p, _, _ in self.frames:
                 arcs.append((p[0], p[1], r, 0.0, TAU))
-        # per band (mid, gap, out): the joints whose knuckle it adds; it clears the others' zones
-        self.knuckles = [[j for j in (0, 1) if hg.knuckle(j) == kind] for kind in ("tongue", "", "fork")]
         # coincident curves would count twice: keep one of each
         ends = np.array([np.concatenate(sorted(s, key=tuple)) for s in segs])
         keep = np.sort(np.unique(ends.round(12), axis=0, return_index=True)[1])
@@ -109,28 +122,54 @@ class _Outline:
         arcs_a = np.array(arcs)
         self.arcs = arcs_a[np.sort(np.unique(arcs_a.round(12), axis=0, return_index=True)[1])]
         a_half, gap, t = hg.tongue_thickness / 2, hg.layer_gap, g.thickness
-        self.a, self.gap, self.t2 = a_half, gap, t / 2
-        #: total thickness of each band (both signs of z)
-        self.thick = np.array([2 * a_half, 2 * gap, t - 2 * a_half - 2 * gap])
+        self.a, self.gap = a_half, gap
+        m = min(t, g.body_t) / 2 if grad else t / 2
+        self.t2 = max(t, g.body_t) / 2 if grad else t / 2
+        forks = tuple(j for j in (0, 1) if hg.knuckle(j) == "fork")
+        tongues = tuple(j for j in (0, 1) if hg.knuckle(j) == "tongue")
+        #: per z-layer: (z from, z to, knuckle discs it adds, joints whose zone it clears,
+        #: 'all' / 'in' (only within the fork ends' blocks) / 'out' (clear of every block))
+        self.layers = [(0.0, a_half, tongues, forks, "all"), (a_half, a_half + gap, (), (0, 1), "all"),
+                       (a_half + gap, m, forks, tongues, "all")]
+        if grad and g.body_t != t:
+            self.layers.append((m, self.t2, forks, tongues, "in") if g.body_t < t else
+                               (m, self.t2, (), tongues, "out"))
+        self.fork_blocks = forks
+        #: total thickness of each layer (both signs of z)
+        self.thick = np.array([2 * (z1 - z0) for z0, z1, *_ in self.layers])
         self._pieces()
 
     # -- membership ------------------------------------------------------------------
 
-    def inside(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """(3, n) bool: whether plane points lie in the mid, gap and out band regions."""
-        h2 = self.h2
+    def _band(self, x: np.ndarray, y: np.ndarray, lo: float, hi: float) -> np.ndarray:
+        """Points in the raw bar between offsets lo and hi (stubs included)."""
         if self.straight:
-            body = (np.abs(y) <= h2) & (x >= -self.stub) & (x <= self.g.length + self.stub)
-        else:
-            (p0, u0, _), (p1, u1, _) = self.frames
-            cx, cy = self.centre
-            r = np.sqrt((x - cx) ** 2 + (y - cy) ** 2)
-            body = ((np.abs(r - self.rho) <= h2) & ((x - p0[0]) * u0[0] + (y - p0[1]) * u0[1] <= 0)
-                    & ((x - p1[0]) * u1[0] + (y - p1[1]) * u1[1] <= 0))
-            for p, u, v in self.frames:
-                dx, dy = x - p[0], y - p[1]
-                along = dx * u[0] + dy * u[1]
-                body |= (along >= 0) & (along <= self.stub) & (np.abs(dx * v[0] + dy * v[1]) <= h2)
+            return (y >= lo) & (y <= hi) & (x >= -self.stub) & (x <= self.g.length + self.stub)
+        (p0, u0, _), (p1, u1, _) = self.frames
+        cx, cy = self.centre
+        w = self.sigma * (self.rho - np.sqrt((x - cx) ** 2 + (y - cy) ** 2))
+        band = ((w >= lo) & (w <= hi) & ((x - p0[0]) * u0[0] + (y - p0[1]) * u0[1] <= 0)
+                & ((x - p1[0]) * u1[0] + (y - p1[1]) * u1[1] <= 0))
+        for p, u, v in self.frames:
+            dx, dy = x - p[0], y - p[1]
+            along = dx * u[0] + dy * u[1]
+            off = dx * v[0] + dy * v[1]
+            band |= (along >= 0) & (along <= self.stub) & (off >= lo) & (off <= hi)
+        return band
+
+    def _block(self, j: int, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        c, d1, n1, d2, n2 = self.blocks[j]
+        s1 = (x - c[0]) * d1[0] + (y - c[1]) * d1[1]
+        s2 = (x - c[0]) * d2[0] + (y - c[1]) * d2[1]
+        return (s1 >= 0) & (s1 <= n1) & (s2 >= 0) & (s2 <= n2)
+
+    def inside(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """(layers, n) bool: whether plane points lie in each z-layer's region (mid, gap,
+        out and, on a graduated rod of another thickness, its outer layer)."""
+        body = self._band(x, y, *self.body)
+        blocks = [self._block(j, x, y) for j in range(len(self.blocks))]
+        if self.thin:
+            body |= self._band(x, y, *self.fam) & (blocks[0] | blocks[1])
         for a, u, n, tan_b, reach, far in self.wedges:
             dx, dy = x - a[0], y - a[1]
             xp = dx * u[0] + dy * u[1]
@@ -139,15 +178,17 @@ class _Outline:
         kr2, zr2, hr2 = (r * r for r in self.radii)
         d2 = [(x - p[0]) ** 2 + (y - p[1]) ** 2 for p, _, _ in self.frames]
         holes = (d2[0] <= hr2) | (d2[1] <= hr2)
-        out = np.empty((3, len(x)), dtype=bool)
-        for i, knuckles in enumerate(self.knuckles):
+        out = np.empty((len(self.layers), len(x)), dtype=bool)
+        for i, (_, _, knuckles, zones, where) in enumerate(self.layers):
             region = body.copy()
-            for j in (0, 1):
-                if j in knuckles:
-                    region |= d2[j] <= kr2
-            for j in (0, 1):
-                if j not in knuckles:
-                    region &= d2[j] > zr2
+            if where == "in":
+                region &= np.logical_or.reduce([blocks[j] for j in self.fork_blocks])
+            elif where == "out":
+                region &= ~(blocks[0] | blocks[1])
+            for j in knuckles:
+                region |= d2[j] <= kr2
+            for j in zones:
+                region &= d2[j] > zr2
             out[i] = region & ~holes
         return out
 
@@ -343,7 +384,7 @@ class RodClearance:
 
     def _plane_distance2(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """(3, n): squared distance of plane points to each band region's boundary."""
-        best = np.full((3, len(x)), np.inf)
+        best = np.full((len(self._outline.layers), len(x)), np.inf)
         for (kind, *p), mask in zip(self._pieces, self._masks.T):
             if kind == "s":
                 x0, y0, ux, uy, n = p
@@ -374,17 +415,16 @@ class RodClearance:
         """Signed clearance of each point (array of shape (n, 3)) in mm."""
         x, y, z = np.array(np.atleast_2d(np.asarray(points, dtype=float)).T)
         o = self._outline
-        a, ag, t2 = o.a, o.a + o.gap, o.t2
+        t2 = o.t2
         az = np.abs(z)
         inside = o.inside(x, y)
         rho2 = self._plane_distance2(x, y)
-        # z-distance to each band: mid |z| <= a, gap a..a+gap, out a+gap..t/2
-        dz = [np.maximum(az - a, 0.0), np.maximum(np.maximum(a - az, az - ag), 0.0),
-              np.maximum(np.maximum(ag - az, az - t2), 0.0)]
+        # z-distance to each layer's z-range (mid |z| <= a, gap a..a+gap, out a+gap..t/2, ...)
+        dz = [np.maximum(np.maximum(z0 - az, az - z1), 0.0) for z0, z1, *_ in o.layers]
         solid = np.zeros(len(x), dtype=bool)
         near_in = np.full(len(x), np.inf)  # squared distance to the complement
         near_out = np.full(len(x), np.inf)  # squared distance to the solid
-        for b in range(3):
+        for b in range(len(o.layers)):
             ins, sq = inside[b], dz[b] * dz[b]
             np.minimum(near_in, sq + np.where(ins, rho2[b], 0.0), out=near_in)
             np.minimum(near_out, sq + np.where(ins, 0.0, rho2[b]), out=near_out)

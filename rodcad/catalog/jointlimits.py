@@ -65,6 +65,19 @@ class EndOutline:
         zone: hinge-zone radius.
         stub: how far the straight stub reaches ahead of the axis.
         depth: how far behind the axis the outline matters (the partner's reach).
+        top_end: the top side's offset from the centreline near the axis (default h/2).
+        top_body: the top side's offset more than ``reach`` behind the axis (a graduated
+            rod's body: :class:`rodcad.catalog.model.RodGeometry`; default ``top_end``).
+        reach: how far behind the axis (along the centreline) ``top_end`` holds.
+        cut_top, cut_bottom: how far above / below the end's tangent the end faces cut (the
+            solid's end-cut prisms, :meth:`rodcad.catalog.model.RodGeometry.cut_reach`): a
+            strongly curved rod's far part lies beyond the face's plane but above its cut.
+        far: the centreline's length from this axis to the rod's other axis, where its body
+            ends (with its own end faces, ``far_end``).
+        far_knuckle: the knuckle radius around the other axis.
+        far_end: the other end's faces (setback, tan top, tan bottom, cut top, cut bottom),
+            or None.
+        far_reach: how far from the other axis its end keeps ``top_end`` (a graduated rod).
     """
 
     height: float
@@ -75,33 +88,111 @@ class EndOutline:
     zone: float
     stub: float
     depth: float
+    top_end: float | None = None
+    top_body: float | None = None
+    reach: float = math.inf
+    cut_top: float = math.inf
+    cut_bottom: float = math.inf
+    far: float = math.inf
+    far_knuckle: float = 0.0
+    far_end: tuple[float, float, float, float, float] | None = None
+    far_reach: float = math.inf
 
     @classmethod
     def of(cls, g: RodGeometry, joint: int, depth: float) -> EndOutline:
         end = g.first if joint == 0 else g.second
-        return cls(g.height, g.curvature, end.setback, math.tan(math.radians(end.top_chamfer)),
-                   math.tan(math.radians(end.bottom_chamfer)), g.hinge.zone_radius, 1.2 * g.height + 2.0, depth)
+        top_end = top_body = g.height / 2
+        reach = far_reach = math.inf
+        if g.graduated:
+            top_body = g.body_top
+            top_end = max(g.height / 2, top_body)
+            assert g.end_reach is not None
+            reach, far_reach = g.end_reach[joint], g.end_reach[1 - joint]
+        tan_top, tan_bottom = math.tan(math.radians(end.top_chamfer)), math.tan(math.radians(end.bottom_chamfer))
+        return cls(g.height, g.curvature, end.setback, tan_top, tan_bottom, g.hinge.zone_radius, g.stub, depth,
+                   top_end, top_body, reach, g.cut_reach(1, tan_top), g.cut_reach(-1, tan_bottom),
+                   _arc_length(g), g.hinge.knuckle_radius, _far_end(g, 1 - joint), far_reach)
+
+    def far_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """The other end's outward tangent and the rod's +y normal there, in this frame."""
+        k = self.curvature
+        th = 0.0 if k == 0 else self.far * abs(k)
+        sk = math.copysign(1.0, k) if k else 1.0
+        return np.array([-math.cos(th), sk * math.sin(th)]), np.array([sk * math.sin(th), math.cos(th)])
+
+    def _far_cut(self, x: np.ndarray, y: np.ndarray, e: float) -> np.ndarray:
+        """Points the other end's face cuts remove (within ``e`` of them count as removed)."""
+        out = np.zeros(x.shape, dtype=bool)
+        if self.far_end is None:
+            return out
+        setback, t_top, t_bottom, c_top, c_bottom = self.far_end
+        q = self.far_axis()
+        u, v = self.far_frame()
+        a = q - setback * u
+        dx, dy = x - a[0], y - a[1]
+        xp = dx * u[0] + dy * u[1]
+        for side, t, c in ((1.0, t_top, c_top), (-1.0, t_bottom, c_bottom)):
+            yp = side * (dx * v[0] + dy * v[1])
+            out |= (yp >= -e) & (yp <= c + e) & (xp >= -yp * t - e)
+        return out
+
+    def far_axis(self) -> np.ndarray:
+        """The rod's other hinge axis in this frame."""
+        k = self.curvature
+        if k == 0:
+            return np.array([-self.far, 0.0])
+        rho = 1 / abs(k)
+        ang = self.far / rho
+        return np.array([-rho * math.sin(ang), math.copysign(rho, k) * (1 - math.cos(ang))])
+
+    @property
+    def top(self) -> float:
+        """The top side's offset near the axis (mm)."""
+        return self.height / 2 if self.top_end is None else self.top_end
+
+    @property
+    def body(self) -> float:
+        """The top side's offset behind ``reach`` (mm)."""
+        return self.top if self.top_body is None else self.top_body
 
     def contains(self, p: np.ndarray, e: float = INSIDE_TOL) -> np.ndarray:
         """Whether points (M, 2) lie inside the outline, more than ``e`` from its edge
         (a negative ``e``: inside or within ``-e`` of the edge)."""
         x, y = p[:, 0], p[:, 1]
-        h2 = self.height / 2 - e
-        face = np.where(y >= 0, x < -self.setback - y * self.tan_top - e,
-                        x < -self.setback + y * self.tan_bottom - e)
+        lo = -self.height / 2 + e
+        face = np.where(y >= 0, (x < -self.setback - y * self.tan_top - e) | (y > self.cut_top + e),
+                        (x < -self.setback + y * self.tan_bottom - e) | (y < -self.cut_bottom - e))
         outside_zone = x * x + y * y > (self.zone + e) * abs(self.zone + e)
-        stub = (x >= 0) & (x < self.stub - e) & (np.abs(y) < h2)
+        stub = (x >= 0) & (x < self.stub - e) & (y > lo) & (y < self.top - e)
         k = self.curvature
         if k == 0:
-            behind = (x < 0) & (np.abs(y) < h2)
+            top = np.where((x >= -self.reach) | (x <= self.far_reach - self.far), self.top, self.body)
+            behind = (x < 0) & (x > -self.far) & (y > lo) & (y < top - e)
         else:
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)  # the arc's centre, on the +y side for k > 0
             r = np.hypot(x, y - cy)
+            w = math.copysign(1.0, k) * (rho - r)  # offset from the centreline toward +y
             # angle travelled back along the arc from the axis, seen from the centre
             back = np.arctan2(-x, np.sign(k) * (cy - y))
-            behind = (x < 0) & (np.abs(r - rho) < h2) & (back > 0) & (back < self.depth / rho)
-        return face & outside_zone & (stub | behind)
+            top = np.where((back <= self.reach / rho) | (back >= (self.far - self.far_reach) / rho), self.top, self.body)
+            behind = (x < 0) & (w > lo) & (w < top - e) & (back > 0) & (back < min(self.depth, self.far) / rho)
+        q = self.far_axis()
+        knuckle = (x - q[0]) ** 2 + (y - q[1]) ** 2 < (self.far_knuckle - e) * abs(self.far_knuckle - e)
+        # the body past the far axis is cut by the far end's faces; its knuckle is not
+        body = (stub | behind | self._far_stub(x, y, e)) & ~self._far_cut(x, y, e)
+        return face & outside_zone & (body | knuckle)
+
+    def _far_stub(self, x: np.ndarray, y: np.ndarray, e: float) -> np.ndarray:
+        """The straight stub past the other axis (what its faces leave of it)."""
+        if not math.isfinite(self.far) or self.far_end is None:
+            return np.zeros(x.shape, dtype=bool)
+        q = self.far_axis()
+        u, v = self.far_frame()
+        dx, dy = x - q[0], y - q[1]
+        along = dx * u[0] + dy * u[1]
+        off = dx * v[0] + dy * v[1]
+        return (along >= 0) & (along < self.stub - e) & (off > -self.height / 2 + e) & (off < self.top - e)
 
     def corners(self) -> np.ndarray:
         """Points along the outline's boundary, :data:`ARC_STEP` apart, with its corners
@@ -119,6 +210,35 @@ class EndOutline:
                 pts += list(p0 + np.outer(_steps(u0, u1), d))
             pts.append(end)
         pts += self._side_samples()
+        if math.isfinite(self.far):  # the body's far end (across the band) and the far knuckle
+            end = min(self.depth, self.far)
+            w = _steps(-self.height / 2, max(self.top, self.body))
+            k = self.curvature
+            if k == 0:
+                pts += list(np.column_stack([np.full(w.size, -end), w]))
+            else:
+                rho, sk = 1 / abs(k), math.copysign(1.0, k)
+                radius, ang = rho - sk * w, end / rho
+                pts += list(np.column_stack([-radius * math.sin(ang), sk * rho - sk * radius * math.cos(ang)]))
+            q, r = self.far_axis(), self.far_knuckle
+            ang = np.linspace(0.0, 2 * math.pi, int(2 * math.pi * r / ARC_STEP) + 2)
+            pts += list(q + r * np.column_stack([np.cos(ang), np.sin(ang)]))
+            if self.far_end is not None:  # the far faces and the far stub's sides
+                setback, t_top, t_bottom, _, _ = self.far_end
+                u, v = self.far_frame()
+                a = q - setback * u
+                hmax = max(self.top, self.height / 2) + 1.0
+                for side, t in ((1.0, t_top), (-1.0, t_bottom)):
+                    ys = _steps(0.0, hmax)
+                    pts += list(a + np.outer(-ys * t, u) + np.outer(side * ys, v))
+                    xs = _steps(0.0, self.stub)
+                    w = self.top if side > 0 else -self.height / 2
+                    pts += list(q + np.outer(xs, u) + w * v)
+        for sign, cut, t in ((1.0, self.cut_top, self.tan_top), (-1.0, self.cut_bottom, self.tan_bottom)):
+            if math.isfinite(cut):  # the end cut's far edge, where the body reaches past it
+                x0 = -self.setback - cut * t
+                xs = -_steps(-x0, self.depth) if x0 < 0 else -_steps(0.0, self.depth)
+                pts += list(np.column_stack([xs, np.full(xs.size, sign * cut)]))
         ang = np.linspace(0.0, 2 * math.pi, int(2 * math.pi * r / ARC_STEP) + 1)
         pts += list(r * np.column_stack([np.cos(ang), np.sin(ang)]))
         pts = np.array(pts, dtype=float)
@@ -133,7 +253,8 @@ class EndOutline:
     def _face_meets_side(self, sign: float) -> np.ndarray:
         """The face's end on the top (sign +1) or bottom (-1) surface."""
         t = self.tan_top if sign > 0 else self.tan_bottom
-        s, h2, k = self.setback, self.height / 2, self.curvature
+        s, k = self.setback, self.curvature
+        h2 = self.top if sign > 0 else self.height / 2
         if k == 0:
             return np.array([-s - h2 * t, sign * h2])
         # intersect the face line with the side arc |p - c| = rho - sign * sign(k) * h2
@@ -152,22 +273,56 @@ class EndOutline:
 
     def _side_samples(self) -> list[np.ndarray]:
         """Points along the top and bottom sides: the stub's straight sides ahead of the
-        axis, then the bar's straight sides or a curved rod's arcs behind it."""
-        k, h2 = self.curvature, self.height / 2
+        axis, then the bar's straight sides or a curved rod's arcs behind it (a graduated
+        rod's top steps to its body's ``reach`` behind the axis)."""
+        k = self.curvature
         out = []
         for sign in (1.0, -1.0):
+            near = self.top if sign > 0 else -self.height / 2
+            far = self.body if sign > 0 else near
             ahead = _steps(0.0, self.stub)
-            out += list(np.column_stack([ahead, np.full(ahead.size, sign * h2)]))
+            out += list(np.column_stack([ahead, np.full(ahead.size, near)]))
+            end = min(self.depth, self.far)
+            cut = min(self.reach, end)
+            spans = [(0.0, cut, near)] + ([(cut, end, far)] if cut < end else [])
+            back_cut = self.far - self.far_reach  # the far end's block (a lower body steps up to it)
+            if far != near and cut < back_cut < end:
+                spans = [(0.0, cut, near), (cut, back_cut, far), (back_cut, end, near)]
+            step = _steps(min(near, far), max(near, far)) if far != near and cut < end else np.zeros(0)
+            steps_at = [cut] + ([back_cut] if len(spans) == 3 else [])
             if k == 0:
-                back = -_steps(0.0, self.depth)
-                out += list(np.column_stack([back, np.full(back.size, sign * h2)]))
+                for a, b, w in spans:
+                    back = -_steps(a, b)
+                    out += list(np.column_stack([back, np.full(back.size, w)]))
+                for at in steps_at:
+                    out += list(np.column_stack([np.full(step.size, -at), step]))
                 continue
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)
-            radius = rho - sign * math.copysign(1.0, k) * h2
-            ang = _steps(0.0, self.depth) / rho  # back along the arc from the axis's radial line
-            out += list(np.column_stack([-radius * np.sin(ang), cy - math.copysign(1.0, k) * radius * np.cos(ang)]))
+            sk = math.copysign(1.0, k)
+            for a, b, w in spans:
+                radius = rho - sk * w
+                ang = _steps(a, b) / rho  # back along the arc from the axis's radial line
+                out += list(np.column_stack([-radius * np.sin(ang), cy - sk * radius * np.cos(ang)]))
+            radius = rho - sk * step
+            for at in steps_at:
+                ang = at / rho
+                out += list(np.column_stack([-radius * math.sin(ang), cy - sk * radius * math.cos(ang)]))
         return out
+
+
+def _far_end(g: RodGeometry, joint: int) -> tuple[float, float, float, float, float]:
+    """The end faces at ``joint`` as EndOutline.far_end."""
+    end = g.first if joint == 0 else g.second
+    t_top, t_bottom = math.tan(math.radians(end.top_chamfer)), math.tan(math.radians(end.bottom_chamfer))
+    return (end.setback, t_top, t_bottom, g.cut_reach(1, t_top), g.cut_reach(-1, t_bottom))
+
+
+def _arc_length(g: RodGeometry) -> float:
+    """The centreline's length between the two hinge axes (mm)."""
+    if g.curvature == 0:
+        return g.length
+    return 2 * abs(math.radians(g.half_angle_deg)) / abs(g.curvature)
 
 
 def _line_meets_circle(p0: np.ndarray, d: np.ndarray, centre: np.ndarray, radius: float) -> list[float]:
@@ -195,13 +350,17 @@ class _Pair:
     """Two rods at their shared joint, the right one turned by the bend phi (rad)."""
 
     def __init__(self, left: RodGeometry, right: RodGeometry) -> None:
-        reach = max(left.length, right.length) + 1.2 * max(left.height, right.height) + 2.0
+        reach = max(left.length, right.length) + 1.2 * max(left.max_height, right.max_height) + 2.0
         self.left = EndOutline.of(left, 1, reach)
         self.right = EndOutline.of(right, 0, reach)
         self.psi_l = math.radians(left.half_angle_deg)
         self.psi_r = math.radians(right.half_angle_deg)
         self.left_pts = self.left.corners()
         self.right_pts = self.right.corners()
+        # each outline's bounding box (its boundary samples, 1 mm wider): a point outside it
+        # is outside the outline, without the full test
+        self.left_box = (self.left_pts.min(axis=0) - 1.0, self.left_pts.max(axis=0) + 1.0)
+        self.right_box = (self.right_pts.min(axis=0) - 1.0, self.right_pts.max(axis=0) + 1.0)
 
     def _axes(self, phi: float) -> tuple[np.ndarray, np.ndarray]:
         """(left frame, right frame) as 2x2 matrices whose rows are the local x and y axes
@@ -216,10 +375,16 @@ class _Pair:
         left, right = self._axes(math.radians(phi_deg))
         # right corners into the left frame, and left corners into the right frame
         r_in_l = (self.right_pts @ right) @ left.T
-        if self.left.contains(r_in_l).any():
+        if _inside(self.left, self.left_box, r_in_l):
             return True
         l_in_r = (self.left_pts @ left) @ right.T
-        return bool(self.right.contains(l_in_r).any())
+        return _inside(self.right, self.right_box, l_in_r)
+
+
+def _inside(outline: EndOutline, box: tuple[np.ndarray, np.ndarray], pts: np.ndarray) -> bool:
+    """Whether any of the points lies inside the outline (only those in its box are tested)."""
+    near = pts[((pts >= box[0]) & (pts <= box[1])).all(axis=1)]
+    return bool(near.size and outline.contains(near).any())
 
 
 def _contact(pair: _Pair, start: float, direction: float, bound: float) -> float | None:

@@ -235,7 +235,7 @@ def _cache_key(left: RodGeometry, right: RodGeometry, wall: float) -> str:
     from rodcad.catalog.model import GEOMETRY_VERSION
 
     return make_key("pair-limits", LIMITS_VERSION, GEOMETRY_VERSION, TOLERANCE_DEG,
-                    asdict(left), asdict(right), wall)
+                    left.key_data(), right.key_data(), wall)
 
 
 def compute_pair_limits(left: RodGeometry, right: RodGeometry, wall: float) -> dict[str, object]:

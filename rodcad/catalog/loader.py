@@ -25,7 +25,6 @@ if TYPE_CHECKING:  # pragma: no cover
     pass
 from rodcad.catalog.model import (
     CATALOG_FORMAT,
-    MAX_ARC_HALF_ANGLE_DEG,
     Balls,
     Fill,
     Catalog,
@@ -36,9 +35,18 @@ from rodcad.catalog.model import (
     Origin,
     Printer,
     Ranges,
+    graduated,
     max_curvature,
     RodGeometry,
     RodType,
+)
+from rodcad.catalog.checks import (
+    check_curvature,
+    check_length,
+    check_printer,
+    check_scales,
+    check_section,
+    check_stops,
 )
 from rodcad.catalog.merge import complete, merge_defaults
 from rodcad.catalog.paths import default_catalog_dir, shipped_catalogs
@@ -262,7 +270,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
     if printer is not None and w < printer.nozzle:
         ctx.report("material.min_wall", f"minimum wall {format_number(w)} mm is thinner than the "
                    f"printer's nozzle ({format_number(printer.nozzle)} mm)")
-    if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f:
+    if isinstance(f["length"], dict) or isinstance(f["curvature"], dict) or "stops" in f or isinstance(f["scale"], dict):
         return _with_fill(f, ctx, material, _expand_ranges(f, ctx, printer, material, kinds, first, second, end_key))
     if f.get("fill") is not None:
         ctx.report("fill", "a fill is for rods printed to order: give the length as a range {min, max}")
@@ -277,19 +285,19 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
         hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
                       jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
         at = f" at scale {format_number(scale)}" if scale != 1 else ""
-        ok &= _check_section(ctx, h, t, hinge, material, kinds, first, second, end_key, at)
+        ok &= check_section(ctx, h, t, hinge, material, kinds, first, second, end_key, at)
         per_scale[si] = (h, t, hinge, at)
     for li, length in enumerate(f["length"]):
         l_rel = f"length[{li}]" if len(f["length"]) > 1 else "length"
         for si, scale in enumerate(f["scale"]):
             h, t, hinge, at = per_scale[si]
-            ok &= _check_length(ctx, l_rel, length, h, hinge, material, first, second, end_key, at)
+            ok &= check_length(ctx, l_rel, length, h, hinge, material, first, second, end_key, at)
             for ci, curv in enumerate(f["curvature"]):
                 c_rel = f"curvature[{ci}]" if multi_curv else "curvature"
-                ok &= _check_curvature(ctx, c_rel, curv, length, h)
+                ok &= check_curvature(ctx, c_rel, curv, length, h)
                 geom = RodGeometry(length, h, t, curv, hinge, first, second)
                 if printer is not None:
-                    ok &= _check_printer(ctx, l_rel, geom, printer)
+                    ok &= check_printer(ctx, l_rel, geom, printer)
                 name = f"{f['name']}-{format_number(length)}"
                 if multi_scale:
                     name += f"-s{format_number(scale)}"
@@ -298,120 +306,6 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
                 out.append(RodType(name, f["name"], length, scale, curv, geom, material, kinds[0] if kinds else None,
                                    ctx.origin(l_rel), heavier=kinds[1:], friction=jt["friction"]))
     return out if ok else []
-
-
-def _check_section(ctx: _FamilyContext, h: float, t: float, hinge: Hinge, m: Material,
-                   kinds: tuple[Balls, ...], first: EndShape, second: EndShape, end_key: Any, at: str) -> bool:
-    """Checks on the cross-section and hinge that make a rod impossible to build."""
-    ok = True
-    fmt = format_number
-    w = m.min_wall
-    if w >= min(h, t) / 2:
-        ctx.report("material.min_wall", f"minimum wall {fmt(w)} mm is thicker than half the section "
-                   f"({fmt(min(h, t) / 2)} mm{at}): no room inside the rod")
-        return False  # every wall check below would fail for the same reason
-    if hinge.zone_radius >= h / 2:
-        ctx.report("joint.knuckle_radius", f"knuckle radius {fmt(hinge.knuckle_radius)} mm + radial gap "
-                   f"{fmt(hinge.radial_gap)} mm is wider than the rod: it must stay below half the section "
-                   f"height ({fmt(h / 2)} mm{at})")
-        ok = False
-    elif h / 2 - hinge.zone_radius < w:
-        ctx.report("joint.knuckle_radius", f"knuckle radius {fmt(hinge.knuckle_radius)} mm + radial gap "
-                   f"{fmt(hinge.radial_gap)} mm leaves {fmt(round(h / 2 - hinge.zone_radius, 6))} mm of end face "
-                   f"between the hinge zone and the rod's edge ({fmt(h / 2)} mm from the axis{at}), less than "
-                   f"the minimum wall {fmt(w)} mm")
-        ok = False
-    knuckle_wall = hinge.knuckle_radius - hinge.hole_diameter / 2
-    if knuckle_wall < w:
-        ctx.report("joint.knuckle_radius", f"knuckle radius {fmt(hinge.knuckle_radius)} mm leaves a wall of "
-                   f"{fmt(knuckle_wall)} mm around the {fmt(hinge.hole_diameter)} mm pin hole, less than "
-                   f"the minimum wall {fmt(w)} mm{at}")
-        ok = False
-    prong = (t - hinge.tongue_thickness - 2 * hinge.layer_gap) / 2
-    if hinge.tongue_thickness < w:
-        ctx.report("joint.tongue_thickness", f"tongue thickness {fmt(hinge.tongue_thickness)} mm is less than "
-                   f"the minimum wall {fmt(w)} mm{at}")
-        ok = False
-    elif prong < w:
-        ctx.report("joint.tongue_thickness", f"tongue {fmt(hinge.tongue_thickness)} mm + 2 layer gaps of "
-                   f"{fmt(hinge.layer_gap)} mm leave fork prongs {fmt(prong)} mm thick in a {fmt(t)} mm "
-                   f"thick rod, less than the minimum wall {fmt(w)} mm{at}")
-        ok = False
-    for which, e in (("first", first), ("second", second)):
-        if e.setback >= hinge.knuckle_radius:
-            ctx.report(end_key(which, "setback"),
-                       f"setback {fmt(e.setback)} mm detaches the end face from the "
-                       f"{fmt(hinge.knuckle_radius)} mm knuckle: must be less than the knuckle radius{at}")
-            ok = False
-    for key, kind in zip(ctx.ball_keys, kinds):
-        need = kind.socket_diameter + 2 * w
-        if need > min(h, t):
-            ctx.report(f"{key}.diameter", f"a {fmt(kind.diameter)} mm ball in a {fmt(kind.socket_diameter)} mm "
-                       f"socket with {fmt(w)} mm walls needs a section of at least {fmt(need)} mm; the rod is "
-                       f"{fmt(h)} x {fmt(t)} mm{at}")
-            ok = False
-    return ok
-
-
-def _check_length(ctx: _FamilyContext, l_rel: str, length: float, h: float, hinge: Hinge,
-                  m: Material, first: EndShape, second: EndShape, end_key: Any, at: str) -> bool:
-    fmt = format_number
-    need = 2 * hinge.zone_radius + m.min_wall
-    if length < need:
-        ctx.report(l_rel, f"length {fmt(length)} mm is too short: the two hinge zones and a minimum wall "
-                   f"need {fmt(round(need, 6))} mm{at}")
-        return False
-    ok = True
-    for half in ("top", "bottom"):
-        b1 = getattr(first, f"{half}_chamfer")
-        b2 = getattr(second, f"{half}_chamfer")
-        cut = first.setback + second.setback + h / 2 * (math.tan(math.radians(b1)) + math.tan(math.radians(b2)))
-        left = length - cut
-        if left < m.min_wall:
-            what = (f"the two {half} end faces would cross" if left <= 0 else
-                    f"they leave {fmt(round(left, 3))} mm of {half} edge between the end faces, less than "
-                    f"the minimum wall {fmt(m.min_wall)} mm")
-            ctx.report(end_key("second", f"{half}_chamfer"),
-                       f"{half} chamfers of {fmt(b1)} and {fmt(b2)} deg cut through a {fmt(length)} mm rod: "
-                       f"{what}{at}")
-            ok = False
-    return ok
-
-
-def _check_curvature(ctx: _FamilyContext, c_rel: str, curv: float, length: float, h: float) -> bool:
-    if curv == 0:
-        return True
-    fmt = format_number
-    limit = math.sin(math.radians(MAX_ARC_HALF_ANGLE_DEG)) * 2 / length
-    if abs(curv) > limit:
-        ctx.report(c_rel, f"curvature {fmt(curv)} /mm bends a {fmt(length)} mm rod past a "
-                   f"{fmt(2 * MAX_ARC_HALF_ANGLE_DEG)} deg arc (at most {fmt(round(limit, 6))} /mm)")
-        return False
-    if abs(curv) * h > 1:
-        ctx.report(c_rel, f"curvature {fmt(curv)} /mm (radius {fmt(round(1 / abs(curv), 3))} mm) is too tight "
-                   f"for a {fmt(h)} mm high section: the radius must be at least the section height")
-        return False
-    return True
-
-
-def _check_printer(ctx: _FamilyContext, l_rel: str, g: RodGeometry, printer: Printer) -> bool:
-    sag = 0.0
-    if g.curvature:
-        sag = (1 - math.cos(math.radians(g.half_angle_deg))) / abs(g.curvature)  # arc's depth below the chord
-    extent = sorted((g.length + 2 * g.hinge.knuckle_radius, g.height + sag, g.thickness))
-    bed = sorted(printer.build_volume)
-    if any(e > b for e, b in zip(extent, bed)):
-        fmt = format_number
-        ctx.report(l_rel, f"a {fmt(g.length)} mm rod ({' x '.join(fmt(round(e, 2)) for e in reversed(extent))} mm) "
-                   f"does not fit the printer's build volume "
-                   f"({' x '.join(fmt(b) for b in printer.build_volume)} mm)")
-        return False
-    return True
-
-
-#: A stop printed to order must stop within this of the bend it is made for (deg), checked
-#: at the ends of the family's ranges with the end geometry (rodcad.catalog.jointlimits).
-STOP_CHECK_DEG = 0.05
 
 
 def _range(ctx: _FamilyContext, f: dict[str, Any], key: str) -> tuple[float, float] | None:
@@ -456,13 +350,22 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     make must be buildable), two reference types (shortest and longest, straight)."""
     fmt = format_number
     if not isinstance(f["length"], dict):
-        for key in ("curvature", "stops"):
+        for key in ("curvature", "stops", "scale"):
             if isinstance(f.get(key), dict):
                 ctx.report(key, f"a {key} range is for rods printed to order: give the length as a range "
                            "{min, max} too")
         return []
-    if len(f["scale"]) > 1:
-        ctx.report("scale", "a family printed to order has one scale (make one family per scale)")
+    scales: tuple[float, float] | None = None
+    if isinstance(f["scale"], dict):
+        scales = _range(ctx, f, "scale")
+        if scales is None:
+            return []
+        if f.get("fill") is not None:
+            ctx.report("scale", "graduated rods (a scale range) take balls, not a fill: give one scale")
+            return []
+    elif len(f["scale"]) > 1:
+        ctx.report("scale", "a family printed to order has one scale or a range {min, max} (graduated rods), "
+                   "not a list")
         return []
     length = _range(ctx, f, "length")
     curv: tuple[float, float] | None
@@ -481,75 +384,48 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     if length is None or curv is None:
         return []
     sec, jt = f["section"], f["joint"]
-    scale = f["scale"][0]
+    scale = 1.0 if scales is not None else f["scale"][0]
     h, t = sec["height"] * scale, sec["thickness"] * scale
     hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
                   jt["tongue_thickness"] * scale, jt["layer_gap"], jt["radial_gap"])
-    if not _check_section(ctx, h, t, hinge, material, kinds, first, second, end_key, ""):
+    if not check_section(ctx, h, t, hinge, material, kinds, first, second, end_key, ""):
         return []
     ok = True
     for rel, lv in (("length.min", length[0]), ("length.max", length[1])):
-        ok &= _check_length(ctx, rel, lv, h, hinge, material, first, second, end_key, "")
+        ok &= check_length(ctx, rel, lv, h, hinge, material, first, second, end_key, "")
     k_big = max(abs(curv[0]), abs(curv[1]))
     k_rel = "curvature.max" if abs(curv[1]) >= abs(curv[0]) else "curvature.min"
     if ok and k_big:  # the shortest rod takes the whole range; longer ones at most a 120 deg arc
-        ok &= _check_curvature(ctx, k_rel, math.copysign(k_big, curv[1] if k_rel.endswith("max") else curv[0]),
+        ok &= check_curvature(ctx, k_rel, math.copysign(k_big, curv[1] if k_rel.endswith("max") else curv[0]),
                                length[0], h)
     if ok and printer is not None:
         k_sig = curv[1] if abs(curv[1]) >= abs(curv[0]) else curv[0]
         k_sig = math.copysign(min(abs(k_sig), max_curvature(length[1])), k_sig)
-        ok &= _check_printer(ctx, "length.max", RodGeometry(length[1], h, t, 0.0, hinge, first, second), printer)
+        ok &= check_printer(ctx, "length.max", RodGeometry(length[1], h, t, 0.0, hinge, first, second), printer)
         if ok and k_big:  # straight it fits: does its most curved form?
-            ok &= _check_printer(ctx, k_rel, RodGeometry(length[1], h, t, k_sig, hinge, first, second), printer)
+            ok &= check_printer(ctx, k_rel, RodGeometry(length[1], h, t, k_sig, hinge, first, second), printer)
     if ok and stops is not None:
-        ok = _check_stops(ctx, stops, length, curv, h, t, hinge, material, first, second)
+        ok = check_stops(ctx, stops, length, curv, h, t, hinge, material, first, second)
+    if ok and scales is not None:
+        ok = check_scales(ctx, scales, length, stops, RodGeometry(length[1], h, t, 0.0, hinge, first, second),
+                           material, printer)
     if not ok:
         return []
     k0 = min(max(0.0, curv[0]), curv[1])
     origin = ctx.origin("length")
-    refs = [RodType(f"{f['name']}-{fmt(lv)}", f["name"], lv, scale, k0,
-                    RodGeometry(lv, h, t, k0, hinge, first, second), material, kinds[0] if kinds else None, origin,
-                    heavier=kinds[1:], friction=jt["friction"])
-            for lv in length]
+    template = RodType(f"{f['name']}-{fmt(length[0])}", f["name"], length[0], scale, k0,
+                       RodGeometry(length[0], h, t, k0, hinge, first, second), material, kinds[0] if kinds else None,
+                       origin, heavier=kinds[1:], friction=jt["friction"])
+    s_ref = 1.0 if scales is None else min(max(1.0, scales[0]), scales[1])
+    refs = []
+    for lv in length:
+        g = graduated(RodGeometry(lv, h, t, k0, hinge, first, second), s_ref, material.min_wall)
+        name = f"{f['name']}-{fmt(lv)}" + (f"-s{fmt(s_ref)}" if s_ref != 1.0 else "")
+        refs.append(RodType(name, f["name"], lv, s_ref if scales is not None else scale, k0, g, material,
+                            kinds[0] if kinds else None, origin, heavier=kinds[1:], friction=jt["friction"]))
     res = f["length"].get("resolution")
     if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:
         ctx.report("length.resolution", f"no multiple of {fmt(res)} mm lies between {fmt(length[0])} and "
                    f"{fmt(length[1])} mm")
         return []
-    return refs, Ranges(length, curv, stops, None if res is None else float(res)), refs[0]
-
-
-def _check_stops(ctx: _FamilyContext, stops: tuple[float, float], length: tuple[float, float],
-                 curv: tuple[float, float], h: float, t: float, hinge: Hinge, material: Material,
-                 first: EndShape, second: EndShape) -> bool:
-    """Every stop of the range, between straight rods at the ends of the length range, is
-    made by flush ends that leave the rod whole and meet exactly at the stop angle (each end's
-    top chamfer half the stop; between curved rods the planner keeps the chamfers within
-    these)."""
-    return all([_check_stop(ctx, rel, s, length, curv, h, t, hinge, material, first, second)
-                for rel, s in (("stops.min", stops[0]), ("stops.max", stops[1]))])
-
-
-def _check_stop(ctx: _FamilyContext, rel: str, s: float, length: tuple[float, float], curv: tuple[float, float],
-                h: float, t: float, hinge: Hinge, material: Material, first: EndShape, second: EndShape) -> bool:
-    from rodcad.catalog.jointlimits import joint_limits
-
-    fmt = format_number
-    for lv in length:
-        for k in (0.0,):
-            c = s / 2  # each end's top chamfer where two straight rods meet at s
-            a, b = EndShape(0.0, c, first.bottom_chamfer), EndShape(0.0, c, second.bottom_chamfer)
-            if not _check_length(ctx, rel, lv, h, hinge, material, a, b, lambda w, key: rel, ""):
-                return False
-            geo = RodGeometry(lv, h, t, k, hinge, a, b)
-            try:
-                hi = joint_limits(geo, geo)[1]
-            except ValueError:
-                hi = None
-            if hi is None or abs(hi - s) > STOP_CHECK_DEG:
-                got = "no stop at all" if hi is None else f"a stop at {fmt(round(hi, 3))} deg"
-                ctx.report(rel, f"a stop at {fmt(s)} deg between two {fmt(lv)} mm rods of curvature {fmt(k)} "
-                           f"needs top chamfers of {fmt(round(c, 3))} deg, which cut into the hinge zone or "
-                           f"knuckle: their outlines give {got} (narrow the stop range)")
-                return False
-    return True
+    return refs, Ranges(length, curv, stops, None if res is None else float(res), scales), template

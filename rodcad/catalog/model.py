@@ -58,7 +58,8 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from rodcad.errors import Problem
+from rodcad.catalog.ends import EndShape, Hinge
+from rodcad.catalog.stock import Balls, Fill, Material, Origin, Printer
 from rodcad.yamlio import suggest
 
 __all__ = [
@@ -69,7 +70,10 @@ __all__ = [
     "Balls",
     "Catalog",
     "EndShape",
+    "end_reach",
     "Family",
+    "graduated",
+    "max_body_scale",
     "Fill",
     "Hinge",
     "json_digest",
@@ -92,12 +96,10 @@ def json_digest(data: Any) -> str:
 #: The catalog format this code reads (the ``catalog:`` key).
 CATALOG_FORMAT = 1
 
-
 #: Version of how :mod:`rodcad.cad` turns a :class:`RodGeometry` into a
 #: solid. Bump it with any change there: it is part of every disk-cache key
 #: (kept here so that cache hits need not import the CAD kernel).
 GEOMETRY_VERSION = "1"
-
 
 #: Largest half-angle of a curved rod's arc (the arc spans at most twice this).
 MAX_ARC_HALF_ANGLE_DEG = 60.0
@@ -107,79 +109,6 @@ def max_curvature(length: float) -> float:
     """The largest |curvature| (1/mm) a rod of this length is printed with: an arc of
     2 x MAX_ARC_HALF_ANGLE_DEG through both pins."""
     return math.sin(math.radians(MAX_ARC_HALF_ANGLE_DEG)) * 2 / length
-
-
-@dataclass(frozen=True)
-class EndShape:
-    """Shape of one rod end outside the hinge zone (the part that limits bending).
-
-    The end face is two planes, one for the top (+y) half and one for the bottom
-    half of the section, each parallel to the hinge axis. Each passes through
-    the point ``setback`` mm back from the hinge axis along the rod's centreline
-    tangent and is tilted by its chamfer angle: positive tilts the face away from
-    the partner rod (cuts the corner back, more room to bend that way), negative
-    tilts it toward the partner (the corner reaches past the hinge plane, so the
-    joint stops before straight). Two facing square ends with setback s each and
-    the pin at mid-height of a section of height h collide at
-    ``2 * atan(2 s / h)``; faces with zero setback meet flush exactly at the sum
-    of their chamfers.
-
-    Attributes:
-        setback: distance from the hinge axis to the face on the centreline (mm).
-        top_chamfer: tilt of the top (+y) half face (deg).
-        bottom_chamfer: tilt of the bottom (-y) half face (deg).
-    """
-
-    setback: float
-    top_chamfer: float
-    bottom_chamfer: float
-
-
-@dataclass(frozen=True)
-class Hinge:
-    """Pinned hinge geometry shared by both ends of a rod (after scaling).
-
-    The rod's thickness (z) is split into three layers: a middle *tongue* layer
-    of ``tongue_thickness`` and two outer *fork prong* layers, separated by
-    ``layer_gap``. One end of the rod carries the tongue knuckle, the other the
-    fork (``layout``); a knuckle is a disc of ``knuckle_radius`` around the hinge
-    axis with a pin hole of ``pin_diameter + pin_clearance``. Around each hinge
-    axis, the layers the partner's knuckle occupies are cleared out to
-    ``knuckle_radius + radial_gap`` (the *hinge zone*), so nothing inside the
-    hinge zone ever collides; bending is limited by the end faces outside it.
-
-    Attributes:
-        layout: 'tongue-fork' (tongue at the first joint) or 'fork-tongue'.
-        pin_diameter: diameter of the pin, which is not part of the rods (mm).
-        pin_clearance: pin hole diameter minus pin diameter (mm).
-        knuckle_radius: outer radius of the knuckles (mm).
-        tongue_thickness: thickness of the middle layer (mm).
-        layer_gap: axial clearance between tongue and prongs (mm).
-        radial_gap: clearance around a partner's knuckle (mm).
-    """
-
-    layout: str
-    pin_diameter: float
-    pin_clearance: float
-    knuckle_radius: float
-    tongue_thickness: float
-    layer_gap: float
-    radial_gap: float
-
-    @property
-    def hole_diameter(self) -> float:
-        """Diameter of the pin hole (mm)."""
-        return self.pin_diameter + self.pin_clearance
-
-    @property
-    def zone_radius(self) -> float:
-        """Radius of the hinge zone around each axis (mm)."""
-        return self.knuckle_radius + self.radial_gap
-
-    def knuckle(self, joint: int) -> str:
-        """'tongue' or 'fork': the knuckle at the first (0) or second (1) joint."""
-        first, second = self.layout.split("-")
-        return first if joint == 0 else second
 
 
 @dataclass(frozen=True)
@@ -197,6 +126,18 @@ class RodGeometry:
         hinge: the hinge geometry.
         first: end shape at the first joint (origin).
         second: end shape at the second joint (length, 0, 0).
+        body_height: a graduated rod's body height between its hinge ends (mm), or None:
+            ``height`` throughout. The body keeps its bottom (-y) face at -height/2, the
+            face a rod is printed on, so a body of another height changes only its top:
+            a lower body keeps the family's ``height`` within ``end_reach`` of each hinge
+            axis (the end faces and stops stay the family's, a step down behind them); a
+            higher body is higher up to its end faces (they reach higher).
+        body_thickness: a graduated rod's body thickness (mm), or None: ``thickness``
+            throughout. Within ``end_reach`` of each hinge axis the rod keeps the
+            family's ``thickness`` (the hinge layers): a thinner body at its fork end
+            (which holds the prongs), a thicker body at both ends.
+        end_reach: (first, second) how far behind each hinge axis, along the centreline,
+            the rod keeps the family's section (mm); None for a rod of one section.
     """
 
     length: float
@@ -206,6 +147,109 @@ class RodGeometry:
     hinge: Hinge
     first: EndShape
     second: EndShape
+    body_height: float | None = None
+    body_thickness: float | None = None
+    end_reach: tuple[float, float] | None = None
+
+    @property
+    def graduated(self) -> bool:
+        """Whether the body's section differs from the hinge ends' (a scaled rod)."""
+        return self.end_reach is not None and (self.body_h != self.height or self.body_t != self.thickness)
+
+    @property
+    def body_h(self) -> float:
+        """The body's height (mm)."""
+        return self.height if self.body_height is None else self.body_height
+
+    @property
+    def body_t(self) -> float:
+        """The body's thickness (mm)."""
+        return self.thickness if self.body_thickness is None else self.body_thickness
+
+    @property
+    def body_top(self) -> float:
+        """The body's top (+y) offset from the centreline (mm): -height/2 + body height."""
+        return -self.height / 2 + self.body_h
+
+    @property
+    def max_height(self) -> float:
+        """The largest section height anywhere on the rod (mm)."""
+        return max(self.height, self.body_h)
+
+    @property
+    def max_thickness(self) -> float:
+        """The largest thickness anywhere on the rod (mm)."""
+        return max(self.thickness, self.body_t)
+
+    @property
+    def stub(self) -> float:
+        """How far the raw body continues past each hinge axis before the end cuts (mm)."""
+        return 1.2 * self.max_height + 2.0
+
+    def frame(self, joint: int) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
+        """Pin position P, outward tangent u and the rod's +y normal v at a joint (0 or 1)."""
+        psi = math.radians(self.half_angle_deg)
+        if joint == 0:
+            p, fx, fy = (0.0, 0.0), math.cos(-psi), math.sin(-psi)
+            u = (-fx, -fy)
+        else:
+            p, fx, fy = (self.length, 0.0), math.cos(psi), math.sin(psi)
+            u = (fx, fy)
+        return p, u, (-fy, fx)
+
+    def end_blocks(self) -> list[tuple[tuple[float, float], ...]]:
+        """Per joint, the rectangle (4 corners, counter-clockwise or not) that holds the
+        rod's end within ``end_reach`` of that joint's axis: one side on the line across the
+        centreline ``end_reach`` behind the axis (through the arc's centre on a curved rod),
+        the rest far beyond the end. Empty for a rod of one section."""
+        if self.end_reach is None:
+            return []
+        hmax = self.max_height
+        out = []
+        k = self.curvature
+        for joint, d in ((0, self.end_reach[0]), (1, self.end_reach[1])):
+            p, u, _ = self.frame(joint)
+            if k == 0:
+                q = (p[0] - u[0] * d, p[1] - u[1] * d)
+                t = u
+            else:
+                psi = abs(math.radians(self.half_angle_deg))
+                c = (self.length / 2, math.copysign(1 / abs(k), k) * math.cos(psi))
+                beta = k * d if joint == 0 else -k * d
+                cb, sb = math.cos(beta), math.sin(beta)
+                w = (p[0] - c[0], p[1] - c[1])
+                q = (c[0] + cb * w[0] - sb * w[1], c[1] + sb * w[0] + cb * w[1])
+                t = (cb * u[0] - sb * u[1], sb * u[0] + cb * u[1])
+            e = (-t[1], t[0])
+            rl = d + 2 * self.stub + 2 * hmax
+            rw = 2 * hmax + self.stub + d
+            out.append(((q[0] + e[0] * rw, q[1] + e[1] * rw), (q[0] - e[0] * rw, q[1] - e[1] * rw),
+                        (q[0] - e[0] * rw + t[0] * rl, q[1] - e[1] * rw + t[1] * rl),
+                        (q[0] + e[0] * rw + t[0] * rl, q[1] + e[1] * rw + t[1] * rl)))
+        return out
+
+    def cut_reach(self, side: int, tan_chamfer: float) -> float:
+        """How far from the centreline the prism cutting an end face reaches (mm): past the
+        side (``side`` +1 top, -1 bottom) and the arc bending away behind the face; on a
+        graduated rod whose top is the inner side of its arc (curvature > 0), up to that
+        side's height at the rod's middle, so that the two ends' cuts leave no island of it."""
+        reach = (max(self.height / 2, self.body_top) if side > 0 else self.height / 2) + 1.0
+        behind = reach * max(tan_chamfer, 0.0)
+        reach += behind**2 * abs(self.curvature) / 2 + 1.0
+        if side > 0 and self.graduated and self.curvature > 0 and tan_chamfer > 0:
+            rho = 1 / self.curvature
+            psi = abs(math.radians(self.half_angle_deg))
+            reach = max(reach, rho - (rho - self.body_top) * math.cos(psi) + 1.0)
+        return reach
+
+    def key_data(self) -> dict[str, Any]:
+        """Every parameter as plain data for cache keys: a rod of one section gives the
+        same data as before graduated rods existed (its shipped seeds stay valid)."""
+        data = asdict(self)
+        for k in ("body_height", "body_thickness", "end_reach"):
+            if data[k] is None:
+                del data[k]
+        return data
 
     @property
     def half_angle_deg(self) -> float:
@@ -221,100 +265,7 @@ class RodGeometry:
 
     def digest(self) -> str:
         """Stable hash of every parameter (used for disk caches)."""
-        return json_digest(asdict(self))
-
-
-@dataclass(frozen=True)
-class Material:
-    """Printing material.
-
-    Attributes:
-        name: e.g. 'PLA'.
-        density: g/cm^3 (PLA about 1.24).
-        min_wall: thinnest wall printed reliably, also the least plastic kept
-            around cavities and ball sockets (mm).
-    """
-
-    name: str
-    density: float
-    min_wall: float
-
-
-@dataclass(frozen=True)
-class Balls:
-    """Metal balls a rod may hold in closed sockets (inserted at a print pause).
-
-    Attributes:
-        diameter: ball diameter (mm).
-        density: g/cm^3 (steel 7.85).
-        clearance: socket diameter minus ball diameter (mm).
-        name: free text, e.g. 'steel 5 mm'.
-    """
-
-    diameter: float
-    density: float
-    clearance: float
-    name: str = ""
-
-    @property
-    def mass(self) -> float:
-        """Mass of one ball (g)."""
-        return math.pi / 6 * self.diameter**3 * self.density / 1000.0
-
-    @property
-    def socket_diameter(self) -> float:
-        """Diameter of the spherical socket holding one ball (mm)."""
-        return self.diameter + self.clearance
-
-
-@dataclass(frozen=True)
-class Fill:
-    """Loose dense shot a rod's chamber may be filled with at a print pause (rods printed to
-    order; see :mod:`rodcad.catalog.chamber`).
-
-    Attributes:
-        name: e.g. 'tungsten shot'.
-        density: of the metal (g/cm^3): tungsten 19.3, lead 11.35, steel 7.85.
-        packing: fraction of the chamber the shot fills (random loose packing of spheres
-            about 0.6).
-    """
-
-    name: str
-    density: float
-    packing: float
-
-    @property
-    def effective_density(self) -> float:
-        """Grams of shot per cm^3 of chamber (g/cm^3)."""
-        return self.density * self.packing
-
-
-@dataclass(frozen=True)
-class Printer:
-    """The printer a catalog is sized for.
-
-    Attributes:
-        build_volume: (x, y, z) of the build volume (mm).
-        nozzle: nozzle diameter (mm).
-        name: free text.
-    """
-
-    build_volume: tuple[float, float, float]
-    nozzle: float
-    name: str = ""
-
-
-@dataclass(frozen=True)
-class Origin:
-    """Where something was defined, for problems found after loading."""
-
-    file: str
-    key: str
-    line: int
-    column: int
-
-    def problem(self, message: str, key: str | None = None) -> Problem:
-        return Problem(self.file, self.line, self.column, self.key if key is None else key, message)
+        return json_digest(self.key_data())
 
 
 @dataclass(frozen=True)
@@ -381,12 +332,15 @@ class Ranges:
         stops: (min, max) stop angles the design may print at a joint (flush ends whose
             top chamfers add up to the bend), or None: the family's own ends only.
         resolution: every length a multiple of this (mm), or None: as designed.
+        scale: (min, max) scale of the body's section (graduated rods: the hinge ends stay
+            the family's, see :class:`RodGeometry`), or None: the family's section only.
     """
 
     length: tuple[float, float]
     curvature: tuple[float, float]
     stops: tuple[float, float] | None
     resolution: float | None = None
+    scale: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -408,6 +362,54 @@ class Family:
     @property
     def printed_to_order(self) -> bool:
         return self.ranges is not None
+
+
+def end_reach(g: RodGeometry, min_wall: float) -> tuple[float, float]:
+    """How far behind each hinge axis a graduated rod keeps its family's section (mm): past
+    its top end face's far corner (a lower body steps down only behind it, so the end faces
+    and stops stay whole) and past the hinge zone, plus the minimum wall."""
+    out = []
+    for e in (g.first, g.second):
+        corner = e.setback + g.height / 2 * max(math.tan(math.radians(e.top_chamfer)), 0.0)
+        out.append(max(corner, e.setback, g.hinge.zone_radius) + min_wall)
+    return (out[0], out[1])
+
+
+def graduated(g: RodGeometry, scale: float, min_wall: float) -> RodGeometry:
+    """The rod ``g`` (the family's section) with its body's section scaled by ``scale``
+    (see :class:`RodGeometry`: the hinge ends stay ``g``'s)."""
+    if scale == 1.0:
+        return g
+    return dataclasses.replace(g, body_height=g.height * scale, body_thickness=g.thickness * scale,
+                               end_reach=end_reach(g, min_wall))
+
+
+#: A curved graduated rod's body is at most this fraction of its arc's radius high.
+CURVED_BODY = 0.8
+
+
+def max_body_scale(g: RodGeometry, min_wall: float) -> float:
+    """The largest body scale (at least 1) at which a rod of ``g``'s length, curvature and ends
+    keeps at least ``min_wall`` of top edge between its two top end faces (a higher body
+    makes them reach higher; on a curved rod the chord of the top side), and a curved rod's
+    body at most :data:`CURVED_BODY` of its radius high. A lower body keeps the family's ends: every scale up to 1."""
+    # a face leaning forward (negative chamfer) reaches over the partner as far as one leaning
+    # back cuts into the top: count both
+    tans = sum(abs(math.tan(math.radians(e.top_chamfer))) for e in (g.first, g.second))
+    setbacks = g.first.setback + g.second.setback
+    if g.curvature == 0:
+        arc, bend = g.length, 0.0
+    else:  # the chord of the top side's arc (the inner side's for k > 0): shorter than its arc
+        arc, bend = g.length, g.length * g.curvature
+    # the top side at offset w spans (L - L k w); the faces take setback + w tan(chamfer)
+    den = tans + bend
+    scale = math.inf
+    if den > 0:
+        w = (arc - setbacks - min_wall) / den
+        scale = (w + g.height / 2) / g.height
+    if g.curvature:  # a body higher than 0.8 of its radius leaves too tight an inner side
+        scale = min(scale, CURVED_BODY * (1 / abs(g.curvature)) / g.height)
+    return max(1.0, scale)
 
 
 def _fmt(x: float, digits: int) -> str:
@@ -483,7 +485,7 @@ class Catalog:
         """The families printed to order (with ranges), in catalog order."""
         return [f for f in self.families if f.ranges is not None]
 
-    def rod(self, family: str, length: float, curvature: float = 0.0, *,
+    def rod(self, family: str, length: float, curvature: float = 0.0, *, scale: float = 1.0,
             first_stop: float | None = None, second_stop: float | None = None,
             first_under: float | None = None, second_under: float | None = None) -> RodType:
         """A rod of a family printed to order with its own parameters.
@@ -492,21 +494,36 @@ class Catalog:
             family: the family's name (it must have ranges).
             length: pin to pin (mm).
             curvature: signed curvature (1/mm).
+            scale: scale of the body's section (a family with a ``scale`` range; 1 is the
+                family's section): height and thickness times ``scale``, the hinge ends
+                (knuckles, pins, end faces) the family's, so any rod joins any other
+                (:class:`RodGeometry`). Within :meth:`scale_range`.
             first_stop, second_stop: top chamfer (deg) of a flush stop end (setback 0) at the
                 first / second joint (the joint cannot bend further), or None.
             first_under, second_under: bottom chamfer (deg) of a flush end whose bottom
                 face stops the joint from straightening further, or None.
 
         An end without a stop is the family's own. The name encodes the parameters:
-        ``<family>-<length>[-k<curvature x 1000>][-a<first top>][-b<second top>]
+        ``<family>-<length>[-s<scale>][-k<curvature x 1000>][-a<first top>][-b<second top>]
         [-c<first bottom>][-d<second bottom>]`` (chamfers of the stop faces), rounded to
-        0.001; the rod itself keeps the exact values.
+        0.001 (no ``-s`` at scale 1); the rod itself keeps the exact values.
+
+        Raises:
+            ValueError: the family is not printed to order, or the scale is outside its range.
         """
         fam = self.family(family)
         if fam.template is None:
             raise ValueError(f"rod family {family!r} is not printed to order (it has no ranges)")
         t = fam.template
         g = t.geometry
+        scale = float(scale)
+        assert fam.ranges is not None
+        rs = fam.ranges.scale
+        if rs is None and scale != t.scale:
+            raise ValueError(f"rod family {family!r} has one scale ({t.scale:g}); give it a scale range "
+                             f"{{min, max}} for rods of scale {scale:g}")
+        if rs is not None and not rs[0] - 1e-9 <= scale <= rs[1] + 1e-9:
+            raise ValueError(f"scale {scale:g} is outside rod family {family!r}'s range {rs[0]:g} to {rs[1]:g}")
 
         def end(own: EndShape, top: float | None, under: float | None) -> EndShape:
             if top is None and under is None:
@@ -517,14 +534,36 @@ class Catalog:
         first = end(g.first, first_stop, first_under)
         second = end(g.second, second_stop, second_under)
         geom = RodGeometry(float(length), g.height, g.thickness, float(curvature), g.hinge, first, second)
+        if rs is not None and scale != 1.0:
+            geom = graduated(geom, scale, t.material.min_wall)
         name = f"{family}-{_fmt(length, 3)}"
+        if rs is not None and scale != 1.0:
+            name += f"-s{_fmt(scale, 3)}"
         if curvature:
             name += f"-k{_fmt(curvature * 1000, 3)}"
         for tag, value in (("a", first_stop), ("b", second_stop), ("c", first_under), ("d", second_under)):
             if value is not None:
                 name += f"-{tag}{_fmt(value, 3)}"
-        return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin,
-                       t.fill, t.heavier, t.friction)
+        return RodType(name, family, float(length), scale if rs is not None else t.scale, float(curvature), geom,
+                       t.material, t.balls, t.origin, t.fill, t.heavier, t.friction)
+
+    def scale_range(self, family: str, length: float, curvature: float = 0.0, *,
+                    first_stop: float | None = None, second_stop: float | None = None,
+                    first_under: float | None = None, second_under: float | None = None) -> tuple[float, float]:
+        """The scales a rod of these parameters can be printed at: the family's scale range,
+        above which its top end faces would leave less than the minimum wall of top edge
+        between them (:func:`max_body_scale`). (1, 1) for a family without a scale range."""
+        fam = self.family(family)
+        if fam.template is None or fam.ranges is None:
+            raise ValueError(f"rod family {family!r} is not printed to order (it has no ranges)")
+        rs = fam.ranges.scale
+        if rs is None:
+            return (fam.template.scale, fam.template.scale)
+        rod = self.rod(family, length, curvature, scale=1.0 if rs[0] <= 1 <= rs[1] else rs[0],
+                       first_stop=first_stop, second_stop=second_stop, first_under=first_under,
+                       second_under=second_under)
+        top = max_body_scale(rod.geometry, rod.material.min_wall)
+        return (rs[0], max(rs[0], min(rs[1], top)))
 
     def with_types(self, types: Sequence[RodType]) -> Catalog:
         """This catalog with rods made to order added (a name already known is kept).

@@ -29,10 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from rodcad.catalog.fastgeom import rod_mass_properties
-from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, max_curvature
+from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType, graduated, max_curvature
 
-__all__ = ["MassTable", "RodNumbers", "SHAPE_MARGIN", "TABLE_STEP", "mass_table", "rod_numbers",
-           "sample_pairs", "stop_chamfer", "table_lengths"]
+__all__ = ["MassTable", "RodNumbers", "SCALE_STEP", "SHAPE_MARGIN", "TABLE_STEP", "mass_table", "rod_numbers",
+           "sample_pairs", "stop_chamfer", "table_lengths", "table_scales"]
 
 #: Spacing of the lengths at which a family's mass range is computed on the solids (mm).
 TABLE_STEP = 5.0
@@ -45,29 +45,44 @@ ON_GRID = 1e-6
 SHAPE_MARGIN = 0.9
 
 
+#: Spacing of the scales at which a graduated family's mass range is computed.
+SCALE_STEP = 0.1
+
+
 @dataclass(frozen=True)
 class MassTable:
-    """A family's mass range along its length range (straight rods, the family's ends).
+    """A family's mass range along its length range (straight rods, the family's ends) and,
+    for graduated rods, its scale range.
 
     Attributes:
         lengths: (K,) table lengths (mm), from the range's min to its max.
-        removable: (K,) fraction of the solid's mass the cavities can remove.
-        addable: (K,) mass the balls can add, less the plastic their sockets take (g).
+        removable: (K,) or (K, S) fraction of the solid's mass the cavities can remove.
+        addable: (K,) or (K, S) mass the balls can add, less the plastic their sockets take (g).
+        scales: (S,) table scales (a family with a scale range), or None: one scale.
     """
 
     lengths: np.ndarray
     removable: np.ndarray
     addable: np.ndarray
+    scales: np.ndarray | None = None
 
-    def at(self, length: float) -> tuple[float, float]:
-        """(removable fraction, addable g) for a rod of this length: the smaller of the two
-        table entries around it."""
-        on = np.flatnonzero(np.abs(self.lengths - length) <= ON_GRID)
-        if on.size:  # a table length, to round-off
-            return float(self.removable[on[0]]), float(self.addable[on[0]])
-        k = int(np.clip(np.searchsorted(self.lengths, length, side="right") - 1, 0, self.lengths.size - 1))
-        j = min(k + 1, self.lengths.size - 1)
-        return float(min(self.removable[k], self.removable[j])), float(min(self.addable[k], self.addable[j]))
+    def at(self, length: float, scale: float = 1.0) -> tuple[float, float]:
+        """(removable fraction, addable g) for a rod of this length and scale: the smallest of
+        the table entries around it (each grows with length and scale)."""
+        ks = _around(self.lengths, length)
+        if self.scales is None:
+            return float(self.removable[ks].min()), float(self.addable[ks].min())
+        ss = _around(self.scales, scale)
+        return float(self.removable[np.ix_(ks, ss)].min()), float(self.addable[np.ix_(ks, ss)].min())
+
+
+def _around(grid: np.ndarray, x: float) -> list[int]:
+    """The grid index at ``x`` (to round-off), or the two around it (clamped at the ends)."""
+    on = np.flatnonzero(np.abs(grid - x) <= ON_GRID)
+    if on.size:
+        return [int(on[0])]
+    k = int(np.clip(np.searchsorted(grid, x, side="right") - 1, 0, grid.size - 1))
+    return sorted({k, min(k + 1, grid.size - 1)})
 
 
 @dataclass(frozen=True)
@@ -93,6 +108,22 @@ def table_lengths(family: Family) -> list[float]:
     return [float(x) for x in np.linspace(lo, hi, n + 1)]
 
 
+def table_scales(family: Family) -> list[float]:
+    """The scales of a graduated family's mass table: the range's ends, scale 1 (the family's
+    own rods, read exactly as without a scale range) and at most SCALE_STEP apart ([] for a
+    family of one scale)."""
+    assert family.ranges is not None
+    if family.ranges.scale is None:
+        return []
+    lo, hi = family.ranges.scale
+    knots = [lo] + ([1.0] if lo < 1.0 < hi else []) + [hi]
+    out: list[float] = [lo]
+    for a, b in zip(knots[:-1], knots[1:]):
+        n = max(1, math.ceil((b - a) / SCALE_STEP - 1e-9))
+        out += [float(x) for x in np.linspace(a, b, n + 1)[1:]]
+    return out
+
+
 def mass_table(family: Family, *, jobs: int | None = None) -> MassTable:
     """The family's mass table from the solids (disk-cached per rod)."""
     from dataclasses import replace
@@ -104,13 +135,26 @@ def mass_table(family: Family, *, jobs: int | None = None) -> MassTable:
     t = family.template
     if t.fill is not None:  # its rods' ranges come from their chambers: no table to compute
         return MassTable(np.zeros(0), np.zeros(0), np.zeros(0))
-    rods = [replace(t, name=f"{family.name}-table-{x:g}", length=x, curvature=0.0,
-                    geometry=replace(t.geometry, length=x, curvature=0.0)) for x in table_lengths(family)]
+    scales = table_scales(family)
+    grid = [(x, s) for x in table_lengths(family) for s in (scales or [None])]
+
+    def rod(x: float, s: float | None) -> RodType:
+        g = replace(t.geometry, length=x, curvature=0.0)
+        if s is None:
+            return replace(t, name=f"{family.name}-table-{x:g}", length=x, curvature=0.0, geometry=g)
+        return replace(t, name=f"{family.name}-table-{x:g}-s{s:g}", length=x, curvature=0.0, scale=s,
+                       geometry=graduated(g, s, t.material.min_wall))
+
+    rods = [rod(x, s) for x, s in grid]
     by_name = mass_infos(rods, jobs=jobs)
     infos = [by_name[r.name] for r in rods]
     removable = np.array([(i.solid_mass - i.m_min) / i.solid_mass for i in infos])
     addable = np.array([i.m_max - i.solid_mass for i in infos])
-    return MassTable(np.array([r.length for r in rods]), removable, addable)
+    lengths = np.array(table_lengths(family))
+    if scales:
+        shape = (lengths.size, len(scales))
+        return MassTable(lengths, removable.reshape(shape), addable.reshape(shape), np.array(scales))
+    return MassTable(lengths, removable, addable)
 
 
 def _plain(g: RodGeometry, template: RodType) -> bool:
@@ -131,7 +175,7 @@ def rod_numbers(rod: RodType, table: MassTable | None, template: RodType) -> Rod
         raise ValueError(f"rod {rod.name!r}: a mass table is needed (it has no fill)")
     volume, (cx, cy, _) = rod_mass_properties(rod.geometry)
     solid = volume * rod.material.density / 1000.0
-    removable, addable = table.at(rod.length)
+    removable, addable = table.at(rod.length, rod.scale)
     if not _plain(rod.geometry, template):
         removable, addable = removable * SHAPE_MARGIN, addable * SHAPE_MARGIN
     return RodNumbers(solid, (cx, cy), (solid * (1 - removable), solid + max(addable, 0.0)))
@@ -157,6 +201,9 @@ def sample_pairs(catalog: Catalog, family: Family) -> list[tuple[RodType, RodTyp
         k = math.copysign(min(abs(k), max_curvature(length)), k)
         return catalog.rod(family.name, length, k, **ends)
 
+    def graded(length: float, scale: float, **ends: float) -> RodType:
+        return catalog.rod(family.name, length, 0.0, scale=scale, **ends)
+
     def chamfer(s: float, a: tuple[float, float], b: tuple[float, float]) -> float:
         c = stop_chamfer(s, rod(*a).geometry, rod(*b).geometry)
         return min(max(c, r.stops[0] / 2), r.stops[1] / 2) if r.stops else c
@@ -170,4 +217,13 @@ def sample_pairs(catalog: Catalog, family: Family) -> list[tuple[RodType, RodTyp
         for s, a, b in ((r.stops[1] / 2, (l1, k1), (l0, k1)), (r.stops[0] / 2, (l0, 0.0), (l1, k0))):
             c = -chamfer(s, a, b)
             pairs.append((rod(*a, second_under=c), rod(*b, first_under=c)))
+    if r.scale is not None:  # graduated rods: the thinnest next to the thickest, free and on stops
+        s0, s1 = r.scale
+        pairs += [(graded(l1, s0), graded(l1, s1)), (graded(l1, s1), graded(l1, s0))]
+        if r.stops is not None:
+            for s in (r.stops[1], r.stops[0] / 2):  # (a concave top stop at the range's end meets the
+                # family's bottom faces too: the joint is fused there, tried above on curved rods)
+                pairs.append((graded(l1, s1, second_stop=s / 2), graded(l1, s0, first_stop=s / 2)))
+            c = -r.stops[1] / 4
+            pairs.append((graded(l1, s0, second_under=c), graded(l1, s1, first_under=c)))
     return pairs

@@ -133,11 +133,15 @@ def family_spec() -> Obj:
                 "a range {min, max} makes rods printed to order, each at the length its place needs.",
             ),
             "scale": Field(
-                num_list(Num(exclusive_minimum=0, maximum=10)),
+                ListOrRange(Num(exclusive_minimum=0, maximum=10), what="scale"),
                 default=[1.0],
-                description="Cross-section scale factor: multiplies section height and thickness, "
-                "knuckle radius and tongue thickness (not pins, gaps or setbacks); a list makes "
-                "one type per value. Types of different scale do not join.",
+                description="Cross-section scale factor. A list makes one type per value, each "
+                "scaling section height and thickness, knuckle radius and tongue thickness (not pins, "
+                "gaps or setbacks); types of different scale do not join. A range {min, max} (rods "
+                "printed to order) makes graduated rods: each rod's body section (height and "
+                "thickness) at its own scale while its hinge ends (knuckles, pins, end faces) stay "
+                "the family's, so any rod joins any other; the body keeps its bottom face, the one it "
+                "is printed on (see rodcad.catalog.model.RodGeometry).",
             ),
             "curvature": Field(
                 ListOrRange(Num(minimum=-1, maximum=1, unit="1/mm"), what="curvature (1/mm)"),

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rodcad.catalog.loader import load_catalog
-from rodcad.catalog.model import Catalog, EndShape, RodType
+from rodcad.catalog.model import Catalog, EndShape, RodType, graduated
 from rodcad.check.built import BuiltChain
 from rodcad.errors import InputError
 from rodcad.outputs.design_json import rod_params
@@ -87,7 +87,12 @@ def _printed(catalog: Catalog, name: str, params: dict) -> RodType | None:
     geom = dataclasses.replace(t.geometry, length=float(params["length"]), curvature=float(params["curvature"]),
                                first=EndShape(**{k: float(v) for k, v in ends["first"].items()}),
                                second=EndShape(**{k: float(v) for k, v in ends["second"].items()}))
-    return dataclasses.replace(t, name=name, length=geom.length, curvature=geom.curvature, geometry=geom)
+    scale = float(params.get("scale", t.scale))
+    if fam.ranges is not None and fam.ranges.scale is not None:  # a graduated rod: its body at its scale
+        geom = graduated(geom, scale, t.material.min_wall)
+    else:
+        scale = t.scale
+    return dataclasses.replace(t, name=name, length=geom.length, curvature=geom.curvature, geometry=geom, scale=scale)
 
 
 def chain_types(built: BuiltChain) -> ChainTypes:

@@ -197,6 +197,7 @@ def _family_json(f: Any, catalog: Catalog) -> dict[str, Any]:
         fill = f.template.fill if f.template is not None else None
         return {"name": f.name, "printed_to_order": True, "length": list(r.length),
                 "curvature": list(r.curvature), "stops_deg": list(r.stops) if r.stops else None,
+                "scale": list(r.scale) if r.scale else None, "mass_span": _mass_span_json(f, catalog),
                 "fill": None if fill is None else {"name": fill.name, "density": fill.density,
                                                    "packing": fill.packing},
                 "balls": _kinds_json(f.template), "types": list(f.type_names)}
@@ -204,6 +205,25 @@ def _family_json(f: Any, catalog: Catalog) -> dict[str, Any]:
     return {"name": f.name, "printed_to_order": False, "length": sorted({t.length for t in ts}),
             "curvature": sorted({t.curvature for t in ts}), "stops_deg": None, "balls": _kinds_json(ts[0]),
             "types": list(f.type_names)}
+
+
+def _mass_span_json(f: Any, catalog: Catalog) -> list[dict[str, Any]] | None:
+    """A graduated family's mass span per table length: the lightest rod (its lowest scale,
+    most cavities) to the heaviest (the highest scale that length takes, most balls), straight
+    rods with the family's ends (from the family's mass table and the closed-form solids)."""
+    from rodcad.catalog.printed import mass_table, table_lengths
+    from rodcad.catalog.scaling import mass_span
+
+    if f.ranges is None or f.ranges.scale is None:
+        return None
+    table = mass_table(f)
+    out = []
+    for length in table_lengths(f):
+        lo, hi = mass_span(catalog, f.name, table, length)
+        s_lo, s_hi = catalog.scale_range(f.name, length)
+        out.append({"length": length, "scales": [round(s_lo, 4), round(s_hi, 4)], "mass": [round(lo, 4), round(hi, 4)],
+                    "ratio": round(hi / lo, 3)})
+    return out
 
 
 def _kinds_json(t: Any) -> list[dict[str, Any]]:
@@ -227,6 +247,9 @@ def _family_lines(families: list[dict[str, Any]]) -> list[str]:
             text += f", stops printed at any bend from {f['stops_deg'][0]:g} to {f['stops_deg'][1]:g} deg"
         else:
             text += ", no stops printed to order"
+        if f.get("scale"):
+            text += (f", body scale {f['scale'][0]:g} to {f['scale'][1]:g} (graduated: the hinge ends stay the "
+                     "family's)")
         if f.get("fill"):
             text += (f"; masses from one chamber per rod, empty or filled with {f['fill']['name']} "
                      f"({f['fill']['density']:g} g/cm^3 at {f['fill']['packing']:g} packing)")
@@ -234,6 +257,10 @@ def _family_lines(families: list[dict[str, Any]]) -> list[str]:
             text += "; balls: " + ", then ".join(f"{ball_text(b['diameter'], b['kind'] or '')} ({b['density']:g} g/cm^3)"
                                                  for b in f["balls"])
         lines.append(text + f" (reference types {', '.join(f['types'])})")
+        if f.get("mass_span"):
+            lines.append("    mass span at one length (straight, lightest scale with cavities to heaviest with balls):")
+            lines += [f"      {m['length']:g} mm: {m['mass'][0]:.2f} to {m['mass'][1]:.2f} g ({m['ratio']:.1f}:1, "
+                      f"scale {m['scales'][0]:g} to {m['scales'][1]:.3g})" for m in f["mass_span"]]
     return lines + [""]
 
 

@@ -30,17 +30,20 @@ forbids stops, ``anchor_stops: none`` the fixture's, ``fuse: never`` fused piece
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from optimize.inverse import design
 from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
 from rodcad.design.asprinted import joint_bands, narrower, too_wide
-from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
+from rodcad.design.laying import (HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, graduate,
+                                  lay_rods)
 
 __all__ = ["Allowed", "Decision", "EXTRA_ROUNDS", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
 
@@ -175,6 +178,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             beyond.append(j)
     if mirrored:
         fused |= {_mirror(j, n) for j in fused}
+    graded = r.scale is not None and r.scale[1] > r.scale[0] and not same
     locks: set[int] = set()
     ends_allowed = (0, 1) if allowed.anchor_stops else ()
     best: Decision | None = None
@@ -187,7 +191,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         t_round = time.perf_counter()
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
-                        end_limits=end_limits, fused=fused)
+                        end_limits=end_limits, fused=fused, spans=graded)
         optional = [j for j in range(n - 1) if printable(j) and j not in forced and j not in rigid]
         need = needed_stop_sides(bare.problem, optional, forced=[j for j in forced if j not in rigid],
                                  ends=ends_allowed, end_weight=END_WEIGHT)
@@ -208,8 +212,11 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         if robust is not None:  # design option robust: the accepted design's stops stay, the held joints added
             stops.update({j: v for j, v in robust[0].stops.items() if j not in stops})
             ends.update({k: v for k, v in robust[0].ends.items() if k not in ends})
-        laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, limits=True, same=same,
-                        end_limits=end_limits_for(points, ends, end_limits), fused=fused)
+        lay = dict(limits=True, same=same, end_limits=end_limits_for(points, ends, end_limits), fused=fused)
+        laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, spans=graded, **lay)
+        if graded:  # each rod's scale for the mass the statics give it, then its own numbers
+            laid = _graded(catalog, pf, laid, lambda sc: lay_rods(catalog, pf, points, lengths, kappa, phi, stops,
+                                                                   scales=sc, **lay), mirrored)
         verdict = masses = None
         if allowed.verify and n > 1:
             if report is not None:
@@ -254,6 +261,33 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                 (locks if printable(m) else fused).add(m)
     assert best is not None
     return best
+
+
+#: Rounds of choosing scales for the masses and the masses for the scales' centres of mass.
+GRADE_ROUNDS = 3
+
+#: Simulator calls of the best fit over the scales' mass spans, where no masses balance the
+#: target.
+GRADE_NFEV = 100
+
+
+def _graded(catalog: Catalog, pf: PrintedFamily, spans: Laid, lay, mirrored: bool) -> Laid:
+    """The rods at the scales their masses need: the masses from the statics over each rod's
+    span of scales, each rod's scale for its mass (:func:`rodcad.design.laying.graduate`),
+    then the masses again with the rods' own centres of mass and ranges, until every mass
+    lies in its rod's range (at most :data:`GRADE_ROUNDS` times)."""
+    problem, laid = spans.problem, spans
+    for _ in range(GRADE_ROUNDS):
+        masses, _, reachable, _ = exact_masses(problem)
+        if not reachable:  # the best fit over the spans (the scales then hold its masses)
+            masses = design(problem, "refine", max_nfev=GRADE_NFEV).masses
+        if mirrored:  # a symmetric target's rods in mirror pairs, as its stops
+            masses = (masses + masses[::-1]) / 2
+        laid = lay(tuple(graduate(catalog, pf, spans, masses)))
+        if exact_masses(laid.problem)[2]:
+            break
+        problem = dataclasses.replace(spans.problem, com=laid.problem.com)  # the spans, the scaled rods' coms
+    return laid
 
 
 def _symmetrize(stops: dict[int, tuple[float, int]], ends: dict[int, int], n: int, deg: np.ndarray,

@@ -14,7 +14,7 @@ way before its rods are united). Each rod's centre of mass and mass range come f
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
@@ -23,9 +23,10 @@ from optimize import InverseProblem
 from rodcad.catalog.jointlimits import joint_limits
 from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType
 from rodcad.catalog.printed import MassTable, rod_numbers
+from rodcad.catalog.scaling import mass_span, scale_for_mass
 
 __all__ = ["HI", "LO", "LOCK", "Laid", "PrintedFamily", "SAME_ROD", "SAFE_MARGIN_DEG", "STOP_SNAP_DEG",
-           "end_limits_for", "free_limits", "free_turn_range", "lay_rods"]
+           "end_limits_for", "free_limits", "free_turn_range", "graduate", "lay_rods"]
 
 #: A stop printed to order must stop, by the rods' outlines, within this of the bend it is
 #: made for (deg); it is designed exactly at the bend.
@@ -47,15 +48,15 @@ def _limits(left: RodGeometry, right: RodGeometry) -> tuple[float, float]:
 
 
 #: Rods whose parameters (length mm, curvature 1/mm, setbacks mm, chamfers deg) agree to
-#: these are made identical (a symmetric target's mirror images differ by round-off and by
+#: these (and scale) are made identical (a symmetric target's mirror images differ by round-off and by
 #: the curve's sampling): one solid to build, one name.
-SAME_ROD = (1e-9, 1e-7, 1e-9, 1e-6, 1e-6, 1e-9, 1e-6, 1e-6)
+SAME_ROD = (1e-9, 1e-7, 1e-9, 1e-6, 1e-6, 1e-9, 1e-6, 1e-6, 1e-6)
 
 
 def _params(t: RodType) -> tuple[float, ...]:
     g = t.geometry
     return (g.length, g.curvature, g.first.setback, g.first.top_chamfer, g.first.bottom_chamfer,
-            g.second.setback, g.second.top_chamfer, g.second.bottom_chamfer)
+            g.second.setback, g.second.top_chamfer, g.second.bottom_chamfer, t.scale)
 
 
 def _unique(rods: list[RodType], catalog: Catalog) -> list[RodType]:
@@ -87,12 +88,18 @@ class Laid:
         problem: the inverse problem with these rods' numbers.
         notes: what the rods could not do, in words.
         unmet: joints whose bend these rods cannot hold.
+        spans: the problem's mass bounds are each rod's span over the scales it can be
+            printed at (a graduated family before its scales are chosen, :func:`graduate`).
+        params: per rod (length mm, curvature 1/mm, Catalog.rod's end keywords): what the
+            rod was made from, for choosing its scale.
     """
 
     rods: list[RodType]
     problem: InverseProblem
     notes: list[str]
     unmet: list[int]
+    spans: bool = False
+    params: list[tuple[float, float, dict[str, float]]] = field(default_factory=list)
 
 
 #: Stop sides: a hi stop keeps the joint from bending further (top faces meet), a lo stop
@@ -120,7 +127,8 @@ def end_limits_for(points: np.ndarray, ends: dict[int, int], given: np.ndarray |
 
 def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
              phi: np.ndarray, stops: dict[int, tuple[float, int]], limits: bool = True, same: bool = False,
-             end_limits: np.ndarray | None = None, fused: frozenset[int] | set[int] = frozenset()) -> Laid:
+             end_limits: np.ndarray | None = None, fused: frozenset[int] | set[int] = frozenset(),
+             scales: np.ndarray | None = None, spans: bool = False) -> Laid:
     """The rods for given stops and their inverse problem.
 
     Args:
@@ -137,6 +145,12 @@ def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: n
         end_limits: the anchor fixtures' bounds on the end rods' angles (rad).
         fused: joints whose rods are printed as one piece: their mitre may lie beyond the
             family's stop range (no faces meet there: the rods are united).
+        scales: each rod's body scale (a graduated family, Catalog.rod's ``scale``), or None:
+            the family's section for every rod.
+        spans: (a graduated family, ``scales`` None) each rod's mass bounds are its span over
+            the scales it can be printed at (:func:`rodcad.catalog.scaling.mass_span`), its
+            centre of mass at scale 1: the statics then choose masses, and :func:`graduate`
+            the scale of each rod that makes its mass.
     """
     fam = pf.family
     r = fam.ranges
@@ -163,11 +177,20 @@ def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: n
         turn = tangent_bends()
     top = {j: turn[j] / 2 for j, (_, side) in stops.items() if side in (HI, LOCK)}
     under = {j: -turn[j] / 2 for j, (_, side) in stops.items() if side in (LO, LOCK)}
-    rods = _unique([catalog.rod(fam.name, float(lengths[i]), float(kappa[i]), first_stop=top.get(i - 1),
-                                second_stop=top.get(i), first_under=under.get(i - 1), second_under=under.get(i))
-                    for i in range(n)], catalog)
+    params = [(float(lengths[i]), float(kappa[i]),
+               {k: v for k, v in (("first_stop", top.get(i - 1)), ("second_stop", top.get(i)),
+                                  ("first_under", under.get(i - 1)), ("second_under", under.get(i)))
+                if v is not None})
+              for i in range(n)]
+    spans = spans and scales is None and r.scale is not None
+    s_ref = 1.0 if r.scale is None else min(max(1.0, r.scale[0]), r.scale[1])
+    rods = _unique([catalog.rod(fam.name, x, k, scale=s_ref if scales is None else float(scales[i]), **e)
+                    for i, (x, k, e) in enumerate(params)], catalog)
     lengths = np.array([t.length for t in rods])  # a rod made one with its twin: the twin's length
     nums = [rod_numbers(t, pf.table, fam.template) for t in rods]
+    if spans:  # each rod's mass over every scale it can be printed at
+        nums = [replace(x, mass_range=mass_span(catalog, fam.name, pf.table, t.length, t.curvature, **e))
+                for x, t, (_, _, e) in zip(nums, rods, params)]
     rows = np.zeros((max(n - 1, 0), 2))
     notes, unmet = [], []
     for j in range(n - 1):
@@ -205,7 +228,23 @@ def lay_rods(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: n
     problem = InverseProblem(target=points, lengths=lengths,
                              mass_bounds=np.array([x.mass_range for x in nums], float),
                              com=np.array([x.com for x in nums], float), limits=rows, end_limits=end_limits)
-    return Laid(rods, problem, notes, unmet)
+    return Laid(rods, problem, notes, unmet, spans, params)
+
+
+def graduate(catalog: Catalog, pf: PrintedFamily, laid: Laid, masses: np.ndarray) -> np.ndarray:
+    """Each rod's scale for its mass (:func:`rodcad.catalog.scaling.scale_for_mass`: the
+    mass nearest the middle of the rod's range at that scale); a mass no scale reaches (the
+    statics' round-off at a bound of the span) takes the nearest end of the scale range."""
+    fam = pf.family
+    out = np.ones(len(laid.rods))
+    for i, (t, m, (_, _, e)) in enumerate(zip(laid.rods, masses, laid.params)):
+        choice = scale_for_mass(catalog, fam.name, pf.table, t.length, float(m), t.curvature, **e)
+        if choice is not None:
+            out[i] = choice.scale
+        else:
+            lo, hi = catalog.scale_range(fam.name, t.length, t.curvature, **e)
+            out[i] = lo if m <= laid.problem.mass_bounds[i].mean() else hi
+    return out
 
 
 def free_limits(catalog: Catalog, pf: PrintedFamily, lengths: np.ndarray, kappa: np.ndarray,

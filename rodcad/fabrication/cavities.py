@@ -204,7 +204,7 @@ def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, so
 
 def cavity_radii(rod: RodType) -> list[float]:
     g = rod.geometry
-    r = min(g.height, g.thickness) / 2 - rod.material.min_wall
+    r = min(g.max_height, g.max_thickness) / 2 - rod.material.min_wall  # a graduated body may be larger
     out = []
     while r >= MIN_CAVITY_RADIUS - 1e-12:
         out.append(r)

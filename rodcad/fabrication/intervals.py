@@ -89,13 +89,38 @@ def _ball_options(rod: RodType) -> list[tuple[float, np.ndarray, float, int]]:
         net = balls_k.mass - void_volume("silo", rs) * rho
         sites = balls.centers - UP * (balls.centers[0] @ UP - info.com[1])
         orbs = orbits(sites, (info.com[0], info.com[1], 0.0), balls.symmetry)
-        for mask in range(1, 2 ** len(orbs)):
+        for mask in _ball_masks(orbs, sites, (info.com[0], info.com[1], 0.0)):
             idx = np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1])
             mass_k = ms + len(idx) * net
             if kind == 0 or mass_k > top:
                 options.append((mass_k, balls.centers[np.sort(idx)], rs, kind))
     options.sort(key=lambda o: (o[0], len(o[1]), o[3]))
     return options
+
+
+#: A rod with at most this many symmetric orbits of ball sockets is tried with every subset
+#: of them; a larger one (a thick graduated rod holds up to twenty balls) with the nested
+#: subsets only, filled from the centre of mass outward and from the ends inward (each
+#: option costs a cavity search: 2^orbits of them would take minutes per rod).
+MAX_FREE_ORBITS = 5
+
+
+def _ball_masks(orbs: list[np.ndarray], sites: np.ndarray, com) -> list[int]:
+    """The subsets of orbits tried (bit masks): all of them for up to :data:`MAX_FREE_ORBITS`
+    orbits, else the nested ones (orbits by their distance from the centre of mass: the
+    nearest k, and the furthest k, for every k)."""
+    if len(orbs) <= MAX_FREE_ORBITS:
+        return list(range(1, 2 ** len(orbs)))
+    dist = [float(np.mean(np.linalg.norm(sites[o] - np.asarray(com, float), axis=1))) for o in orbs]
+    order = sorted(range(len(orbs)), key=lambda b: (dist[b], b))
+    masks: list[int] = []
+    for seq in (order, order[::-1]):
+        m = 0
+        for b in seq:
+            m |= 1 << b
+            if m not in masks:
+                masks.append(m)
+    return masks
 
 
 def _removable(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int,
@@ -143,7 +168,7 @@ def intervals_key(rod: RodType, seed: int) -> str:
 
     return make_key("fabint", INTERVALS_VERSION, FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION,
                     POOL_SIZE, RADIUS_FACTOR, MIN_CAVITY_RADIUS, SOLID_TOL, GAP_MERGE,
-                    asdict(rod.geometry), asdict(rod.material),
+                    rod.geometry.key_data(), asdict(rod.material),
                     rod.balls_json(), int(seed))
 
 

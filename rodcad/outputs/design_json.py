@@ -57,11 +57,14 @@ def rod_params(rod: RodType) -> dict[str, Any]:
     def end(e: EndShape) -> dict[str, float]:
         return {"setback": e.setback, "top_chamfer": e.top_chamfer, "bottom_chamfer": e.bottom_chamfer}
 
-    return {"family": rod.family, "length": rod.length, "scale": rod.scale, "curvature": rod.curvature,
-            "section": {"height": g.height, "thickness": g.thickness},
-            "ends": {"first": end(g.first), "second": end(g.second)},
-            "pin_diameter": g.hinge.pin_diameter, "pin_clearance": g.hinge.pin_clearance,
-            "material": rod.material.name}
+    out = {"family": rod.family, "length": rod.length, "scale": rod.scale, "curvature": rod.curvature,
+           "section": {"height": g.height, "thickness": g.thickness},
+           "ends": {"first": end(g.first), "second": end(g.second)},
+           "pin_diameter": g.hinge.pin_diameter, "pin_clearance": g.hinge.pin_clearance,
+           "material": rod.material.name}
+    if g.graduated:  # the body's section at the rod's scale (the hinge ends keep 'section')
+        out["body"] = {"height": g.body_h, "thickness": g.body_t}
+    return out
 
 
 def print_profile(catalog: Catalog) -> dict[str, Any]:

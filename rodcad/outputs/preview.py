@@ -34,7 +34,9 @@ def plot_chain(r, *paths: Path) -> None:
     if r.target_points is not None:
         ax.plot(*r.target_points.T, "o", mfc="none", mec="0.35", ms=6, label="target joints")
     curvature = [getattr(d.catalog[n], "curvature", 0.0) if n in d.catalog else 0.0 for n in r.type_names]
-    lc, _ = draw_rods(ax, pts, curvature, r.masses)
+    geoms = [getattr(d.catalog[n], "geometry", None) if n in d.catalog else None for n in r.type_names]
+    heights = None if any(g is None for g in geoms) else [g.body_h for g in geoms]
+    lc, _ = draw_rods(ax, pts, curvature, r.masses, heights)
     fused = [j for a, b in (r.plan.fused if r.plan is not None else []) for j in range(a, b)]
     stops = [j for j in (r.plan.added_stops if r.plan is not None else []) if j not in fused]
     if stops:
@@ -72,13 +74,19 @@ def plot_chain(r, *paths: Path) -> None:
     finish_figure(fig, ax, lc, d.anchors, title, paths)
 
 
-def draw_rods(ax, points: np.ndarray, curvature, masses) -> tuple[object, list[np.ndarray]]:
-    """Each rod as it is printed (its chord, or the arc of its curved body), thick and
-    coloured by mass, with its joints as dots; returns (the collection, the rods' polylines)."""
+#: Line width (pt) per mm of a rod's body height in the previews (6 pt for a 16 mm section).
+WIDTH_PER_MM = 0.375
+
+
+def draw_rods(ax, points: np.ndarray, curvature, masses, heights=None) -> tuple[object, list[np.ndarray]]:
+    """Each rod as it is printed (its chord, or the arc of its curved body), coloured by mass,
+    its line width proportional to its body's height (``heights``, mm; None: 6 pt each),
+    with its joints as dots; returns (the collection, the rods' polylines)."""
     from matplotlib.collections import LineCollection
 
     segs = [centerline(points[i:i + 2], [k]) for i, k in enumerate(curvature)]
-    lc = LineCollection(segs, cmap="coolwarm", linewidths=6, capstyle="round", zorder=3)
+    widths = 6 if heights is None else [WIDTH_PER_MM * float(h) for h in heights]
+    lc = LineCollection(segs, cmap="coolwarm", linewidths=widths, capstyle="round", zorder=3)
     lc.set_array(np.asarray(masses, float))
     if np.ptp(masses) == 0:
         lc.set_clim(masses[0] * 0.95, masses[0] * 1.05)

@@ -59,7 +59,7 @@ def as_printed_json(ap: AsPrinted, curve: np.ndarray | None, curvature, span: fl
         "bands": {
             "friction": None if fb is None else {
                 "mu": ap.mu, "per_joint_mm": [float(v) for v in fb.per_joint], "cells": int(fb.cells),
-                "exhaustive": bool(fb.exhaustive), "method": fb.method},
+                "exhaustive": bool(fb.exhaustive), "tight": bool(fb.tight), "method": fb.method},
             "mass": None if mb is None else {
                 "mass_tolerance": ap.mass_tolerance, "quantile": mb.quantile, "samples": int(mb.n_samples),
                 "per_joint_mm": [float(v) for v in mb.per_joint], "method": mb.method},
@@ -111,7 +111,9 @@ def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
         j = _worst(fb.per_joint)
         lines.append(
             f"- **Pin friction** (coefficient {ap.mu:g}): the chain can come to rest anywhere within "
-            f"{fb.band:.3g} mm ({fb.band * pct:.3g} % of its size) of its design, most at joint {j}. To settle it "
+            f"{fb.band:.3g} mm ({fb.band * pct:.3g} % of its size) of its design"
+            + ("" if getattr(fb, "tight", True) else " (an upper bound: its many stops make the exact band costly)")
+            + f", most at joint {j}. To settle it "
             "onto its design, tap it lightly a few times once it hangs: each tap frees the pins for a moment and "
             "gravity moves the chain toward its design.")
     mb = ap.mass_band

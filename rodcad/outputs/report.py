@@ -115,9 +115,9 @@ def report_markdown(r, data: dict[str, Any]) -> str:
     add("## Rods")
     add("")
     fab = r.fabrication
-    head = ("| # | type | length mm | curvature 1/mm | ends: first / second (chamfer deg) | mass g | range g | joint after (deg) "
-            "| x, y of first pin (mm) |")
-    rule = "|---|---|---|---|---|---|---|---|---|"
+    head = ("| # | type | length mm | scale | curvature 1/mm | ends: first / second (chamfer deg) | mass g | range g "
+            "| joint after (deg) | x, y of first pin (mm) |")
+    rule = "|---|---|---|---|---|---|---|---|---|---|"
     if fab is not None:
         head += " as built g | filament g | cavities | balls | pause at Z mm | file |"
         rule += "---|---|---|---|---|---|"
@@ -130,7 +130,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         lo, hi = rod["mass_range"]
         ends = rod["params"]["ends"]
         stops = " / ".join(_end_text(e) for e in (ends["first"], ends["second"]))
-        row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['curvature']:g} | {stops} | {rod['mass']:.3f} "
+        row = (f"| {i} | {rod['type']} | {rod['length']:g} | {rod['params'].get('scale', 1.0):.3g} | "
+               f"{rod['curvature']:g} | {stops} | {rod['mass']:.3f} "
                f"| {lo:.2f}-{hi:.2f} | {lim_s} | {pts[i][0]:.1f}, {pts[i][1]:.1f} |")
         if fab is not None:
             f = fab.rods[i]

@@ -1,0 +1,111 @@
+"""Graduated rods for the planner: a rod's mass range over its scale, and the scale for a mass.
+
+A family with a scale range (:class:`rodcad.catalog.model.Ranges`) prints each rod's body at
+its own scale while the hinge ends stay the family's (:class:`rodcad.catalog.model.RodGeometry`).
+A rod's plain mass and centre of mass are closed-form functions of (length, curvature, scale,
+ends) (:func:`rodcad.catalog.fastgeom.rod_mass_properties`, equal to the B-rep's to
+round-off); its mass range [m_min, m_max] comes from the family's mass table over length and
+scale (:func:`rodcad.catalog.printed.mass_table`, read conservatively). Both grow with the
+scale, so the scales at which a wanted mass lies inside a rod's range form one interval, found
+by bisection:
+
+    table = mass_table(catalog.family("rod"))
+    choice = scale_for_mass(catalog, "rod", table, 40.0, 12.0, curvature=0.01)
+    if choice is not None:
+        rod = choice.rod                       # Catalog.rod(..., scale=choice.scale)
+        m_min, m_max = choice.numbers.mass_range
+    lightest, heaviest = mass_span(catalog, "rod", table, 40.0)
+
+Units: mm, 1/mm, g, deg.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from rodcad.catalog.model import Catalog, RodType
+from rodcad.catalog.printed import MassTable, RodNumbers, rod_numbers
+
+__all__ = ["ScaleChoice", "mass_span", "numbers_at", "scale_for_mass", "SCALE_TOL"]
+
+#: Bisection tolerance on the scale.
+SCALE_TOL = 1e-5
+
+
+@dataclass(frozen=True)
+class ScaleChoice:
+    """The scale a rod is printed at for a wanted mass.
+
+    Attributes:
+        scale: the chosen scale: where the wanted mass is nearest the middle of the rod's
+            mass range (the middle grows with the scale).
+        scales: (lowest, highest) scale at which the wanted mass lies in the rod's range.
+        rod: the rod at ``scale``.
+        numbers: its solid mass, centre of mass and mass range.
+    """
+
+    scale: float
+    scales: tuple[float, float]
+    rod: RodType
+    numbers: RodNumbers
+
+
+def numbers_at(catalog: Catalog, family: str, table: MassTable, length: float, scale: float,
+               curvature: float = 0.0, **ends: Any) -> tuple[RodType, RodNumbers]:
+    """The rod of these parameters at ``scale`` and its numbers (solid mass, com, mass range).
+
+    ``ends``: Catalog.rod's first_stop, second_stop, first_under, second_under."""
+    rod = catalog.rod(family, length, curvature, scale=scale, **ends)
+    fam = catalog.family(family)
+    assert fam.template is not None
+    return rod, rod_numbers(rod, table, fam.template)
+
+
+def mass_span(catalog: Catalog, family: str, table: MassTable, length: float, curvature: float = 0.0,
+              **ends: Any) -> tuple[float, float]:
+    """The lightest and heaviest mass a rod of these parameters reaches over the scales it
+    can be printed at (:meth:`Catalog.scale_range`): (m_min at the lowest scale, m_max at the
+    highest) (g)."""
+    lo, hi = catalog.scale_range(family, length, curvature, **ends)
+    return (numbers_at(catalog, family, table, length, lo, curvature, **ends)[1].mass_range[0],
+            numbers_at(catalog, family, table, length, hi, curvature, **ends)[1].mass_range[1])
+
+
+def _bisect(f: Any, lo: float, hi: float) -> float:
+    """The scale in [lo, hi] where the increasing ``f`` crosses 0 (f(lo) < 0 <= f(hi))."""
+    while hi - lo > SCALE_TOL:
+        mid = (lo + hi) / 2
+        if f(mid) < 0:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: float, mass: float,
+                   curvature: float = 0.0, **ends: Any) -> ScaleChoice | None:
+    """The scale at which a rod of these parameters can be made at ``mass`` (g), or None when
+    no scale of its range reaches it (see :func:`mass_span`).
+
+    The chosen scale puts ``mass`` nearest the middle of the rod's range (cavities and balls
+    then have room either way); :attr:`ScaleChoice.scales` is every scale whose range holds it.
+    """
+    s_lo, s_hi = catalog.scale_range(family, length, curvature, **ends)
+
+    def rng(s: float) -> tuple[float, float]:
+        return numbers_at(catalog, family, table, length, s, curvature, **ends)[1].mass_range
+
+    lo_range, hi_range = rng(s_lo), rng(s_hi)
+    if mass < lo_range[0] or mass > hi_range[1]:
+        return None
+    a = s_lo if mass <= lo_range[1] else _bisect(lambda s: rng(s)[1] - mass, s_lo, s_hi)
+    b = s_hi if mass >= hi_range[0] else _bisect(lambda s: rng(s)[0] - mass, s_lo, s_hi)
+    if a > b:  # a gap between the ranges of neighbouring scales (not expected)
+        return None
+    mid = lambda s: sum(rng(s)) / 2 - mass  # noqa: E731
+    s = a if mid(a) >= 0 else b if mid(b) <= 0 else _bisect(mid, a, b)
+    rod, nums = numbers_at(catalog, family, table, length, s, curvature, **ends)
+    if not nums.mass_range[0] - 1e-9 <= mass <= nums.mass_range[1] + 1e-9:
+        return None
+    return ScaleChoice(s, (a, b), rod, nums)

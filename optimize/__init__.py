@@ -1,4 +1,4 @@
-"""Numerics of hanging rod chains: equilibrium, shape distance, inverse design.
+"""Numerics of hanging rod chains and nets: equilibrium, shape distance, inverse design.
 
 numpy/scipy only; this package never imports rodcad or build123d.
 """
@@ -7,6 +7,10 @@ from optimize.distance import ShapeDistance, shape_distance
 from optimize.equilibrium import MESSAGES, EquilibriumResult, solve_equilibrium
 from optimize.inverse import METHODS, InverseProblem, InverseResult, design
 from optimize.multistart import MultiStartResult, find_equilibria
+from optimize.net import NET_MESSAGES, NetResult, solve_net
+from optimize.netdesign import NetDesign, design_net, shape_jacobian
+from optimize.netmodes import NetModes, net_modes
+from optimize.netstatics import NetMassDesign, NetStatics, design_net_masses, net_statics
 
 __all__ = [
     "EquilibriumResult",
@@ -15,9 +19,21 @@ __all__ = [
     "MESSAGES",
     "METHODS",
     "MultiStartResult",
+    "NET_MESSAGES",
+    "NetDesign",
+    "NetMassDesign",
+    "NetModes",
+    "NetResult",
+    "NetStatics",
     "ShapeDistance",
     "design",
+    "design_net",
+    "design_net_masses",
     "find_equilibria",
+    "net_modes",
+    "net_statics",
     "shape_distance",
+    "shape_jacobian",
     "solve_equilibrium",
+    "solve_net",
 ]

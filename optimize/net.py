@@ -274,9 +274,13 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     net, start = Net.from_args(node_positions0, edges, lengths, masses, anchored, node_masses=node_masses, com=com,
                                g=g, node_com=node_com, pivots=pivots, node_rotations0=node_rotations0)
     out, nres = _solve_from(net, start, max_iter)
-    if out is None:
-        out, nres2 = _solve_from(net, net_sag_guess(net, start), max_iter)
+    if out is None or out.status != 0:
+        # the given start could not be made feasible, or the descent from it stalled (a
+        # flat start with rods longer than its spacing): from the hanging cable-net shape
+        sag, nres2 = _solve_from(net, net_sag_guess(net, start), max_iter)
         nres += nres2
+        if sag is not None and (out is None or sag.status == 0):
+            out = sag
     first = _result(net, out) if out is not None else _failed(net, start, nres)
     first.n_starts = max(int(n_starts), 1)
     first.counts = [1]

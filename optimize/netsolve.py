@@ -40,7 +40,8 @@ from scipy.sparse.linalg import splu
 from optimize.netderiv import NetEval, assemble, energy_change, evaluate, gauge_rows, hessian
 from optimize.netmodel import Net, NetState
 
-__all__ = ["Outcome", "kkt_residual", "multipliers", "restore", "descend", "is_stable", "Factor", "factor"]
+__all__ = ["Factor", "Outcome", "descend", "factor", "is_stable", "kkt_residual", "multipliers", "newton_matrix",
+           "pd_factor", "restore"]
 
 #: The penalty weight rho of the regularised KKT step, in units of the force scale / length.
 RHO = 1e6
@@ -111,7 +112,7 @@ class Factor:
         return self.lu.solve(b)
 
 
-def _pd_factor(K: sp.spmatrix):
+def pd_factor(K: sp.spmatrix):
     """An LDL^T-like factorization of symmetric K when K is positive definite, else None."""
     try:
         lu = splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
@@ -126,7 +127,7 @@ def _pd_factor(K: sp.spmatrix):
     return lu
 
 
-def _newton_matrix(net: Net, hess, ev: NetEval, gauge: np.ndarray, mu: float, rho: float, s_h: float):
+def newton_matrix(net: Net, hess, ev: NetEval, gauge: np.ndarray, mu: float, rho: float, s_h: float):
     """K = H + mu s_h D + rho s_h (J'J + the gauge rows' squares), CSC."""
     diag = net.var_scale * (mu * s_h)
     diag[gauge] += rho * s_h
@@ -138,7 +139,7 @@ def factor(net: Net, hess, ev: NetEval, gauge: np.ndarray, s_h: float, mu0: floa
     positive definite: (Factor, mu). mu runs 0, 1e-6, 1e-5, ... (times s_h)."""
     mu = mu0
     for _ in range(20):
-        lu = _pd_factor(_newton_matrix(net, hess, ev, gauge, mu, rho, s_h))
+        lu = pd_factor(newton_matrix(net, hess, ev, gauge, mu, rho, s_h))
         if lu is not None:
             return Factor(lu, rho * s_h, mu, ev.J), mu
         mu = 1e-6 if mu == 0 else mu * 10
@@ -155,7 +156,7 @@ def is_stable(net: Net, state: NetState, ev: NetEval, lam: np.ndarray) -> bool:
     gauge = gauge_rows(net, state, ev)
     s_h = _force_scale(net, lam) / net.mean_length
     for rho in (RHO, 1e10):
-        if _pd_factor(_newton_matrix(net, hess, ev, gauge, 0.0, rho, s_h)) is not None:
+        if pd_factor(newton_matrix(net, hess, ev, gauge, 0.0, rho, s_h)) is not None:
             return True
     return False
 
@@ -167,7 +168,7 @@ def _negative_direction(net: Net, state: NetState, ev: NetEval, lam: np.ndarray)
     hess = hessian(net, state, ev, lam)
     gauge = gauge_rows(net, state, ev)
     s_h = _force_scale(net, lam) / net.mean_length
-    K = _newton_matrix(net, hess, ev, gauge, 0.0, RHO, s_h)
+    K = newton_matrix(net, hess, ev, gauge, 0.0, RHO, s_h)
     bound = float(abs(K).sum(axis=1).max())
     try:
         vals, vecs = eigsh(K, k=1, sigma=-2 * bound, which="LM", maxiter=2000)
@@ -299,7 +300,12 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
         alpha = 1.0
         accepted = False
         for _ in range(40):
-            trial, tev, ok = _project(net, state.moved(net, alpha * dy), fac, tol)
+            moved = state.moved(net, alpha * dy)
+            trial, tev, ok = _project(net, moved, fac, tol)
+            if not ok and alpha >= 0.1:
+                # the chord iteration fails where J turns fast (a flat net whose rods swing
+                # out of its plane): Levenberg-Marquardt with fresh Jacobians
+                trial, tev, ok, _ = restore(net, moved, max_iter=30)
             if ok:
                 drop = energy_change(net, state, ev, trial, tev)
                 if drop <= 1e-4 * alpha * slope:

@@ -211,7 +211,7 @@ def build_net_mjcf(tree: _Tree, masses, com, node_masses, node_com, g, inertia, 
 
 
 def settle_net(positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None, node_com=None,
-               pivots=None, rotations0=None, body_nodes=None, rod_y=None, g=9.81, tol=1e-10, max_time=200.0,
+               pivots=None, rotations0=None, body_nodes=None, rod_y=None, g=9.81, tol=1e-8, max_time=200.0,
                **options) -> dict:
     """Simulate the net in MuJoCo from ``positions0`` until it rests; return the rest state.
 

@@ -96,7 +96,7 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
         d = q + np.where(has_lo, zl / sl, 0.0) + np.where(has_hi, zu / su, 0.0) + reg
         N = (A @ sp.diags(1.0 / d) @ At + sp.identity(k) * (reg * scale)).tocsc()
         try:
-            lu = splu(N, permc_spec="MMD_AT_PLUS_A")
+            lu = splu(N, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         except RuntimeError:
             reg *= 100
             continue

@@ -136,7 +136,7 @@ def net_sag_guess(net: Net, state: NetState, *, iterations: int = 30) -> NetStat
         Aff = A[free][:, free].tocsc()
         rhs = -(A[free][:, ~free] @ x[~free])
         rhs[:, 2] += load[free]
-        lu = splu(Aff)
+        lu = splu(Aff, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         x[free] = lu.solve(rhs)
         dist = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
         q = q * np.clip(dist / net.lengths, 0.5, 2.0)

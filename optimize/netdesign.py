@@ -136,7 +136,7 @@ def _error(res: NetResult, target: np.ndarray) -> float:
 def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
                allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None, rotations=None,
                n_starts: int = 8, seed: int = 0, refine: bool = True, tol: float = 1e-6,
-               max_refine: int = 30) -> NetDesign:
+               max_refine: int = 10) -> NetDesign:
     """Masses for a net to hang in its target, and the exact solver's check of them.
 
     Args:
@@ -150,7 +150,8 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
         seed: its seed.
         refine: when the statics are not exact, refine the masses through the solver.
         tol: on target when every node lies within ``tol`` x the target's size.
-        max_refine: solver evaluations the refinement may use.
+        max_refine: solver evaluations the refinement may use (each also costs a shape
+            Jacobian: one sparse solve per rod).
 
     Returns:
         NetDesign.
@@ -225,6 +226,9 @@ def _refine(target, edges, lengths, anchored, statics, check, mass_bounds, rotat
     ls = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale=np.maximum(hi - lo, 1e-12),
                        max_nfev=max_refine, xtol=1e-14, ftol=1e-14, gtol=1e-14)
     best = solve(ls.x)
-    if _error(best, target) > _error(check, target):
-        return statics.masses, check, {"refine_nfev": ls.nfev, "refine_improved": False}
-    return ls.x, best, {"refine_nfev": ls.nfev, "refine_improved": True}
+    before, after = _error(check, target), _error(best, target)
+    info = {"refine_nfev": ls.nfev, "fit_error": before, "refined_error": min(before, after),
+            "refine_improved": after < before}
+    if after >= before:
+        return statics.masses, check, info
+    return ls.x, best, info

@@ -41,11 +41,10 @@ from optimize.netderiv import NetEval, assemble, energy_change, evaluate, gauge_
 from optimize.netmodel import Net, NetState
 
 __all__ = ["Factor", "Outcome", "descend", "factor", "is_stable", "kkt_residual", "multipliers", "newton_matrix",
-           "pd_factor", "restore"]
+           "pd_factor", "restore", "spd_lu"]
 
 #: The penalty weight rho of the regularised KKT step, in units of the force scale / length.
 RHO = 1e6
-DEBUG = False
 #: Relative KKT residual the descent aims at, and the one that counts as converged.
 TARGET = 1e-14
 CONVERGED = 1e-10
@@ -71,7 +70,7 @@ def multipliers(net: Net, ev: NetEval) -> np.ndarray:
     w = net.lengths / net.mean_length
     eps = 1e-10 * max(float(JJ.diagonal().max(initial=0.0)), 1e-300)
     A = (JJ + sp.diags(eps * w)).tocsc()
-    lu = splu(A, permc_spec="MMD_AT_PLUS_A")
+    lu = spd_lu(A)
     rhs = -(J @ ev.grad)
     lam = lu.solve(rhs)
     for _ in range(3):
@@ -112,10 +111,16 @@ class Factor:
         return self.lu.solve(b)
 
 
+def spd_lu(A: sp.spmatrix):
+    """Sparse LU of a symmetric positive definite matrix with symmetric, diagonal pivoting
+    (a Cholesky in effect: far less fill than partial pivoting)."""
+    return splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+
+
 def pd_factor(K: sp.spmatrix):
     """An LDL^T-like factorization of symmetric K when K is positive definite, else None."""
     try:
-        lu = splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        lu = spd_lu(K)
     except RuntimeError:  # an exactly zero pivot: singular
         return None
     d = lu.U.diagonal()
@@ -222,7 +227,7 @@ def restore(net: Net, state: NetState, max_iter: int = 200) -> tuple[NetState, N
         for _ in range(30):
             A = (JtJ + sp.diags(nu * net.var_scale)).tocsc()
             try:
-                dy = -splu(A, permc_spec="MMD_AT_PLUS_A").solve(g)
+                dy = -spd_lu(A).solve(g)
             except RuntimeError:
                 nu *= 10
                 continue
@@ -319,8 +324,15 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
                         accepted = True
                         break
             alpha *= 0.5
-        if DEBUG:
-            print(f"it {it} kkt {kkt:.2e} mu {mu:.1e} alpha {alpha:.2e} |dy| {np.abs(dy).max():.2e}")
+        if not accepted:
+            if kkt <= CONVERGED:
+                stall = 2  # at round-off already: stop here
+                continue
+            if mu < 1e3:
+                mu = max(mu * 100, 1e-4)  # a shorter, more gradient-like step
+                continue
+            status = 3
+            break
         old = kkt
         state, ev = trial, (tev if tev.J is not None else evaluate(net, trial))
         lam = multipliers(net, ev)

@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from optimize.netderiv import NetEval, assemble, energy_change, evaluate, gauge_rows, hessian
+from optimize.netderiv import Hess, NetEval, assemble, energy_change, evaluate, gauge_rows, hessian
 from optimize.netmodel import Net, NetState
 
 __all__ = ["Factor", "Outcome", "descend", "factor", "is_stable", "kkt_residual", "multipliers", "newton_matrix",
@@ -140,14 +140,22 @@ def newton_matrix(net: Net, hess, ev: NetEval, gauge: np.ndarray, mu: float, rho
 
 
 def factor(net: Net, hess, ev: NetEval, gauge: np.ndarray, s_h: float, mu0: float = 0.0, rho: float = RHO):
-    """Factor K with the smallest proximal weight mu >= mu0 (relative, in s_h) that makes it
-    positive definite: (Factor, mu). mu runs 0, 1e-6, 1e-5, ... (times s_h)."""
+    """Factor K with a proximal weight mu >= mu0 (relative, in s_h) that makes it positive
+    definite: (Factor, mu). mu runs 0, 1e-6, 1e-5, ... (times s_h); where K needed more
+    than mu0 (H has negative curvature on the tangent space), ten times the first weight
+    that works, so that the step along that curvature stays of the size mu sets, not of
+    the size of what little curvature is left."""
     mu = mu0
-    for _ in range(20):
+    raised = False
+    for _ in range(24):
         lu = pd_factor(newton_matrix(net, hess, ev, gauge, mu, rho, s_h))
         if lu is not None:
+            if raised:
+                mu *= 10
+                lu = pd_factor(newton_matrix(net, hess, ev, gauge, mu, rho, s_h)) or lu
             return Factor(lu, rho * s_h, mu, ev.J), mu
         mu = 1e-6 if mu == 0 else mu * 10
+        raised = True
     raise FloatingPointError("no proximal weight made the Newton matrix positive definite")
 
 
@@ -209,23 +217,24 @@ def _feasible_tol(net: Net, state: NetState) -> float:
     return 64 * np.finfo(float).eps * size / float(np.min(net.lengths))
 
 
-def restore(net: Net, state: NetState, max_iter: int = 200) -> tuple[NetState, NetEval, bool, int]:
-    """Levenberg-Marquardt on ``sum c_e^2`` from ``state``: (state, eval, feasible, iterations)."""
+def restore(net: Net, state: NetState, max_iter: int = 200, nu: float = 1e-3) -> tuple[NetState, NetEval, bool, int]:
+    """Levenberg-Marquardt on ``sum c_e^2`` from ``state``: (state, eval, feasible, iterations).
+
+    ``nu`` is the first damping (relative to J'J's entries, which are of order one): small
+    near the manifold (Gauss-Newton, quadratic), larger from a far start."""
     ev = evaluate(net, state)
     tol = _feasible_tol(net, state)
     if net.nvar == 0:
         return state, ev, _violation(net, ev) <= tol, 0
-    nu = 1e-3
     cost = float(ev.c @ ev.c)
+    zero = Hess(np.zeros((net.m, net.loc.shape[1], net.loc.shape[1])), np.zeros((0, 3, 3)))
     for it in range(1, max_iter + 1):
         if _violation(net, ev) <= tol:
             return state, ev, True, it - 1
-        J = ev.J
-        JtJ = (J.T @ J).tocsc()
-        g = J.T @ ev.c
+        g = ev.J.T @ ev.c
         improved = False
         for _ in range(30):
-            A = (JtJ + sp.diags(nu * net.var_scale)).tocsc()
+            A = assemble(net, zero, ev, rho=1.0, diag=nu * net.var_scale)
             try:
                 dy = -spd_lu(A).solve(g)
             except RuntimeError:
@@ -245,7 +254,7 @@ def restore(net: Net, state: NetState, max_iter: int = 200) -> tuple[NetState, N
     return state, ev, _violation(net, ev) <= tol, it
 
 
-def _project(net: Net, state: NetState, fac: Factor, tol: float, max_iter: int = 12):
+def _project(net: Net, state: NetState, fac: Factor, tol: float, max_iter: int = 20):
     """Back onto the manifold with the step's factors: (state, eval, ok).
 
     A chord iteration: the Jacobian stays the one ``fac`` was assembled with (a fresh one
@@ -262,7 +271,7 @@ def _project(net: Net, state: NetState, fac: Factor, tol: float, max_iter: int =
         tv = _violation(net, tev)
         state, ev = trial, tev
         ok = tv <= tol
-        if not ok and not tv < 0.7 * viol:
+        if not ok and not tv < 0.9 * viol:
             break
         viol = tv
     return state, ev, ok
@@ -300,6 +309,8 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
         fac, mu = factor(net, hess, ev, gauge, s_h, mu0=mu)
         nfactor += 1
         dy = -fac.solve(r)
+        if mu > 0:
+            dy = _capped(net, dy)
         slope = float(r @ dy)
         tol = _feasible_tol(net, state)
         alpha = 1.0
@@ -310,7 +321,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
             if not ok and alpha >= 0.1:
                 # the chord iteration fails where J turns fast (a flat net whose rods swing
                 # out of its plane): Levenberg-Marquardt with fresh Jacobians
-                trial, tev, ok, _ = restore(net, moved, max_iter=30)
+                trial, tev, ok, _ = restore(net, moved, max_iter=30, nu=1e-8)
             if ok:
                 drop = energy_change(net, state, ev, trial, tev)
                 if drop <= 1e-4 * alpha * slope:
@@ -342,6 +353,17 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     if status == 1 and kkt <= CONVERGED:
         status = 0
     return Outcome(state, ev, lam, kkt, status, nit=it, nfactor=nfactor, escapes=escapes)
+
+
+def _capped(net: Net, dy: np.ndarray) -> np.ndarray:
+    """The step scaled down (direction kept) so that no node moves more than a mean rod
+    length and no body turns more than half a radian: used where H has negative curvature
+    (the proximal weight mu is on), whose steps the quadratic model does not bound."""
+    nf = int(np.count_nonzero(net.pos_idx >= 0))
+    pos = float(np.max(np.abs(dy[:3 * nf]), initial=0.0)) / net.mean_length
+    rot = float(np.max(np.abs(dy[3 * nf:]), initial=0.0)) / 0.5
+    big = max(pos, rot)
+    return dy / big if big > 1 else dy
 
 
 def _escape(net: Net, state: NetState, ev: NetEval, v: np.ndarray):

@@ -7,7 +7,7 @@ from optimize.distance import ShapeDistance, shape_distance
 from optimize.equilibrium import MESSAGES, EquilibriumResult, solve_equilibrium
 from optimize.inverse import METHODS, InverseProblem, InverseResult, design
 from optimize.multistart import MultiStartResult, find_equilibria
-from optimize.net import NET_MESSAGES, NetResult, solve_net
+from optimize.net import NET_MESSAGES, NetResult, pivots_by_node, pivots_from_nodes, solve_net
 from optimize.netdesign import NetDesign, design_net, shape_jacobian
 from optimize.netmodes import NetModes, net_modes
 from optimize.netstatics import NetMassDesign, NetStatics, design_net_masses, net_statics
@@ -32,6 +32,8 @@ __all__ = [
     "find_equilibria",
     "net_modes",
     "net_statics",
+    "pivots_by_node",
+    "pivots_from_nodes",
     "shape_distance",
     "shape_jacobian",
     "solve_equilibrium",

@@ -27,7 +27,7 @@ from optimize.netderiv import evaluate, rod_frames
 from optimize.netmodel import Net, NetState
 from optimize.netsolve import CONVERGED, descend, is_stable, restore
 
-__all__ = ["NET_MESSAGES", "NetResult", "net_sag_guess", "solve_net"]
+__all__ = ["NET_MESSAGES", "NetResult", "net_sag_guess", "pivots_by_node", "pivots_from_nodes", "solve_net"]
 
 #: Status codes and their messages (one table, as in scipy.optimize).
 NET_MESSAGES = {
@@ -109,6 +109,51 @@ class NetResult:
         return (f"NetResult(success={self.success}, stable={self.stable}, kkt_residual={self.kkt_residual:.2e}, "
                 f"nit={self.nit}, compressed={self.compressed.size}, alternatives={len(self.alternatives)}, "
                 f"message={self.message!r})")
+
+
+def pivots_from_nodes(edges, node_pivots) -> np.ndarray:
+    """The (m, 2, 3) ``pivots`` array from design.json's per-node form.
+
+    Args:
+        edges: (m, 2) the rods' nodes.
+        node_pivots: one entry per node: None (a point node) or a mapping {rod index:
+            [dx, dy, dz]}, each rod's pivot from the node point in the node body's frame
+            (mm); a rod the mapping leaves out pivots about the node point.
+
+    Returns:
+        (m, 2, 3) array: rod e's pivot at its node i (column 0) and at its node j (1).
+    """
+    edges = np.asarray(edges, int)
+    out = np.zeros((edges.shape[0], 2, 3))
+    for node, entry in enumerate(node_pivots):
+        if not entry:
+            continue
+        for rod, offset in entry.items():
+            rod = int(rod)
+            ends = np.flatnonzero(edges[rod] == node)
+            if ends.size == 0:
+                raise ValueError(f"node {node} gives a pivot for rod {rod}, which does not end at it")
+            out[rod, ends[0]] = np.asarray(offset, float)
+    return out
+
+
+def pivots_by_node(edges, pivots, n: int | None = None) -> list:
+    """design.json's per-node form of a (m, 2, 3) ``pivots`` array: for each of the ``n``
+    nodes (default: up to the largest in ``edges``) None (all its rods pivot about the node
+    point) or {rod index: [dx, dy, dz]}."""
+    edges = np.asarray(edges, int)
+    pivots = np.asarray(pivots, float)
+    n = (int(edges.max()) + 1 if edges.size else 0) if n is None else int(n)
+    out: list = [None] * n
+    for rod, (i, j) in enumerate(edges):
+        for end, node in enumerate((i, j)):
+            if np.any(pivots[rod, end] != 0) or out[node] is not None:
+                out[node] = out[node] or {}
+    for rod, (i, j) in enumerate(edges):
+        for end, node in enumerate((i, j)):
+            if out[node] is not None:
+                out[node][rod] = pivots[rod, end].tolist()
+    return out
 
 
 def net_sag_guess(net: Net, state: NetState, *, iterations: int = 30) -> NetState:

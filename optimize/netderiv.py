@@ -156,7 +156,7 @@ def evaluate(net: Net, state: NetState, full: bool = True) -> NetEval:
     GP = np.zeros((net.m, 2, 3))
     GP[:, :, 2] = shares
     keep = net.loc >= 0
-    grad = np.bincount(net.loc[keep], weights=_to_local(net, a, GP)[keep], minlength=net.nvar)
+    grad = np.bincount(net.loc[keep], weights=_to_local(net, a, GP)[keep], minlength=net.nvar).astype(float)
     wz = g * net.node_masses
     free = net.pos_idx >= 0
     grad[net.pos_idx[free] + 2] += wz[free]
@@ -246,7 +246,7 @@ def assemble(net: Net, hess: Hess, ev: NetEval | None = None, *, rho: float = 0.
     if rho:
         local = local + rho * (ev.Jloc[:, :, None] * ev.Jloc[:, None, :])
     keep = pat.k_pos >= 0
-    data = np.bincount(pat.k_pos[keep], weights=local[keep], minlength=pat.k_indices.size)
+    data = np.bincount(pat.k_pos[keep], weights=local[keep], minlength=pat.k_indices.size).astype(float)
     if hess.body.size:
         data += np.bincount(pat.k_body.ravel(), weights=hess.body.ravel(), minlength=data.size)
     if diag is not None:

@@ -12,6 +12,7 @@ import pytest
 from netgen import grid_net, jitter, radial_net, random_grid, random_masses
 
 from optimize import net_modes, solve_net
+from optimize.net import pivots_by_node, pivots_from_nodes
 from optimize.netderiv import assemble, evaluate, hessian, rod_frames
 from optimize.netmodel import Net, rotation_exp
 
@@ -32,6 +33,16 @@ def test_v_of_two_rods_with_a_point_mass():
     assert np.allclose(res.tensions, 3 * G / (2 * 0.8), rtol=1e-12)
     assert np.allclose(res.reactions[:, 2], 2 * G, rtol=1e-12)  # half of everything each
     assert np.allclose(np.abs(res.reactions[:, 0]), 3 * G / 1.6 * 0.6, rtol=1e-12)
+
+
+def test_a_rod_between_two_anchors_shares_its_weight_by_the_lever_rule():
+    # nothing moves; the rod turns its offset centre of mass (along 20, perp 3) under its
+    # axis, 9.6 of the 30 horizontal mm from the upper pivot: 0.68 and 0.32 of its weight
+    res = solve_net([[0, 0, 0], [30, 0, -40]], [[0, 1]], [50], [2.0], [0, 1], com=[[20, 3]])
+    assert res.success and res.stable
+    assert np.allclose(res.reactions, [[0, 0, 0.68 * 2 * G], [0, 0, 0.32 * 2 * G]], atol=1e-12)
+    assert res.tensions[0] == 0  # statically open; the equally-stiff choice is none
+    assert np.allclose(res.rod_frames[0, 1], [-0.8, 0, -0.6], atol=1e-12)
 
 
 def test_pendulum_turns_its_offset_centre_of_mass_below_the_pivot():
@@ -350,3 +361,12 @@ def test_rod_frames_of_a_vertical_rod_are_a_frame():
     net, st = Net.from_args([[0, 0, 0], [0, 0, -20.0]], [[0, 1]], [20.0], [1.0], [0])
     F = rod_frames(net, evaluate(net, st))
     assert np.allclose(F[0] @ F[0].T, np.eye(3), atol=1e-12)
+
+
+def test_pivots_convert_to_and_from_design_json_per_node_form():
+    spec, lengths, m, kw = _ring_net()
+    per_node = pivots_by_node(spec.edges, kw["pivots"], spec.n)
+    assert len(per_node) == spec.n and all(isinstance(p, dict) for p in per_node)
+    assert np.array_equal(pivots_from_nodes(spec.edges, per_node), kw["pivots"])
+    with pytest.raises(ValueError, match="does not end at it"):
+        pivots_from_nodes(spec.edges, [{int(np.flatnonzero((spec.edges != 0).all(axis=1))[0]): [1, 0, 0]}])

@@ -15,14 +15,17 @@ every iterate on the constraint manifold:
    care whether rows of J are dependent (closed loops, rods between anchors), so no rank
    decision is needed. The matrix is factored by a sparse LU with symmetric, diagonal
    pivoting (an LDL^T), whose pivots give its inertia: ``mu`` grows until it is positive
-   definite (the step then descends), and shrinks again as the iteration converges. The
-   trial point is projected back onto the manifold with the same factors (a few linear
-   solves), and an Armijo line search on U decides the step length.
+   definite (the step then descends; where it had to grow, steps are capped to a rod
+   length and half a radian), and shrinks again as the iteration converges. The trial
+   point is projected back onto the manifold with the same factors (a chord iteration; a
+   Gauss-Newton restoration where that fails), and an Armijo line search on U, computed
+   from coordinate differences, decides the step length; at round-off, where U is flat,
+   a full step that halves the KKT residual is taken.
 3. *Stability*: ``H`` positive definite on the tangent space ``null(J)`` is decided by
    Debreu's lemma, ``H + rho J'J`` positive definite for a large ``rho``, read from the
    same pivots; exact symmetries (a part hung from one vertical line of anchors turns
    about it, a node body spins about the line of its pivots) are held fixed by one unknown
-   each (:func:`optimize.netmodel.gauge_rows`). A KKT point that is not stable is left
+   each (:func:`optimize.netderiv.gauge_rows`). A KKT point that is not stable is left
    along its most negative curvature, and the descent resumes.
 
 Each iteration costs one or a few sparse factorizations of an ``nvar x nvar`` matrix with
@@ -126,7 +129,7 @@ def pd_factor(K: sp.spmatrix):
     d = lu.U.diagonal()
     if not np.array_equal(lu.perm_r, lu.perm_c) or not np.all(d > 0) or not np.all(np.isfinite(d)):
         return None
-    small = 1e-13 * float(np.max(np.abs(K.diagonal()), initial=0.0))
+    small = 1e-14 * float(np.max(np.abs(K.diagonal()), initial=0.0))  # round-off of the pivots
     if np.min(d) <= small:
         return None
     return lu

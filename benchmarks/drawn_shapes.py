@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["KINDS", "Shape", "family", "shape", "design_text"]
+__all__ = ["KINDS", "Shape", "design_text", "diamond", "family", "heart_outline", "shape"]
 
 KINDS = ("heart", "drop", "ring", "polygon", "leaf", "spade", "wave", "m-shape", "steps")
 
@@ -67,8 +67,9 @@ def _arclength_resample(pts: np.ndarray, n: int) -> np.ndarray:
 
 def _open_at_top(closed: np.ndarray, gap: float, top: np.ndarray) -> np.ndarray:
     """A closed outline (counter-clockwise or not, first point anywhere) cut open at the
-    point nearest ``top``: the part within ``gap/2`` of it (along the outline) removed, the
-    rest as a polyline from the left end (A) to the right end (B)."""
+    point nearest ``top``: the two ends go as far from it along the outline, either way, as
+    puts them ``gap`` mm apart (the anchors, a fixture apart), the rest a polyline from the
+    left end (A) to the right end (B)."""
     pts = np.asarray(closed, float)
     if np.allclose(pts[0], pts[-1]):
         pts = pts[:-1]
@@ -76,12 +77,17 @@ def _open_at_top(closed: np.ndarray, gap: float, top: np.ndarray) -> np.ndarray:
     ring = np.vstack([pts[k:], pts[:k], pts[k:k + 1]])  # from the top round back to it
     d = np.hypot(*np.diff(ring, axis=0).T)
     s = np.concatenate([[0.0], np.cumsum(d)])
-    keep = (s >= gap / 2) & (s <= s[-1] - gap / 2)
 
     def at(t: float) -> np.ndarray:
         return np.array([np.interp(t, s, ring[:, 0]), np.interp(t, s, ring[:, 1])])
 
-    out = np.vstack([at(gap / 2), ring[keep], at(s[-1] - gap / 2)])
+    lo, hi = 0.0, s[-1] / 4  # half the cut, along the outline: the ends' distance grows with it
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if np.hypot(*(at(mid) - at(s[-1] - mid))) < gap else (lo, mid)
+    cut = hi
+    keep = (s > cut) & (s < s[-1] - cut)
+    out = np.vstack([at(cut), ring[keep], at(s[-1] - cut)])
     if out[0, 0] > out[-1, 0]:  # A on the left
         out = out[::-1]
     return out
@@ -241,6 +247,32 @@ def shape(kind: str, rng: np.random.Generator, index: int = 0) -> Shape:
     pts = pts - pts[0]
     pts = np.round(pts, 3)
     return Shape(kind, f"{kind}-{index:03d}", np.array([pts[0], pts[-1]]), pts, params)
+
+
+def diamond(side: float = 100.0, gap: float = 10.0) -> Shape:
+    """A square standing on a corner, hung from its top corner: anchors ``gap`` mm apart on
+    the two sides at the top (issue 24's square hung from one corner)."""
+    h = side / math.sqrt(2)
+    top, left, bottom, right = np.array([0.0, 0.0]), np.array([-h, -h]), np.array([0.0, -2 * h]), np.array([h, -h])
+    d = gap / 2 / math.cos(math.radians(45))
+    a = top + (left - top) / side * d
+    b = top + (right - top) / side * d
+    pts = np.round(np.array([a, left, bottom, right, b]) - a, 6)
+    return Shape("polygon", "diamond", pts[[0, -1]], pts, dict(side=side, gap=gap))
+
+
+def heart_outline(width: float = 160.0, gap: float = 12.0, lobes: float = 1.0) -> Shape:
+    """The classic parametric heart ``width`` mm wide (the right lobe ``lobes`` times as wide
+    as the left one), hung from its cusp, anchors ``gap`` mm apart (issue 24's hearts)."""
+    t = np.linspace(0, 2 * math.pi, 721)[:-1]
+    x = 16 * np.sin(t) ** 3
+    y = 13 * np.cos(t) - 5 * np.cos(2 * t) - 2 * np.cos(3 * t) - np.cos(4 * t)
+    x = x / np.ptp(x) * width
+    y = (y - 5) / np.ptp(y) * width * 0.95
+    x = np.where(x > 0, x * lobes, x)
+    pts = _open_at_top(_arclength_resample(np.column_stack([x, y]), 600), gap, np.zeros(2))
+    pts = np.round(pts - pts[0], 3)
+    return Shape("heart", f"heart-{width:g}-{lobes:g}", pts[[0, -1]], pts, dict(width=width, gap=gap, lobes=lobes))
 
 
 def family(n: int, seed: int = 0) -> list[Shape]:

@@ -43,6 +43,7 @@ __all__ = [
     "kkt_residual",
     "multipliers",
     "sag_guess",
+    "stable_on_closure",
     "violations",
 ]
 
@@ -439,10 +440,27 @@ def is_stable(chain: Chain, theta: np.ndarray, lam: complex, side: np.ndarray, m
     D, chords = D[moves], chords[moves]
     if not D.size:
         return True  # every group held by the fixtures: nothing can move
-    cols = 1j * chords  # d(closure)/d(psi_G)
+    return stable_on_closure(D, 1j * chords, chain.total_length)
+
+
+def stable_on_closure(D: np.ndarray, cols: np.ndarray, length_scale: float) -> bool:
+    """Is the Hessian diag(D) positive definite on the null space of the closure Jacobian?
+
+    Args:
+        D: (n,) the Lagrangian's second derivatives in n independent angles (one per rigid
+            body or group that turns freely), force x length.
+        cols: (n,) complex, d(closure)/d(angle) of each (i times the body's chord), length.
+        length_scale: the chain's length (rank tolerance).
+
+    The inertia identity In(Z'DZ) = In(D) + In(-C D^-1 C') - (m, m, 0) (C the 2 x n
+    Jacobian, m its rank) decides it in O(n); where some D vanishes (an unloaded body) the
+    null space is projected explicitly.
+    """
+    if not D.size:
+        return True
     C = np.vstack([cols.real, cols.imag])
     scale = np.max(np.abs(D))
-    rank = np.linalg.matrix_rank(C, tol=1e-12 * chain.total_length)
+    rank = np.linalg.matrix_rank(C, tol=1e-12 * length_scale)
     if np.any(np.abs(D) <= 1e-9 * scale):
         # an unloaded group: the inertia identity needs D invertible, so project
         # explicitly (dense, affordable for the few hundred groups where this occurs)

@@ -207,7 +207,15 @@ def _exchange(chain: Chain, act: np.ndarray, max_iter: int):
     return status, act, theta, lam, it, nnewton, hanging
 
 
-def _solve_exact(chain: Chain, active0, end_active0, max_iter: int) -> EquilibriumResult:
+def _solve_exact(chain: Chain, active0, end_active0, max_iter: int, nlp_fallback: bool = True,
+                 theta0=None) -> EquilibriumResult:
+    if theta0 is not None:
+        # a configuration the caller knows (the designed shape, on the branches its rigid
+        # pieces take there): where it is a stable equilibrium the descent stays on it
+        found = _first_stable(chain, [np.asarray(theta0, float)])
+        if found is not None:
+            theta, lam, act, k = found
+            return _assemble(chain, theta, lam, act, 0, 0, k, False, "start")
     act0 = _start_set(chain, active0, end_active0)
     status, act, theta, lam, it, nnewton, hanging = _exchange(chain, act0, max_iter)
     hanging_set = np.where(_held_always(chain), -1, 0)
@@ -235,6 +243,9 @@ def _solve_exact(chain: Chain, active0, end_active0, max_iter: int) -> Equilibri
             nnewton += k
             status = 0
             path = "descent"
+        elif not nlp_fallback:  # the caller would rather know it failed than wait for SLSQP
+            theta = lasts[0] if lasts else sag_guess(chain)
+            status = 3
         else:
             # from where the exchange from the given start got to (a start of the multi-start's
             # reaches its own equilibrium), or the symmetric sag when no dual solve converged
@@ -434,6 +445,8 @@ def solve_equilibrium(
     max_iter: int | None = None,
     penalty_weight: float = 1e3,
     collision_weight: float = 1.0,
+    nlp_fallback: bool = True,
+    theta0=None,
 ) -> EquilibriumResult:
     """Static equilibrium of a chain of rigid rods hung between anchors A and B.
 
@@ -459,6 +472,12 @@ def solve_equilibrium(
         max_iter: cap on active-set iterations (default 10 + 4 N).
         penalty_weight: penalty model only: lambda_1 in units of total weight / total length.
         collision_weight: penalty model only: lambda_2 in units of total weight x total length.
+        nlp_fallback: when the exchange and the descent both fail, polish with SLSQP (slow:
+            up to a second on a long chain of stops); False reports the failure instead (a
+            multi-start's random starts: a start that fails is just a failed start).
+        theta0: optional (N,) chord angles (rad) to start from: where the chain is in a
+            stable equilibrium there (a design checked in its designed shape, rigid pieces
+            that push included), it is returned as found (``info['path']`` "start").
 
     Returns:
         EquilibriumResult.
@@ -483,4 +502,4 @@ def solve_equilibrium(
         return solve_penalty(chain, penalty_weight, collision_weight)
     if max_iter is None:
         max_iter = 10 + 4 * chain.n
-    return _solve_exact(chain, active0, end_active0, max_iter)
+    return _solve_exact(chain, active0, end_active0, max_iter, nlp_fallback, theta0)

@@ -15,6 +15,13 @@ import numpy as np
 from optimize.equilibrium import EquilibriumResult, solve_equilibrium
 
 
+#: Random starts of chains up to this many rods that the exchange and the descent cannot
+#: finish are polished by SLSQP (milliseconds at this size: an arch leaning the other way is
+#: found that way); longer chains' such starts count as failed (SLSQP there takes seconds
+#: a start, and the descent already covers what it would find).
+NLP_RODS = 16
+
+
 @dataclass
 class MultiStartResult:
     """Distinct stable equilibria found from several starts.
@@ -68,7 +75,9 @@ def find_equilibria(
         MultiStartResult.
     """
     rng = np.random.default_rng(seed)
-    first = solve_equilibrium(lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, end_limits=end_limits)
+    n_rods = np.asarray(lengths).size
+    first = solve_equilibrium(lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, end_limits=end_limits,
+                              nlp_fallback=n_rods <= NLP_RODS)
     n = first.angles.size
     lim = np.asarray(limits, dtype=float) if limits is not None else None
     span = max(float(np.hypot(*(np.asarray(anchor_b, float) - np.asarray(anchor_a, float)))), 1e-300)
@@ -105,7 +114,7 @@ def find_equilibria(
         try:
             res = solve_equilibrium(
                 lengths, masses, anchor_a, anchor_b, com=com, limits=limits, g=g, active0=active0,
-                end_limits=end_limits, end_active0=end0,
+                end_limits=end_limits, end_active0=end0, nlp_fallback=n <= NLP_RODS,
             )
         except ValueError:
             out.n_failed += 1

@@ -118,6 +118,7 @@ class InverseProblem:
         joints, ends = self.designed_active()
         kw.setdefault("active0", joints if self.n > 1 else None)
         kw.setdefault("end_active0", ends if self.end_limits is not None else None)
+        kw.setdefault("theta0", self.angles)
         return solve_equilibrium(
             self.lengths, masses, a, b, com=self.com, limits=self.limits, g=self.g,
             end_limits=self.end_limits, **kw

@@ -232,7 +232,9 @@ def _central(As: np.ndarray, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray, n: 
 
     cons = [{"type": "ineq", "fun": lambda z: N[rows] @ z - lo[rows], "jac": lambda z: N[rows]},
             {"type": "ineq", "fun": lambda z: hi[rows_hi] - N[rows_hi] @ z, "jac": lambda z: -N[rows_hi]}]
-    res = minimize(fun, z0, jac=True, constraints=cons, method="SLSQP", options={"ftol": 1e-15, "maxiter": 500})
+    # SLSQP only has to find which bounds the minimiser rests on: the polish below solves the
+    # KKT system for them exactly
+    res = minimize(fun, z0, jac=True, constraints=cons, method="SLSQP", options={"ftol": 1e-12, "maxiter": 200})
     z = res.x
     # polish: the constraints the solver ends on, held as equalities, give the minimiser to
     # round-off (a linear KKT system) instead of the solver's tolerance

@@ -111,3 +111,38 @@ def as_gravity(g) -> float:
     if not np.isfinite(g) or g <= 0:
         raise ValueError(f"g must be positive and finite, got {g}")
     return g
+
+
+def as_clearance(value, n: int) -> np.ndarray:
+    """Diametral pin clearances per pin (N+1,): a scalar for every pin, or one per pin.
+
+    Raises:
+        ValueError: not a scalar or an (N+1,) array of finite numbers >= 0.
+    """
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"clearance must be a number or an array of N+1 numbers ({exc})") from None
+    if arr.ndim == 0:
+        arr = np.full(n + 1, float(arr))
+    if arr.shape != (n + 1,):
+        raise ValueError(f"clearance must be a number or have shape ({n + 1},) (one per pin, "
+                         f"anchors included), got {arr.shape}")
+    bad = np.flatnonzero(~np.isfinite(arr) | (arr < 0))
+    if bad.size:
+        raise ValueError(f"clearance[{bad[0]}] must be finite and >= 0, got {arr[bad[0]]}")
+    return arr
+
+
+def as_pinned(value, n: int) -> np.ndarray:
+    """(N-1,) bool: joints with lo == hi that keep their pin (a two-sided stop); None: none.
+
+    Raises:
+        ValueError: not N-1 booleans.
+    """
+    if value is None:
+        return np.zeros(max(n - 1, 0), dtype=bool)
+    arr = np.asarray(value)
+    if arr.shape != (max(n - 1, 0),) or arr.dtype.kind not in "bi":
+        raise ValueError(f"pinned must be {max(n - 1, 0)} booleans (one per joint), got shape {arr.shape}")
+    return arr.astype(bool)

@@ -11,6 +11,7 @@ chandelier take the same path::
     -> cavities, sockets, exact B-rep of every rod            rodcad.cad.rods.fabricate_chain
     -> fused runs of rods as one solid each                   rodcad.cad.pieces.fuse_pieces
     -> as-built re-simulation per chain                       as_built()
+    -> as printed: pins in holes (compensated), bands          rodcad.design.asprinted
     -> design.json, report.md, previews, STEP/STL             rodcad.outputs, write_outputs()
 
 Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
@@ -35,7 +36,7 @@ from optimize import (
 from optimize.discretize import MAX_RODS
 from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
-from rodcad.cad.pieces import PieceRefused, fuse_pieces
+from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
 from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
 from rodcad.cad.printfile import PrintProfile, write_print_files
 from rodcad.cad.rods import (
@@ -46,6 +47,7 @@ from rodcad.cad.rods import (
     write_assembly,
     write_rod_files,
 )
+from rodcad.design.asprinted import AsPrinted, HolePlan, anchor_holes, plan_holes, printed_chain
 from rodcad.design.chains import ChainSpec, design_chains
 from rodcad.design.fit import DEFAULT_TOLERANCE, curve_fit, fit_limit
 from rodcad.design.chandelier import ChandelierDesign, design_chandelier
@@ -121,6 +123,7 @@ class BuildResult:
         plan, chain_design: the planning and inverse-design results (None for an explicit chain).
         fabrication: the fabricated rods (None without CAD).
         as_built: the as-built re-simulation (None without CAD).
+        holes, as_printed: the pin holes printed; the chain as printed (rodcad.design.asprinted).
         notes: things the user should know (infeasibility, bounds, stops).
         time_s: wall time of the run.
     """
@@ -147,6 +150,8 @@ class BuildResult:
     end_limits: np.ndarray | None = None
     fixture: Any = None
     fixture_problems: list[str] = field(default_factory=list)
+    holes: HolePlan | None = None
+    as_printed: AsPrinted | None = None
 
     @property
     def ok(self) -> bool:
@@ -165,14 +170,16 @@ class BuildResult:
     @property
     def fit(self) -> float | None:
         """How far the hanging rods' centrelines are from the target curve over the target's
-        size (:func:`rodcad.design.fit.curve_fit`), the as-built chain's where it is worse;
-        None for an explicit chain."""
+        size (:func:`rodcad.design.fit.curve_fit`), the as-built or as-printed chain's where it
+        is worse; None for an explicit chain."""
         if self.plan is None or self.design.target_curve is None:
             return None
         curvature = [self.design.catalog[n].curvature for n in self.type_names]
         fit = curve_fit(self.plan.curve, self.equilibrium.points, curvature)
         if self.as_built is not None:
             fit = max(fit, curve_fit(self.plan.curve, self.as_built.equilibrium.points, curvature))
+        if self.as_printed is not None:
+            fit = max(fit, curve_fit(self.plan.curve, self.as_printed.result.points, curvature))
         return fit
 
     @property
@@ -251,7 +258,7 @@ def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
 
 
 def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]], *, jobs: int | None,
-               progress: Progress, label: str, fused: Sequence[tuple[int, int]] = ()
+               progress: Progress, label: str, fused: Sequence[tuple[int, int]] = (), holes=None
                ) -> tuple[list[ChainFabrication], list[str]]:
     """Every rod of every chain built in one go (identical rods once); split per chain. The
     sockets' roofs go onto as few print layers as the rods allow (the rods of ``fused``
@@ -262,7 +269,7 @@ def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]
     keep = {i for a, b in fused for i in range(a, b + 1)}
     with progress.step(label) as st:
         fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count,
-                              layers=layers, keep_roofs=keep)
+                              layers=layers, keep_roofs=keep, holes=holes)
     if len(chains) == 1:
         return [fab], list(fab.problems)
     out, k = [], 0
@@ -329,6 +336,8 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         plan=p, chain_design=cd, notes=list(p.notes), end_limits=pr.end_limits,
     )
     result.notes += _design_notes(result)
+    rods = [design.catalog[name] for name in result.type_names]
+    result.holes = plan_holes(rods, result)
     snap = cd.buildable
     if snap is not None and snap.snapped:
         result.notes.append(
@@ -338,7 +347,7 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     if cad:
         (fab,), problems = _fabricate(design, [(result.type_names, result.masses)], jobs=jobs, progress=progress,
                                       label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
-                                      fused=p.fused)
+                                      fused=p.fused, holes=result.holes.holes)
         result.fabrication = fab
         result.notes += problems
         if p.fused:
@@ -349,12 +358,14 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
                 except PieceRefused as err:
                     raise InputError([design.problem("constraints.fuse", str(err))]) from None
         with progress.step("as-built check (masses and centres of mass from the solids)"):
-            result.as_built = as_built(fab.rods, result.lengths, result.limits, design.anchors,
+            result.as_built = as_built(as_printed_rods(fab), result.lengths, result.limits, design.anchors,
                                        result.target_points, design.g, result.end_limits)
         if result.end_limits is not None:
             with progress.step("the anchor fixture (stops for the end rods), checked against the rods at rest"):
                 result.fixture, result.fixture_problems = build_fixture_for(result)
             result.notes += [f"fixture: {p}" for p in result.fixture_problems]
+    with progress.step("as printed: every pin bearing in its holes; friction and mass tolerance bands"):
+        result.as_printed = printed_chain(rods, result)
     result.time_s = time.perf_counter() - t0
     return result
 
@@ -367,7 +378,8 @@ def build_fixture_for(result: BuildResult) -> tuple[Any, list[str]]:
     d = result.design
     rods = [d.catalog[name] for name in result.type_names]
     angles = result.equilibrium.angles
-    solid = fixture_solid(d.anchors, rods[0], rods[-1], result.end_limits, rest_angles=(angles[0], angles[-1]))
+    solid = fixture_solid(d.anchors, rods[0], rods[-1], result.end_limits, rest_angles=(angles[0], angles[-1]),
+                          pin_holes=None if result.holes is None else anchor_holes(result.holes, result.equilibrium.points))
     printer = d.catalog.printer
     problems = check_fixture(solid, placed_rods(result.equilibrium.points, rods), anchors=d.anchors,
                              end_limits=result.end_limits,

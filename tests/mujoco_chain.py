@@ -31,6 +31,13 @@ MuJoCo model and solver choices (see ``settle_chain`` docstring for the why)
   tendons (eigenvectors of the joint-space inertia matrix) carrying tendon
   damping.  Every vibration mode then decays at a rate ~ min(alpha/2, omega),
   which makes settling times nearly independent of mass ratios and N.
+* Pin friction (``frictionloss``, one moment per pin): the hinge of rod 0 at A and the hinge
+  between rods j-1 and j carry MuJoCo's dry friction loss on their angle; the pin at B, which
+  has no hinge (the tip is welded to B by the equality), a fixed tendon over every hinge (the
+  last rod's absolute angle) with the same friction loss. MuJoCo's friction loss is a soft
+  constraint that creeps under a load it should hold; with the stiff settings of the joint
+  limits (below) a held chain creeps at ~1e-8 rad/s (with MuJoCo's defaults ~1e-4 rad/s, and
+  the noslip solver did not stop it), so ``tol = 1e-7`` finds it at rest.
 * Rotational inertia of every rod about its com is (max_k m_k) * l_i^2/12,
   i.e. the thin-rod value of the heaviest rod.  Rotational inertia does not
   enter the statics; raising it for light rods lowers the constraint
@@ -73,11 +80,12 @@ def _f(x: float) -> str:
 
 def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep, integrator,
                iterations, solver_tolerance, impedance, dampratio, limit_dampratio, inertias,
-               tendons=None, end_limits=None) -> str:
+               tendons=None, end_limits=None, frictionloss=None) -> str:
     """Return the MJCF string of the chain.
 
     ``tendons`` is a list of (damping, coef_vector) for fixed tendons over all
     hinge joints (used for mass-proportional damping); ``None`` = no tendons.
+    ``frictionloss`` (N+1,): the friction moment each pin holds (pins 0 = A .. N = B).
     """
     n = len(lengths)
     tc = 2.0 * timestep  # MuJoCo's "refsafe" floor for the time constant
@@ -115,7 +123,9 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
                     lo, hi = (lo + hi) / 2 - 1e-9, (lo + hi) / 2 + 1e-9
                 lim = (f'limited="true" range="{_f(lo)} {_f(hi)}" '
                        f'solreflimit="{sref_lim}" solimplimit="{simp}"')
-        out.append(f'{indent}  <joint name="j{i}" type="hinge" axis="0 0 1" {lim}/>')
+        fric = "" if frictionloss is None else (f' frictionloss="{_f(frictionloss[i])}" '
+                                                 f'solreffriction="{sref_lim}" solimpfriction="{simp}"')
+        out.append(f'{indent}  <joint name="j{i}" type="hinge" axis="0 0 1" {lim}{fric}/>')
         inertia = inertias[i]
         out.append(f'{indent}  <inertial pos="{_f(com[i][0])} {_f(com[i][1])} 0" mass="{_f(mi)}" '
                    f'diaginertia="{_f(inertia)} {_f(inertia)} {_f(inertia)}"/>')
@@ -129,7 +139,8 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
     out.append("  </worldbody>")
     last = end_limits[1] if end_limits is not None else None
     last_limited = last is not None and (np.isfinite(last[0]) or np.isfinite(last[1]))
-    if tendons or last_limited:
+    pin_b = frictionloss is not None and frictionloss[n] > 0
+    if tendons or last_limited or pin_b:
         out.append("  <tendon>")
         for k, (damp, coef) in enumerate(tendons or []):
             joints = "".join(f'<joint joint="j{i}" coef="{_f(coef[i])}"/>' for i in range(n))
@@ -140,6 +151,10 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
             joints = "".join(f'<joint joint="j{i}" coef="1"/>' for i in range(n))
             out.append(f'    <fixed name="last_rod" limited="true" range="{_f(lo)} {_f(hi)}" '
                        f'solreflimit="{sref_lim}" solimplimit="{simp}">{joints}</fixed>')
+        if pin_b:  # the pin at B: friction on the last rod's absolute angle
+            joints = "".join(f'<joint joint="j{i}" coef="1"/>' for i in range(n))
+            out.append(f'    <fixed name="pin_b" frictionloss="{_f(frictionloss[n])}" '
+                       f'solreffriction="{sref_lim}" solimpfriction="{simp}">{joints}</fixed>')
         out.append("  </tendon>")
     out.append("  <equality>")
     out.append(f'    <connect name="close" site1="tip" site2="anchor_b" solref="{sref}" solimp="{simp}"/>')
@@ -154,7 +169,7 @@ def _qpos_from_angles(theta):
 
 
 def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, angles0, g=9.81,
-                 tol=1e-9, max_time=120.0, end_limits=None, **options) -> dict:
+                 tol=1e-9, max_time=120.0, end_limits=None, frictionloss=None, **options) -> dict:
     """Simulate the chain in MuJoCo until it is at rest and return the rest state.
 
     Parameters
@@ -171,6 +186,9 @@ def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, 
     tol : rest criterion: max|qvel| < tol [rad/s] (and max|qacc| < 1e3*tol
         [rad/s^2]) on three consecutive checks, 100 steps apart.
     max_time : simulated-seconds cap.
+    end_limits : (2, 2) anchor stops on theta_0 and theta_{N-1}, or None.
+    frictionloss : (N+1,) dry friction moment each pin holds (pin 0 = A, pin N = B), or
+        None (see the module docstring; rest with ``tol = 1e-7``).
     options : override entries of ``DEFAULTS``.
 
     Returns
@@ -235,7 +253,8 @@ def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, 
     build_kw = dict(timestep=dt, integrator=opts["integrator"], iterations=opts["iterations"],
                     solver_tolerance=opts["solver_tolerance"], impedance=opts["impedance"],
                     dampratio=opts["dampratio"], limit_dampratio=opts["limit_dampratio"],
-                    inertias=inertias)
+                    inertias=inertias,
+                    frictionloss=None if frictionloss is None else np.asarray(frictionloss, float).reshape(n + 1))
 
     # 1) joint-space inertia at the start configuration -> mass-proportional damping
     build_kw["end_limits"] = None if end_limits is None else np.asarray(end_limits, float).reshape(2, 2)

@@ -71,7 +71,8 @@ def test_every_example_builds_without_cad(example, tmp_path, capsys):
                      [-np.inf if e[0] is None else math.radians(e[0]), np.inf if e[1] is None else math.radians(e[1])]
                      for e in data["anchor_limits_deg"]])  # the anchor fixture's stops (the heart)
     eq = solve_equilibrium([r["length"] for r in rods], [r["mass"] for r in rods], *d.anchors,
-                           com=[r["com"] for r in rods], limits=lim if len(rods) > 1 else None, end_limits=ends)
+                           com=[r.get("com_rod_frame", r["com"]) for r in rods],  # rods[].com: the hole frame
+                           limits=lim if len(rods) > 1 else None, end_limits=ends)
     np.testing.assert_allclose(eq.points, data["simulated"]["points"], atol=1e-6 * d.span)
     # masses are within what each rod can be made to weigh (a catalog type's range, or a rod
     # printed to order's own)

@@ -270,7 +270,12 @@ def test_assembly_step_round_trip(built, capsys):
     code, res, err = _check([str(out), "--json", "--assembly", str(out / "assembly.step")], capsys)
     assert code == 0, err
     assert res["edited"] == []
-    assert res["error_vs_design"]["max_rel_span"] < 1e-9
+    # the rods as built, re-read from the assembly, hang where the build's own as-built check
+    # put them (not exactly on the design: moving the pin holes by the play's compensation moves
+    # each rod's centre of mass by ~1e-3 mm, 1e-7 of the span)
+    built_off = np.hypot(*(np.array(data["as_built"]["points"]) - np.array(data["simulated"]["points"])).T).max()
+    span = float(np.hypot(*np.subtract(*data["anchors"])))
+    assert abs(res["error_vs_design"]["max_rel_span"] - built_off / span) < 1e-9
 
 
 def test_overlap_at_a_joint_is_reported(built, tmp_path, capsys):

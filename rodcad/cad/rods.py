@@ -4,50 +4,41 @@ has its designed mass, and the rods' STEP/STL files and assembly.
 The data flow for one rod (type + target mass), one step per function (the numbers in
 :mod:`rodcad.fabrication`, the solids here):
 
-    type     -> achievable_intervals(): once per type (disk-cached), every
-                               symmetric ball subset of the type's socket layout
-                               and the cavity volumes its layouts can remove:
-                               the reachable masses, narrow bands above the solid
+    type     -> achievable_intervals(): once per type (disk-cached), every symmetric ball
+                               subset of the type's socket layout and the cavity volumes its
+                               layouts can remove: the reachable masses, narrow bands above
+                               the solid
     target   -> plan_rod():       clip to the type's mass range [m_min, m_max]
-                               (:mod:`rodcad.catalog.massrange`); look up the ball
-                               sockets and the cavity volume left to remove in
-                               that table (a target in a gap: the nearest
-                               reachable mass, reported)
-             -> place_cavities():   cavity centres by Poisson-disk (blue-noise) dart
-                               throwing on a seeded candidate pool, every dart
-                               thrown with all its mirror images about the
-                               centre of mass; the symmetric lattice of
-                               :mod:`rodcad.catalog.massrange` is the fallback when the
+                               (:mod:`rodcad.catalog.massrange`); look up the ball sockets and
+                               the cavity volume left to remove in that table (a target in a
+                               gap: the nearest reachable mass, reported)
+             -> place_cavities():   cavity centres by Poisson-disk (blue-noise) dart throwing
+                               on a seeded candidate pool, every dart thrown with all its
+                               mirror images about the centre of mass; the symmetric lattice
+                               of :mod:`rodcad.catalog.massrange` is the fallback when the
                                blue-noise layouts cannot remove enough
-             -> _build():      the cavity radius tuned by a Newton/secant root
-                               solve on the exact B-rep volume (the analytic
-                               volume is the start; 1-2 booleans), walls measured
-                               on the B-rep (BRepExtrema), mass and centre of mass
-                               from the B-rep plus the balls
-    chain    -> fabricate_chain(): identical (type, mass) built once, distinct
-                               rods in worker processes (one task per type),
-                               disk-cached
+             -> _build():      the cavity radius tuned by a Newton/secant root solve on the
+                               exact B-rep volume (the analytic volume is the start; 1-2
+                               booleans), walls measured on the B-rep (BRepExtrema), mass and
+                               centre of mass from the B-rep plus the balls
+    chain    -> fabricate_chain(): identical (type, mass, holes) built once, distinct
+                               rods in worker processes (one task per type), disk-cached
              -> write_rod_files(), write_assembly(): STEP/STL, checked on re-read
 
 Void shapes (all printable without support in the print orientation, see
-:data:`rodcad.fabrication.layout.VOIDS`): cavities are spheres cut flat at 45 degrees
-('capped'), sockets are 'silos' (half sphere + cylinder, flat bridged roof)
-all standing on one print layer, so one pause serves all balls; given the print's
-layers, :func:`fabricate_chain` raises roofs onto layers the chain's other rods share
-(:mod:`rodcad.fabrication.roofs`), so a plate of them pauses seldom. Every layout
-is symmetric about the rod's centre of mass (mirrors across x, y and z, or
-the half turn about the com axis with the z mirror; sockets are raised by
-:func:`rodcad.fabrication.layout.ball_offset` so socket and ball together act at their
-site), so the centre of mass stays where the design assumes.
+:data:`rodcad.fabrication.layout.VOIDS`): cavities are spheres cut flat at 45 degrees ('capped'),
+sockets are 'silos' (half sphere + cylinder, flat bridged roof) all standing on one print layer, so
+one pause serves all balls; given the print's layers, :func:`fabricate_chain` raises roofs onto
+layers the chain's other rods share (:mod:`rodcad.fabrication.roofs`), so a plate of them pauses
+seldom. Every layout is symmetric about the rod's centre of mass (mirrors across x, y and z, or the
+half turn about the com axis with the z mirror; sockets are raised by
+:func:`rodcad.fabrication.layout.ball_offset` so socket and ball together act at their site), so
+the centre of mass stays where the design assumes.
 
-Print orientation: every rod lies on its side, the rod frame's -y face on the
-bed and +y up (:data:`rodcad.cad.export.PRINT_ROTATION`): hinge layers and pin
-holes then build without support. Curved rods have no flat side but their
-chain-plane faces, which would leave the tongue knuckle in mid-air; they print
-on their side too, resting on the lowest point of their arc (a slicer adds a
-little support under the rising ends; see :attr:`FabricatedRod.print_note`).
-
-Units: mm, mm^3, g; densities g/cm^3.
+Print orientation: every rod lies on its side, the rod frame's -y face on the bed and +y up
+(:data:`rodcad.cad.export.PRINT_ROTATION`): hinge layers and pin holes build without support.
+Curved rods rest on their arc's lowest point (:attr:`FabricatedRod.print_note`). The pin holes
+may sit off the hinge axes (``holes``: the pin-play compensation). Units: mm, mm^3, g; g/cm^3.
 """
 
 from __future__ import annotations
@@ -72,7 +63,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from rodcad.fabrication.layers import LayerGrid
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, print_matrix, rod_matrices
 from rodcad.cad.frame import pin_solid
-from rodcad.cad.solids import mass_properties, type_solid, with_voids
+from rodcad.cad.solids import NO_SHIFT, Holes, mass_properties, type_solid, with_voids
 from rodcad.colors import mass_colors
 from rodcad.fabrication.cavities import (
     CAPPED_K,
@@ -146,6 +137,8 @@ class FabricatedRod:
         ball_name: the kind of the balls (catalog name, e.g. 'tungsten carbide ball 6 mm';
             '' without balls).
         ball_mass_each: mass of one ball (g; 0 without balls).
+        holes: each pin hole's centre minus its hinge axis (mm, rod frame): the pin-play
+            compensation (:func:`rodcad.cad.solids.build_rod`).
     """
 
     index: int
@@ -181,6 +174,7 @@ class FabricatedRod:
     ball_name: str = ""
     ball_mass_each: float = 0.0
     socket_height: float = 0.0
+    holes: Holes = NO_SHIFT
 
 
 @dataclass
@@ -312,17 +306,20 @@ def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
     return _assemble_result(rod, target, index, plan)
 
 
-def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, Any]) -> FabricatedRod:
-    """Rebuild the solid from a solved plan (one boolean) and collect the numbers."""
+def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, Any],
+                     holes: Holes = NO_SHIFT) -> FabricatedRod:
+    """Rebuild the solid from a solved plan (one boolean; the pin holes moved by ``holes``,
+    which keeps the volume and moves the centre of mass a little) and collect the numbers."""
     plan = RodPlan.from_json(data)
     rho = rod.material.density / 1000.0
     socks, cavs, rs, r = plan.sockets, plan.cavities, plan.socket_radius, plan.cavity_radius
     groups = ([("silo", socks, rs, plan.socket_top)] if len(socks) else []) + ([("capped", cavs, r)] if len(cavs) else [])
-    solid = with_voids(type_solid(rod), groups, rod.name)
+    solid = with_voids(type_solid(rod, holes), groups, rod.name)
     meas = plan.measured
     if meas is None:
         raise FabricationError(f"rod {index} ({rod.name}): its plan was never built")
-    volume = mass_properties(solid).volume
+    props = mass_properties(solid)
+    volume = props.volume
     if abs(volume - meas.volume) > 1e-6 * meas.volume:
         raise FabricationError(f"rod {index} ({rod.name}): rebuilt volume {volume} differs from the solved "
                                f"{meas.volume} mm^3")
@@ -331,6 +328,11 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         raise FabricationError(f"rod {index} ({rod.name}): a wall of {meas.min_wall:.3f} mm around a void is "
                                f"thinner than the minimum {wall} mm")
     kind = rod.ball_kinds[plan.ball_kind] if len(socks) else None
+    com = meas.com
+    if holes != NO_SHIFT:  # measured again: the plan's solid had its holes on the axes
+        metal = kind.mass * len(socks) if kind else 0.0
+        c = np.array(props.center[:2]) * volume * rho + (kind.mass * socks.sum(axis=0)[:2] if kind else 0.0)
+        com = (float(c[0] / (volume * rho + metal)), float(c[1] / (volume * rho + metal)))
     pm = print_matrix(solid)
     roofs: list[float] = []
     for z in sorted(socks @ UP + plan.socket_top + pm[2, 3]):  # rod +y is bed +Z
@@ -344,14 +346,15 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     note = _print_note(rod)
     return FabricatedRod(
         index=index, type_name=rod.name, target_mass=float(target), mass=mass,
-        com=meas.com, plastic_volume=meas.volume, filament_mass=meas.volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
+        com=com, plastic_volume=meas.volume, filament_mass=meas.volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
         ball_count=len(socks), ball_diameter=kind.diameter if kind is not None else None,
         ball_name=kind.name if kind is not None else "", ball_mass_each=kind.mass if kind is not None else 0.0,
         pause_z=pause, mass_error=(mass - goal) / goal, in_range=not plan.message, message=plan.message,
         solid=solid, cavity_centers=cavs, socket_centers=socks, socket_radius=rs if len(socks) else 0.0,
         min_wall=meas.min_wall, layout=plan.layout, print_matrix=pm,
         file_stem=f"{index:02d}_{rod.name}", print_note=note, thickness=rod.geometry.thickness,
-        pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs), socket_height=plan.socket_height)
+        pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs), socket_height=plan.socket_height,
+        holes=holes)
 
 
 def _filled_result(rod: RodType, target: float) -> FabricatedRod:
@@ -393,7 +396,7 @@ def _print_note(rod: RodType) -> str:
 def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: int = 0, jobs: int | None = None,
                     progress: Callable[[int, int], None] | None = None,
                     cache: DiskCache | None = None, layers: LayerGrid | None = None,
-                    keep_roofs: Collection[int] = ()) -> ChainFabrication:
+                    keep_roofs: Collection[int] = (), holes: Sequence[Holes] | None = None) -> ChainFabrication:
     """Cavities and ball sockets for every rod of a chain, built on the B-rep.
 
     Identical rods (same type, same target mass to 1 microgram) are built
@@ -413,6 +416,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
         cache: disk cache (default :class:`DiskCache`).
         layers: the print's layers (None: every socket as laid out).
         keep_roofs: positions whose sockets stay as laid out (the rods of fused pieces).
+        holes: per position, its pin holes' offsets (:func:`rodcad.cad.solids.build_rod`).
 
     Returns:
         The :class:`ChainFabrication`; e.g. ``all(abs(r.mass_error) < 1e-3 for r in fab.rods)``.
@@ -427,14 +431,16 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     cache = cache if cache is not None else DiskCache()
     roofs: list[float | None] = [None] * len(types) if layers is None else shared_roofs(
         types, masses, layers, seed=seed, jobs=jobs, cache=cache, keep=keep_roofs)
-    keys: dict[tuple[str, float, float | None], int] = {}
+    keys: dict[tuple[Any, ...], int] = {}
     distinct: list[tuple[RodType, float, float | None]] = []
+    moved: list[Holes] = []  # per distinct rod, its holes (not part of the plan: same volume)
     where: list[int] = []
-    for rod, m, roof in zip(types, masses, roofs):
-        k = (rod.name, round(float(m), 6), None if roof is None else round(roof, 9))
+    for rod, m, roof, hl in zip(types, masses, roofs, holes or [NO_SHIFT] * len(types)):
+        k = (rod.name, round(float(m), 6), None if roof is None else round(roof, 9), hl)
         if k not in keys:
             keys[k] = len(distinct)
             distinct.append((rod, float(m), roof))
+            moved.append(hl)
         where.append(keys[k])
     plans: list[dict[str, Any] | None] = []
     todo: list[int] = []
@@ -483,7 +489,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     finally:
         if pool is not None:
             pool.shutdown()
-    built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i])
+    built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i], moved[i])
              for i, (rod, m, _) in enumerate(distinct)]
     rods: list[FabricatedRod] = []
     problems: list[str] = []

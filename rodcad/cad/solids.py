@@ -46,8 +46,10 @@ __all__ = [
     "GeometryError",
     "hinge_zone",
     "is_valid_solid",
+    "Holes",
     "mass_properties",
     "MassProperties",
+    "NO_SHIFT",
     "one_solid",
     "prism_solid",
     "rod_solid",
@@ -61,6 +63,12 @@ __all__ = [
 
 #: Distances at or below this count as contact (mm).
 CONTACT_TOL = 1e-6
+
+#: Pin holes moved off the hinge axes, ((dx0, dy0), (dx1, dy1)) mm in the rod frame.
+Holes = tuple[tuple[float, float], tuple[float, float]]
+
+#: Both pin holes on their hinge axes.
+NO_SHIFT: Holes = ((0.0, 0.0), (0.0, 0.0))
 
 
 class GeometryError(ValueError):
@@ -160,12 +168,16 @@ def _end_cuts(g: RodGeometry) -> list[Solid]:
     return out
 
 
-def build_rod(g: RodGeometry, name: str = "") -> Solid:
+def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
     """Build a rod's exact B-rep solid in the rod frame.
 
     Args:
         g: the rod's geometry.
         name: label of the solid (becomes the STEP product name).
+        holes: each pin hole's centre minus its hinge axis, ((dx0, dy0), (dx1, dy1)) in the
+            rod frame (mm): the pin-play compensation (:mod:`rodcad.design.asprinted`), at most
+            the clearance's half, inside the knuckle. The body, knuckles and hinge zones stay
+            on the hinge axes, where the loaded pins put them.
 
     Returns:
         A valid build123d ``Solid``.
@@ -199,7 +211,7 @@ def build_rod(g: RodGeometry, name: str = "") -> Solid:
             clear.append(cylinder_solid(p, r, -t / 2 - 1, -a))
         else:  # slot for the partner's tongue
             clear.append(cylinder_solid(p, r, -a - gap, a + gap))
-        clear.append(cylinder_solid(p, hg.hole_diameter / 2, -t / 2 - 1, t / 2 + 1))
+        clear.append(cylinder_solid(p + np.asarray(holes[joint], float), hg.hole_diameter / 2, -t / 2 - 1, t / 2 + 1))
     for cut in clear:
         body = one_solid(body.cut(cut), "clearing the hinge zones and pin holes")
     body = one_solid(body.clean(), "cleaning up")
@@ -208,9 +220,9 @@ def build_rod(g: RodGeometry, name: str = "") -> Solid:
 
 
 @lru_cache(maxsize=128)
-def rod_solid(g: RodGeometry, name: str = "") -> Solid:
+def rod_solid(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
     """:func:`build_rod`, cached per process. Do not modify the result."""
-    return build_rod(g, name)
+    return build_rod(g, name, holes)
 
 
 def hinge_zone(g: RodGeometry, joint: int) -> Solid:
@@ -346,15 +358,16 @@ def with_voids(solid: Solid, voids: Sequence[tuple[Any, ...]], name: str = "") -
 
 
 
-def type_solid(rod: RodType) -> Solid:
+def type_solid(rod: RodType, holes: Holes = NO_SHIFT) -> Solid:
     """The exact B-rep solid of a catalog rod type in the rod frame, labelled with the
-    type's name. Built once per process.
+    type's name (its pin holes moved by ``holes``, see :func:`build_rod`). Built once per
+    process.
 
     Raises:
         InputError: when the parameters make no valid solid (pointing at the family
             in the catalog).
     """
     try:
-        return rod_solid(rod.geometry, rod.name)
+        return rod_solid(rod.geometry, rod.name, holes)
     except GeometryError as err:
         raise InputError([rod.origin.problem(f"rod type {rod.name!r}: {err}")]) from None

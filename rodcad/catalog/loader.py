@@ -296,7 +296,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
                 if multi_curv:
                     name += f"-k{format_number(curv)}"
                 out.append(RodType(name, f["name"], length, scale, curv, geom, material, kinds[0] if kinds else None,
-                                   ctx.origin(l_rel), heavier=kinds[1:]))
+                                   ctx.origin(l_rel), heavier=kinds[1:], friction=jt["friction"]))
     return out if ok else []
 
 
@@ -509,7 +509,7 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     origin = ctx.origin("length")
     refs = [RodType(f"{f['name']}-{fmt(lv)}", f["name"], lv, scale, k0,
                     RodGeometry(lv, h, t, k0, hinge, first, second), material, kinds[0] if kinds else None, origin,
-                    heavier=kinds[1:])
+                    heavier=kinds[1:], friction=jt["friction"])
             for lv in length]
     res = f["length"].get("resolution")
     if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:

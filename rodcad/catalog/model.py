@@ -335,6 +335,8 @@ class RodType:
         heavier: further ball kinds, in the catalog's order of preference after ``balls``:
             a rod uses one kind, a later one only where the kinds before cannot make it
             heavy enough (see :attr:`ball_kinds`).
+        friction: friction coefficient of the pins in its holes (the catalog's
+            ``joint.friction``; the friction band, :mod:`rodcad.design.asprinted`).
     """
 
     name: str
@@ -348,6 +350,7 @@ class RodType:
     origin: Origin = field(compare=False, repr=False)
     fill: Fill | None = None
     heavier: tuple[Balls, ...] = ()
+    friction: float = 0.3
 
     @property
     def ball_kinds(self) -> tuple[Balls, ...]:
@@ -521,7 +524,7 @@ class Catalog:
             if value is not None:
                 name += f"-{tag}{_fmt(value, 3)}"
         return RodType(name, family, float(length), t.scale, float(curvature), geom, t.material, t.balls, t.origin,
-                       t.fill, t.heavier)
+                       t.fill, t.heavier, t.friction)
 
     def with_types(self, types: Sequence[RodType]) -> Catalog:
         """This catalog with rods made to order added (a name already known is kept).

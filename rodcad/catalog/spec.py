@@ -186,7 +186,13 @@ def family_spec() -> Obj:
                                               description="Pin diameter (mm); pins are separate parts, "
                                               "e.g. pieces of 1.75 mm filament."),
                         "pin_clearance": Field(Num(minimum=0, maximum=5, unit="mm"), default=0.25,
-                                               description="Pin hole diameter minus pin diameter (mm)."),
+                                               description="Pin hole diameter minus pin diameter (mm). "
+                                               "Under load each pin bears on the far side of its holes; "
+                                               "rodcad places the holes so the loaded chain hangs on its design."),
+                        "friction": Field(Num(minimum=0, maximum=2), default=0.3,
+                                          description="Friction coefficient of the pin in its holes. Default "
+                                          "0.3: the middle of the 0.2-0.4 published for dry PLA on steel (and "
+                                          "on PLA); the friction band rodcad reports grows in proportion to it."),
                         "knuckle_radius": Field(Num(maximum=100, **mm_pos), required=True,
                                                 description="Outer radius of the knuckles around the "
                                                 "hinge axis (mm, before scaling)."),
@@ -326,6 +332,11 @@ def catalog_spec() -> Obj:
                                             description="Perimeter loops (the rest is 100 % infill)."),
                         "filament_diameter": Field(Num(exclusive_minimum=0, maximum=5, unit="mm"), default=1.75,
                                                    description="Filament diameter (mm)."),
+                        "mass_tolerance": Field(Num(exclusive_minimum=0, maximum=0.5), default=0.03,
+                                                description="Relative error of a printed rod's mass that 95 % "
+                                                "of rods stay within. Default 0.03: filament sold as 1.75 +- "
+                                                "0.02 to 0.05 mm is 2.3-5.7 % off in cross-section at the "
+                                                "extremes of its tolerance; a rod averages metres of it."),
                         "temperature": Field(Num(minimum=100, maximum=500, unit="degC"), default=215,
                                              description="Nozzle temperature (deg C)."),
                         "bed_temperature": Field(Num(minimum=0, maximum=200, unit="degC"), default=60,

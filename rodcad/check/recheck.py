@@ -29,6 +29,7 @@ from optimize.distance import ShapeDistance
 from rodcad.check.built import BuiltChain, load_built
 from rodcad.check.measure import JointOverlap, RodReading, joint_overlaps, read_rods
 from rodcad.check.types import ChainTypes, chain_types
+from rodcad.design.asprinted import AsPrinted, as_printed, fused_joints, plan_of
 from rodcad.errors import InputError, Problem
 from rodcad.progress import Progress
 
@@ -47,6 +48,9 @@ class CheckResult:
         vs_design: its joints against design.json's simulated joints.
         vs_target: its joints against the target joints.
         overlaps: joints next to edited rods where the rods now overlap.
+        as_printed: the chain with every pin bearing in its holes as printed (design.json
+            ``rods[].holes_mm``, ``params.pin_clearance``), the measured masses and centres of
+            mass (None for a build without them).
         notes: what the user should know, in sentences.
         time_s: wall time.
     """
@@ -60,6 +64,7 @@ class CheckResult:
     overlaps: list[JointOverlap]
     notes: list[str] = field(default_factory=list)
     time_s: float = 0.0
+    as_printed: AsPrinted | None = None
 
     @property
     def edited(self) -> list[int]:
@@ -90,6 +95,22 @@ def simulate(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) -
                              g=g, end_limits=built.end_limits)
 
 
+def printed(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) -> AsPrinted | None:
+    """The chain as printed (pins in their holes) with these masses and centres of mass, the
+    holes and clearances design.json gives; None where it gives none (an older build)."""
+    rods = built.data.get("rods")
+    try:
+        offsets = [r["holes_mm"] for r in rods]
+        clear = [float(r["params"]["pin_clearance"]) for r in rods]
+    except (KeyError, TypeError):
+        return None
+    runs = built.data.get("fused") or []
+    plan = plan_of(offsets, clear + clear[-1:], built.limits if built.n > 1 else None, fused_joints(runs, built.n))
+    return as_printed(lengths=built.lengths, masses=masses, com=com, plan=plan, anchors=built.anchors,
+                      target=built.target, limits=built.limits if built.n > 1 else None,
+                      end_limits=built.end_limits, g=g)
+
+
 def check(outdir: str | Path, *, assembly: str | Path | None = None,
           progress: Progress | None = None) -> CheckResult:
     """Re-read the rods of an earlier build and re-simulate the chain.
@@ -115,12 +136,16 @@ def check(outdir: str | Path, *, assembly: str | Path | None = None,
         readings = read_rods(built, types.rods, assembly=asm)
     masses = np.array([r.mass for r in readings], float)
     com = np.array([r.com for r in readings], float)
-    with progress.step("re-simulating the chain"):
+    with progress.step("re-simulating the chain (and with every pin bearing in its holes)"):
         eq = simulate(built, masses, com, types.g)
+        try:
+            ap = printed(built, masses, com, types.g)
+        except ValueError:  # the play leaves no configuration: reported by the notes below
+            ap = None
     with progress.step("joints next to edited rods (overlaps at the new bends and at the limits)"):
         overlaps = joint_overlaps(built, readings, np.degrees(eq.bends))
     res = CheckResult(built, types, readings, eq, shape_distance(built.simulated, eq.points),
-                      shape_distance(built.target, eq.points), overlaps)
+                      shape_distance(built.target, eq.points), overlaps, as_printed=ap)
     res.notes = _notes(res)
     res.time_s = time.perf_counter() - t0
     return res
@@ -142,6 +167,11 @@ def _notes(res: CheckResult) -> list[str]:
         notes.append(f"the equilibrium solver did not converge: {eq.message}")
     elif not eq.stable:
         notes.append("the re-simulated shape is an equilibrium but NOT a stable one")
+    ap = res.as_printed
+    if ap is not None:
+        notes.append(f"as printed (every pin bearing in its holes): the chain hangs {ap.distance.max:.3g} mm "
+                     f"({100 * ap.distance.max / span:.3g} % of the span) from the target"
+                     + ("" if ap.result.success else f" (the solver: {ap.result.message})"))
     notes += [o.sentence() for o in res.overlaps]
     return notes
 
@@ -157,6 +187,19 @@ def equilibrium_json(eq: EquilibriumResult) -> dict[str, Any]:
             "angles_deg": [float(math.degrees(v)) for v in eq.angles],
             "reaction": [_f(v * 1e-3) for v in eq.reaction], "reaction_a": [_f(v * 1e-3) for v in eq.reaction_a],
             "kkt_residual": _f(eq.kkt_residual), "stable": bool(eq.stable), "success": bool(eq.success)}
+
+
+def _printed_json(res: CheckResult) -> dict[str, Any]:
+    """check --json's ``as_printed``: the pins, against the target and against the build's own
+    as-printed pins (design.json ``as_printed.points``) where it has them."""
+    ap = res.as_printed
+    assert ap is not None
+    out: dict[str, Any] = {"points": [[float(x), float(y)] for x, y in ap.result.points], "error": ap.distance.as_dict(),
+                           "stable": bool(ap.result.stable), "success": bool(ap.result.success)}
+    before = (res.built.data.get("as_printed") or {}).get("points")
+    if isinstance(before, list) and np.shape(before) == ap.result.points.shape:
+        out["error_vs_design"] = shape_distance(np.asarray(before, float), ap.result.points).as_dict()
+    return out
 
 
 def check_json(res: CheckResult) -> dict[str, Any]:
@@ -175,6 +218,7 @@ def check_json(res: CheckResult) -> dict[str, Any]:
         "simulated": equilibrium_json(res.equilibrium),
         "error_vs_design": res.vs_design.as_dict(),
         "error": res.vs_target.as_dict(),
+        "as_printed": None if res.as_printed is None else _printed_json(res),
         "joints": [{"joint": o.joint, "bend_deg": o.bend_deg, "where": o.where, "overlap_mm3": o.overlap}
                    for o in res.overlaps],
         "ok": bool(res.ok),

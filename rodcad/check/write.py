@@ -21,6 +21,7 @@ import numpy as np
 
 from optimize import shape_distance
 from optimize.discretize import centerline
+from rodcad.design.asprinted import hole_frame
 from rodcad.cad.export import export_assembly
 from rodcad.cad.printfile import write_print_files
 from rodcad.cad.reread import write_rod_step, write_rod_stl
@@ -134,6 +135,9 @@ def rebalanced_json(res: CheckResult, rb: Rebalanced) -> dict[str, Any]:
         if r.edited:
             rod["mass"] = float(r.mass)
             rod["com"] = [float(v) for v in r.com]
+            if "holes_mm" in rod:  # design.json's com is in the hole frame (contract.md "As printed")
+                rod["com_rod_frame"] = rod["com"]
+                rod["com"] = [float(v) for v in hole_frame([b.lengths[i]], [r.com], [rod["holes_mm"]])[1][0]]
             fab.update({"mass": float(r.mass), "com": [float(v) for v in r.com],
                         "filament_g": float(r.mass - b.rods[i].ball_mass - b.rods[i].fill_mass),
                         "plastic_volume_mm3": float(r.volume), "edited": True,

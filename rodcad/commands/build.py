@@ -50,13 +50,13 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet)
     design = load_design(args.design)
     outdir = Path(args.outdir) if args.outdir else Path("outputs") / design.name
-    folders = [outdir, outdir.with_name(outdir.name + ".best-fit")]
     problems = []
-    for folder in folders:  # before any work: never replace what rodcad did not write
+    for folder in (outdir, _best_fit(outdir)):  # before any work: never replace what rodcad did not write
         try:
             check_output_folder(folder)
-        except OutputFolderError as err:
+        except (OutputFolderError, ValueError) as err:
             problems.append(Problem(str(folder), 0, 0, "-o" if args.outdir else "name", str(err)))
+            break  # the best fit's folder sits beside OUTDIR: one problem says it
     if problems:
         raise InputError(problems)
     if args.seed is not None and args.seed < 0:
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     code = 0
     target = outdir
     if not result.ok:
-        target = outdir.with_name(outdir.name + ".best-fit")
+        target = _best_fit(outdir)
         code = 1
     pipeline.write_outputs(result, target, progress=progress)
     print(summary_text(result, target))
@@ -82,13 +82,19 @@ def run(args: argparse.Namespace) -> int:
     return code
 
 
+def _best_fit(outdir: Path) -> Path:
+    """OUTDIR.best-fit, beside OUTDIR (where a design that misses its tolerance goes)."""
+    return outdir.resolve().with_name(outdir.resolve().name + ".best-fit") if not outdir.name else \
+        outdir.with_name(outdir.name + ".best-fit")
+
+
 def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
     from rodcad import pipeline
     from rodcad.outputs.report import chandelier_summary
 
     b = pipeline.build_chandelier(design, method=args.method, seed=args.seed,
                                   cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
-    target = outdir if b.meets_tolerance else outdir.with_name(outdir.name + ".best-fit")
+    target = outdir if b.meets_tolerance else _best_fit(outdir)
     pipeline.write_chandelier_outputs(b, target, progress=progress)
     print(chandelier_summary(b, target))
     if target != outdir:

@@ -39,12 +39,17 @@ from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
+from rodcad.design.asprinted import joint_bands, narrower, too_wide
 from rodcad.design.laying import HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, lay_rods
 
-__all__ = ["Allowed", "Decision", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
+__all__ = ["Allowed", "Decision", "EXTRA_ROUNDS", "HI", "LO", "LOCK", "MAX_ROUNDS", "decide"]
 
 #: Rounds of holding more joints both ways before the planner settles for what it has.
 MAX_ROUNDS = 10
+
+#: Rounds of holding one more joint once a design is accepted (on target, stable, nothing
+#: lower) but the multi-start still finds other, higher shapes.
+EXTRA_ROUNDS = 2
 
 #: A bend below this (rad) is straight: only a stop holds it.
 STRAIGHT_TOL = 1e-9
@@ -69,12 +74,17 @@ class Allowed:
             of stopped joints is printed as one piece too).
         verify: check the result against the solver and hold more joints where it fails
             (off for one shell of rods, whose stops are fixed by the shell).
+        robust: (allowance mm, mu, pin radius mm, mass tolerance) for design option ``robust``:
+            an accepted design whose friction or mass band exceeds the allowance at a joint
+            gets that joint held both ways in one more round (:func:`rodcad.design.asprinted.
+            loose_joints`); None: off.
     """
 
     stops: bool = True
     anchor_stops: bool = True
     fuse: str = "auto"
     verify: bool = True
+    robust: tuple[float, float, float, float] | None = None
 
 
 @dataclass
@@ -94,6 +104,7 @@ class Decision:
         notes: what the planner did and why, in words.
         feasible: some choice of stops balances the target within the mass ranges.
         history: per round, the joints held both ways so far and the solver's verdict.
+        masses: the masses the verdict is for (None when not checked).
     """
 
     laid: Laid
@@ -107,6 +118,7 @@ class Decision:
     notes: list[str] = field(default_factory=list)
     feasible: bool = True
     history: list[tuple[list[int], Verdict | None]] = field(default_factory=list)
+    masses: np.ndarray | None = None
 
     @property
     def accepted(self) -> bool:
@@ -147,7 +159,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     def printable(j: int) -> bool:
         return stop_range is not None and stop_range[0] - 1e-9 <= deg[j] <= stop_range[1] + 1e-9
 
-    free_lim = free_limits(catalog, pf, lengths, kappa) if n > 1 else np.zeros((0, 2))
+    free_lim = free_limits(catalog, pf, lengths, kappa, deg) if n > 1 else np.zeros((0, 2))
     can_fuse = allowed.fuse != "never" and allowed.stops
     forced, fused, beyond = [], set(), []
     for j in range(n - 1):
@@ -168,7 +180,11 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     best: Decision | None = None
     notes: list[str] = []
     history: list[tuple[list[int], Verdict | None]] = []
+    settled = 0
+    last = 0.0  # how long the last round took (s)
+    robust = None  # (the first accepted design, its bands) once design option robust looked at it
     for rnd in range(MAX_ROUNDS + 1):
+        t_round = time.perf_counter()
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
                         end_limits=end_limits, fused=fused)
@@ -189,9 +205,12 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
                     stops[j] = (float(deg[j]), side)
             if mirrored:
                 _symmetrize(stops, ends, n, deg, printable)
+        if robust is not None:  # design option robust: the accepted design's stops stay, the held joints added
+            stops.update({j: v for j, v in robust[0].stops.items() if j not in stops})
+            ends.update({k: v for k, v in robust[0].ends.items() if k not in ends})
         laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, limits=True, same=same,
                         end_limits=end_limits_for(points, ends, end_limits), fused=fused)
-        verdict = None
+        verdict = masses = None
         if allowed.verify and n > 1:
             if report is not None:
                 report(f"checking the stops with the solver (round {rnd + 1}"
@@ -200,17 +219,32 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             verdict = verify(laid.problem, masses, n_starts=n_starts, seed=seed, tol=ON_TARGET)
         history.append((sorted(locks), verdict))
         d = Decision(laid, stops, ends, set(fused), list(beyond), verdict, rnd, sorted(locks), notes, feasible,
-                     history)
+                     history, masses)
         if best is None or _better(d, best):
             best = d
-        if verdict is None or d.accepted and not verdict.others or not feasible:
+        if verdict is None or (d.accepted and not verdict.others and allowed.robust is None) or not feasible:
             break
-        if time.perf_counter() - t0 > budget_s:
-            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) ({budget_s:g} s)")
+        last = time.perf_counter() - t_round
+        if time.perf_counter() - t0 + last > budget_s:  # another round would overrun the budget
+            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) (its {budget_s:g} s "
+                         "budget)")
             break
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
-        if d.accepted:  # other shapes exist, all higher: hold a joint more only if it is cheap
-            new = new[:1]
+        if d.accepted:  # other shapes exist, all higher: hold one joint more, for a few rounds
+            settled += 1
+            new = new[:1] if settled <= EXTRA_ROUNDS else []
+        if d.accepted and not new and allowed.robust is not None:
+            bands = joint_bands(laid.problem, masses, allowed.robust, seed=seed)
+            if robust is None:  # the first accepted design: hold the joints whose band is too wide
+                robust = (d, bands)
+                new = [j for j in too_wide(bands, allowed.robust[0]) if j not in locks | fused]
+            else:  # the design that holds them, kept where its bands are narrower
+                best = d if narrower(bands, robust[1]) else robust[0]
+                notes.append(f"robust: joint(s) {sorted(set(best.held) - set(robust[0].held))} held both ways, "
+                             "where pin friction or the print's mass tolerance moved the chain more than "
+                             f"{allowed.robust[0]:.3g} mm" if best is d else "robust: holding the joints whose "
+                             "bands exceed the tolerance does not narrow them here; the design keeps them free")
+                break
         if not new:
             break
         for j in new:
@@ -250,10 +284,11 @@ def _to_hold(culprits: list[int], n: int, held: set[int], printable, can_fuse: b
 
 
 def _score(d: Decision) -> tuple:
+    """Accepted first, then on target, then the only stable shape found, then the error."""
     v = d.verdict
     if v is None:
-        return (1, 0.0, 0)
-    return (0 if d.accepted else 1, 0 if v.on_target else 1, v.error / max(v.size, 1e-300))
+        return (1, 1, 1, 0.0)
+    return (0 if d.accepted else 1, 0 if v.on_target else 1, 1 if v.others else 0, v.error / max(v.size, 1e-300))
 
 
 def _better(a: Decision, b: Decision) -> bool:

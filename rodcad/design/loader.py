@@ -172,7 +172,8 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
     constraints = Constraints(types, lengths, int(c["rods"]) if "rods" in c else None,
                               c.get("preferred_length"), tuple(fixed), c.get("joints", "any"),
                               bool(c.get("same_shell", False)), c.get("anchor_stops"),
-                              _anchor_limits(c.get("anchor_limits_deg"), v), c.get("fuse"))
+                              _anchor_limits(c.get("anchor_limits_deg"), v), c.get("fuse"),
+                              bool(data.get("robust", True)))
 
     # target
     form, params, curve = None, {}, None

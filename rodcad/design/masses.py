@@ -123,6 +123,10 @@ def check_chain(plan: ChainPlan, masses: np.ndarray, *, seed: int = 0, n_starts:
     every joint on the stop the design puts it on) and look for other stable equilibria
     (multi-start)."""
     p = plan.problem
+    if plan.verified is not None and (g is None or g == p.g) and n_starts <= plan.verified[1].starts:
+        m, v = plan.verified  # the planner's own check of these very masses: the same answer
+        if v.equilibrium is not None and np.array_equal(np.asarray(m, float), np.asarray(masses, float)):
+            return ChainCheck(v.equilibrium, 1 + len(v.others), not v.others, v.starts, tuple(v.others))
     a, b = p.anchors
     joints, ends = p.designed_active()
     return check_equilibrium(p.lengths, masses, a, b, com=p.com, limits=p.limits, g=p.g if g is None else g,

@@ -111,6 +111,8 @@ class Constraints:
             planner decides: 'auto' for rods printed to order, bare pins for a fixed menu).
         anchor_limits_deg: bounds [lo, hi] on the absolute angles of the first and of the
             last rod (deg from +x) that the anchor fixture imposes, or None per end.
+        robust: the design file's top-level ``robust`` (held here, where the planner reads
+            it): prefer designs whose friction and mass bands stay within the tolerance.
         fuse: 'auto', 'never' ('none'), 'stops' (:data:`FUSE_MODES`) or None: not given
             (the planner decides: 'auto' for rods printed to order).
     """
@@ -125,6 +127,7 @@ class Constraints:
     anchor_stops: str | None = None
     anchor_limits_deg: tuple[tuple[float, float] | None, tuple[float, float] | None] = (None, None)
     fuse: str | None = None
+    robust: bool = True
 
     @property
     def anchor_stops_allowed(self) -> bool:

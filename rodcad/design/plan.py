@@ -30,6 +30,7 @@ from rodcad.catalog.limits import all_pair_limits
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
 from rodcad.catalog.printed import mass_table
+from rodcad.design.asprinted import robust_option
 from rodcad.design.model import Constraints, FixedRod
 from rodcad.design.printed import (
     PrintedFamily,
@@ -67,6 +68,8 @@ class ChainPlan:
         rods: the rods made to order (rods printed to order), in chain order; empty for a
             catalog's fixed menu.
         fused: rods printed as one rigid piece, (first, last) rod indices.
+        verified: (masses, :class:`optimize.verify.Verdict`) the planner checked for this
+            very problem, or None.
     """
 
     curve: np.ndarray
@@ -80,6 +83,7 @@ class ChainPlan:
     added_stops: list[int] = field(default_factory=list)
     rods: list[RodType] = field(default_factory=list)
     fused: list[tuple[int, int]] = field(default_factory=list)
+    verified: tuple[np.ndarray, object] | None = None
 
 
 @dataclass(frozen=True)
@@ -454,8 +458,9 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     if problems:
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
-    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None, "end_limits": c.end_limits,
-            "fuse": c.fuse_mode, "report": report}
+    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None and _fixture_fits(curve, pf),
+            "end_limits": c.end_limits, "fuse": c.fuse_mode, "report": report,
+            "robust": robust_option(curve, pf, arrays.catalog) if c.robust else None}
     try:
         if c.rods is not None:
             lp = count_for(curve, arrays.catalog, pf, c.rods, stops_allowed=not free, same_shell=same, **ends)
@@ -472,12 +477,21 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     return _from_printed(curve, lp)
 
 
+def _fixture_fits(curve: np.ndarray, pf: PrintedFamily) -> bool:
+    """Whether the anchors are far enough apart for the anchor fixture's two knuckles (one
+    piece, a wall between them): else the planner uses bare pins."""
+    t = pf.family.template
+    hg = t.geometry.hinge
+    return float(np.hypot(*(curve[-1] - curve[0]))) >= hg.zone_radius + hg.knuckle_radius + t.material.min_wall
+
+
 def _from_printed(curve: np.ndarray, lp: PrintedPlan) -> ChainPlan:
     n = len(lp.rods)
     mismatch = np.zeros(max(n - 1, 0))
     mismatch[lp.unmet] = np.inf
     return ChainPlan(np.asarray(curve, float), lp.discretization, [t.name for t in lp.rods], lp.problem, 0.0,
-                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods), list(lp.fused))
+                     list(lp.notes), mismatch, list(lp.unmet), list(lp.stops), list(lp.rods), list(lp.fused),
+                     lp.verified)
 
 
 def _apply_fixed(p: ChainPlan, fixed: Sequence[FixedRod], arrays: CatalogArrays,

@@ -53,6 +53,9 @@ class PrintedPlan:
             the first rod), 1 (B, the last rod); the bounds are ``problem.end_limits``.
         fused: rods printed as one rigid piece, as (first, last) rod indices: the joints
             between them are fused (a limits row with lo == hi at the bend).
+        verified: (masses, verdict) the planner checked with the solver
+            (:func:`optimize.verify.verify`), or None: the mass design reuses the verdict
+            when it chooses the same masses for the same problem.
     """
 
     discretization: object
@@ -63,6 +66,7 @@ class PrintedPlan:
     stops: list[int]
     anchor_stops: list[int] = field(default_factory=list)
     fused: list[tuple[int, int]] = field(default_factory=list)
+    verified: tuple[np.ndarray, object] | None = None
 
 
 #: A bend below this (rad) is straight: only a stop holds it.
@@ -146,7 +150,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
                  end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0,
-                 report=None):
+                 report=None, robust: tuple[float, float, float, float] | None = None):
     """Lay rods printed to order on a target (see the module's docstring); how each joint
     holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 
@@ -166,6 +170,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             fits the catalog's printer).
         n_starts, seed: the multi-start of the planner's checks.
         report: called with a line of progress now and then (or None).
+        robust: design option ``robust`` (:attr:`rodcad.design.decide.Allowed.robust`), or None.
 
     Returns:
         The :class:`PrintedPlan`.
@@ -184,7 +189,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     phi = np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0])))
     deg = np.degrees(phi)
     allowed = Allowed(stops=stops_allowed and r.stops is not None, anchor_stops=anchor_stops,
-                      fuse=fuse, verify=not same_shell)
+                      fuse=fuse, verify=not same_shell, robust=robust)
     dec = decide(catalog, pf, points, lengths, kappa, phi, allowed=allowed, end_limits=end_limits,
                  mirrored=_is_mirror_symmetric(points), same=same_shell, n_starts=n_starts, seed=seed,
                  report=report)
@@ -242,8 +247,12 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
             "; the stops make the ends of the rods beside them differ, so same_shell keeps the length and the "
             "curvature only" if stops else ", the family's own ends; the masses differ only inside"))
     notes += laid.notes
+    e0, e1 = problem.end_limits, laid.problem.end_limits
+    same = problem is laid.problem or (np.array_equal(problem.limits, laid.problem.limits)
+                                       and (e0 is e1 or (e0 is not None and e1 is not None and np.array_equal(e0, e1))))
+    verified = (dec.masses, dec.verdict) if dec.verdict is not None and same else None
     return PrintedPlan(disc, laid.rods, problem, notes, sorted(set(beyond) | set(laid.unmet)), sorted(stops),
-                       sorted(ends), fused)
+                       sorted(ends), fused, verified)
 
 
 def fused_pieces(joints: Sequence[int], points: np.ndarray, curvature: np.ndarray, height: float,

@@ -215,6 +215,11 @@ def design_spec() -> Obj:
             "tolerance": Field(Num(exclusive_minimum=0),
                                description="Largest acceptable max joint error relative to the anchor "
                                "span; `build` exits with code 1 when the design misses it."),
+            "robust": Field(Bool(), default=True,
+                            description="Prefer, among designs that hang on the curve, those whose pin "
+                            "friction and print tolerance bands stay within the tolerance: where a free "
+                            "joint's band is larger, the planner holds it with a two-sided stop (rods "
+                            "printed to order). false: the first design that hangs on the curve."),
             "g": Field(Num(exclusive_minimum=0, unit="m/s^2"), default=9.81,
                        description="Gravitational acceleration (scales only forces and moments)."),
             "fabrication": Field(

@@ -16,6 +16,8 @@ from optimize.discretize import centerline, curve_distance
 from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
+from rodcad.design.asprinted import anchor_holes
+from rodcad.outputs.printed import as_printed_json, printed_rod_fields
 
 __all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
 
@@ -58,7 +60,8 @@ def rod_params(rod: RodType) -> dict[str, Any]:
     return {"family": rod.family, "length": rod.length, "scale": rod.scale, "curvature": rod.curvature,
             "section": {"height": g.height, "thickness": g.thickness},
             "ends": {"first": end(g.first), "second": end(g.second)},
-            "pin_diameter": g.hinge.pin_diameter, "material": rod.material.name}
+            "pin_diameter": g.hinge.pin_diameter, "pin_clearance": g.hinge.pin_clearance,
+            "material": rod.material.name}
 
 
 def print_profile(catalog: Catalog) -> dict[str, Any]:
@@ -193,6 +196,8 @@ def design_json(r) -> dict[str, Any]:
         rod["mass_range"] = [float(v) for v in bounds]
         if r.fabrication is not None:
             rod["fabrication"] = fabrication_json(r.fabrication.rods[i], _piece_of(r.fabrication, i))
+        if getattr(r, "as_printed", None) is not None:
+            rod.update(printed_rod_fields(r.as_printed, r.lengths, r.com, i))
         rods.append(rod)
     out: dict[str, Any] = {
         **_header(d, r.method or None, r.seed, r.time_s),
@@ -225,6 +230,8 @@ def design_json(r) -> dict[str, Any]:
         out["as_built"] = _as_built_json(r.as_built)
         if r.plan is not None:
             out["as_built"]["curve"] = curve_error(r.plan.curve, r.as_built.equilibrium.points, curvature, d.span)
+    if getattr(r, "as_printed", None) is not None:
+        out.update(as_printed_json(r.as_printed, r.plan.curve if r.plan is not None else None, curvature, d.span))
     out["print"] = print_profile(d.catalog)
     out["bill_of_materials"] = bill_of_materials(r)
     if getattr(r, "fixture", None) is not None:
@@ -243,7 +250,9 @@ def fixture_json(r) -> dict[str, Any]:
     return {"file": "fixture.step", "stl": "fixture.stl", "volume_mm3": volume,
             "filament_g": volume * mat.density / 1000.0,
             "anchor_pins": {"count": 2, "diameter_mm": rods[0].geometry.hinge.pin_diameter,
-                            "length_mm": round(fixture_width(rods[0], rods[-1]), 2)},
+                            "length_mm": round(fixture_width(rods[0], rods[-1]), 2),
+                            "holes_mm": None if getattr(r, "holes", None) is None else  # centre minus A, B
+                            [[float(v) for v in row] for row in anchor_holes(r.holes, r.equilibrium.points)]},
             "stops": [k for k in (0, 1) if np.any(np.isfinite(np.asarray(r.end_limits)[k]))],
             "mount": "a 5 mm hanging hole above the anchors' midpoint",
             "print": "lying on its back face, with supports under the front cheek's slots",

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.discretize import centerline, curve_distance
+from rodcad.outputs.printed import draw_bands
 
 __all__ = ['draw_rods', 'finish_figure', 'fit_title', 'plot_chain']
 
@@ -48,6 +49,8 @@ def plot_chain(r, *paths: Path) -> None:
                 label="anchor fixture stops the end rod")
     if r.as_built is not None:
         ax.plot(*r.as_built.equilibrium.points.T, ":", color="k", lw=1, zorder=5, label="as built")
+    if getattr(r, "as_printed", None) is not None:
+        draw_bands(ax, r.as_printed, pts, max(d.span, float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1]))))
     title = f"{d.name}: {r.n} rods"
     if r.method:
         title += f", {r.method}"
@@ -64,6 +67,8 @@ def plot_chain(r, *paths: Path) -> None:
         title += f"\njoints {100 * r.distance.max_rel_span:.3g} % of the span off the target"
         if r.as_built is not None:
             title += f", as built {100 * r.as_built.distance.max_rel_span:.3g} %"
+        if getattr(r, "as_printed", None) is not None:
+            title += f"\nas printed (pins in their holes) {100 * r.as_printed.distance.max_rel_span:.3g} %"
     finish_figure(fig, ax, lc, d.anchors, title, paths)
 
 

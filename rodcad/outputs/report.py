@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from rodcad.outputs.printed import as_printed_lines, printed_summary
 from rodcad import __version__
 from rodcad.fabrication.layers import LayerGrid
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
@@ -87,6 +88,10 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         add(f"- Joints: {_joints_text(r)}")
     if "as_built" in data:
         add(f"- As built (masses and centres of mass of the real solids): {_fmt_err(data['as_built']['error'])}")
+    if getattr(r, "as_printed", None) is not None:
+        size = float(data["curve"]["size_mm"]) if "curve" in data else float(d.span)
+        for line in as_printed_lines(r.as_printed, size):
+            add(line)
     if "inverse" in data:
         inv = data["inverse"]
         add(f"- Inverse design: {'exact' if inv['exact'] else 'best fit within the mass bounds'}; "
@@ -288,6 +293,9 @@ def summary_text(r, outdir: Path | None) -> str:
             L.append(f"  joints        {_joints_text(r)}")
     if r.as_built is not None:
         L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
+    if getattr(r, "as_printed", None) is not None:
+        size = float(cv["size_mm"]) if r.plan is not None else float(r.design.span)
+        L.append(f"  as printed    {printed_summary(r.as_printed, size)}")
     eq = r.equilibrium
     L.append(f"  equilibrium   {'stable' if eq.stable else 'NOT STABLE'}, "
              f"{'unique' if r.unique else str(r.n_stable) + ' stable shapes found'}, "

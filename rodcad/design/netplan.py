@@ -1,0 +1,299 @@
+"""Planning and physics of a net design: rods and hardware for the target, their masses,
+and the exact equilibrium's verdict.
+
+:func:`plan_net` lays the catalog's node hardware on the target (a hub at every node, each
+rod's pivot ``pivot_radius`` from the hub's centre along the rod's target direction; a point
+node: the node itself), gives every rod its pivot-to-pivot length and its mass bounds
+(:meth:`rodcad.catalog.node.NodeHardware.rod_numbers`) and every node its hub's mass and
+centre of mass, and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) rods the catalog
+cannot print and nodes whose rods meet closer than the hub's sockets allow.
+
+:func:`design_net_plan` designs the masses with :func:`optimize.design_net` (exact where the
+bounds allow, else the best fit within them, refined through the solver, with the reason),
+solves the designed net from the target with a multi-start, and measures the fit: the
+largest distance of a simulated node or pivot from its target over the net's size (straight
+rods: their centrelines are no farther apart than their ends).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optimize import NetDesign, design_net, net_statics
+from rodcad.catalog.node import NetRodNumbers, NodeHardware, socket_centres
+from rodcad.design.fit import DEFAULT_TOLERANCE
+from rodcad.design.net import NetTarget
+from rodcad.errors import DesignLimit
+
+__all__ = ["NET_STARTS", "NetCheck", "NetPlan", "design_net_plan", "length_range", "plan_net"]
+
+#: Starts of the multi-start that looks for other stable shapes of a designed net.
+NET_STARTS = 8
+
+
+@dataclass
+class NetPlan:
+    """Rods and hardware laid on a net's target.
+
+    Attributes:
+        target: the net's target.
+        hardware: the catalog's node hardware.
+        pivots: (m, 2, 3) each rod's pivot at its node i and j, from the node point (mm; the
+            hub's frame, which is the world frame at the target).
+        lengths: (m,) pivot-to-pivot lengths (mm).
+        rods: each rod's numbers (solid mass, mass range, steel balls).
+        bounds: (m, 2) mass bounds (g).
+        node_masses: (n,) hub (or point part) masses (g).
+        node_com: (n, 3) hubs' centres of mass from the node point (mm, hub frame).
+        length_range: (min, max) rod lengths the catalog prints (mm).
+        degree: (n,) rods at each node.
+    """
+
+    target: NetTarget
+    hardware: NodeHardware
+    pivots: np.ndarray
+    lengths: np.ndarray
+    rods: list[NetRodNumbers]
+    bounds: np.ndarray
+    node_masses: np.ndarray
+    node_com: np.ndarray
+    length_range: tuple[float, float]
+    degree: np.ndarray
+
+    @property
+    def target_ends(self) -> np.ndarray:
+        """(m, 2, 3) the rods' pivots at the target (mm)."""
+        return self.target.positions[self.target.edges] + self.pivots
+
+
+def length_range(catalog) -> tuple[float, float]:
+    """The rod lengths a catalog prints for a net (mm): its first family printed to order's
+    range, else the span of its rod types' lengths."""
+    fams = catalog.printed_families
+    if fams:
+        return tuple(float(x) for x in fams[0].ranges.length)  # type: ignore[return-value]
+    lengths = [t.length for t in catalog]
+    return float(min(lengths)), float(max(lengths))
+
+
+def plan_net(target: NetTarget, catalog) -> NetPlan:
+    """Hardware, lengths, mass bounds and hub masses for a net's target.
+
+    Raises:
+        DesignLimit: rods shorter or longer than the catalog prints, or rods meeting at a
+            node closer than its hub's sockets allow (every such rod and node named).
+    """
+    hw: NodeHardware = catalog.node
+    pos, edges = target.positions, target.edges
+    n, m = target.n, target.m
+    d = pos[edges[:, 1]] - pos[edges[:, 0]]
+    dist = np.linalg.norm(d, axis=1)
+    u = d / dist[:, None]
+    r = hw.pivot
+    pivots = np.stack([r * u, -r * u], axis=1)
+    lengths = dist - 2 * r
+    lo, hi = length_range(catalog)
+    lo_hw = max(lo, hw.shortest_rod())
+    problems = []
+    short = np.flatnonzero(lengths < lo_hw * (1 - 1e-9))
+    long = np.flatnonzero(lengths > hi * (1 + 1e-9))
+    extra = f" (node to node: {2 * r:g} mm more, the hubs)" if r else ""
+    if short.size:
+        problems.append(f"{short.size} rod(s) would be shorter than the {lo_hw:g} mm the catalog prints: "
+                        f"rods {short[:8].tolist()} need {', '.join(f'{x:.4g}' for x in lengths[short[:8]])} mm "
+                        f"pivot to pivot{extra}; use fewer cells or draw the net larger")
+    if long.size:
+        problems.append(f"{long.size} rod(s) would be longer than the {hi:g} mm the catalog prints: rods "
+                        f"{long[:8].tolist()} need {', '.join(f'{x:.4g}' for x in lengths[long[:8]])} mm; use more "
+                        "cells or draw the net smaller")
+    degree = np.bincount(edges.ravel(), minlength=n)
+    # directions of the rods at every node (from the node toward the rod's other end)
+    dirs: list[list[np.ndarray]] = [[] for _ in range(n)]
+    for e, (i, j) in enumerate(edges):
+        dirs[i].append(u[e])
+        dirs[j].append(-u[e])
+    if hw.is_hub:
+        need = hw.min_angle_deg
+        worst = []
+        for k in range(n):
+            if len(dirs[k]) < 2:
+                continue
+            D = np.asarray(dirs[k])
+            cos = np.clip(D @ D.T, -1, 1)
+            np.fill_diagonal(cos, -1)
+            ang = float(np.degrees(np.arccos(cos.max())))
+            if ang < need - 1e-9:
+                worst.append((ang, k))
+        if worst:
+            worst.sort()
+            problems.append(f"at {len(worst)} node(s) rods meet closer than the hub's sockets allow ({need:.3g} deg): "
+                            + ", ".join(f"node {k} at {a:.3g} deg" for a, k in worst[:6])
+                            + "; a larger hub (node.diameter and node.pivot_radius) or a net with wider angles")
+    if problems:
+        raise DesignLimit("; ".join(problems))
+    rods = [hw.rod_numbers(float(L)) for L in lengths]
+    bounds = np.array([rn.mass_range for rn in rods], float)
+    node_masses = np.zeros(n)
+    node_com = np.zeros((n, 3))
+    for k in range(n):
+        mass, com = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
+        node_masses[k] = mass
+        node_com[k] = com
+    return NetPlan(target, hw, pivots, lengths, rods, bounds, node_masses, node_com, (lo_hw, hi), degree)
+
+
+@dataclass
+class NetCheck:
+    """A designed net, its exact equilibrium and how well it hangs on its target.
+
+    Attributes:
+        plan: the rods and hardware.
+        design: optimize's design (masses, statics verdict, equilibrium with alternatives).
+        masses: (m,) the designed rod masses (g).
+        error_mm: largest distance of a simulated node or pivot from its target (mm).
+        rel_size: that over the net's size.
+        node_error: (n,) each node's distance from its target (mm).
+        tolerance: the figure aimed at (design's tolerance or the default 1 %).
+        sockets: (m, 2, 3) where each rod's socket is printed (hub frame, mm): its pivot
+            moved ``clearance / 2`` against the rod's pull (rodcad.catalog.node).
+        swing_deg: (m, 2) each rod's turn from its socket's axis at the equilibrium (deg).
+        time_s: wall time of the design.
+        notes: things the user should know.
+        why: when no masses at all balance the target, where and why (else '').
+    """
+
+    plan: NetPlan
+    design: NetDesign
+    masses: np.ndarray
+    error_mm: float
+    rel_size: float
+    node_error: np.ndarray
+    tolerance: float
+    sockets: np.ndarray
+    swing_deg: np.ndarray
+    time_s: float
+    notes: list[str] = field(default_factory=list)
+    why: str = ""
+
+    @property
+    def equilibrium(self):
+        return self.design.equilibrium
+
+    @property
+    def in_tension(self) -> bool:
+        return self.plan.target.compression or self.equilibrium.compressed.size == 0
+
+    @property
+    def meets_tolerance(self) -> bool:
+        return bool(self.equilibrium.success and self.equilibrium.stable and self.rel_size <= self.tolerance)
+
+    @property
+    def ok(self) -> bool:
+        """Hangs within the tolerance, stable, in tension (unless allowed), rods within their swing."""
+        return self.meets_tolerance and self.in_tension and bool(np.all(self.swing_deg <= self.plan.hardware.swing_deg))
+
+    def limit(self) -> str:
+        """One line: what keeps the net off its target and what would reach it."""
+        pct = (f"hangs {100 * self.rel_size:.3g} % of its size off its target (tolerance "
+               f"{100 * self.tolerance:.3g} %)")
+        eq, st = self.equilibrium, self.design.statics
+        if not eq.success:
+            return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})"
+        if not eq.stable:
+            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one"
+        if not self.meets_tolerance and self.why:
+            return f"{pct}: {self.why}"
+        if not self.meets_tolerance:
+            return f"{pct}: {st.message} The best fit within the rods' mass ranges (refined through the solver) is " \
+                   "the closest; a catalog with a wider mass range, more anchored nodes or a target closer to a " \
+                   "hanging shape would reach it"
+        if not self.in_tension:
+            c = eq.compressed
+            return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
+                   "or anchor more nodes"
+        over = np.argwhere(self.swing_deg > self.plan.hardware.swing_deg)
+        return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
+               f"than the {self.plan.hardware.swing_deg:.3g} deg the hub allows"
+
+
+def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,
+                    n_starts: int = NET_STARTS, progress=None) -> NetCheck:
+    """Masses for the planned net, its exact equilibrium and its fit.
+
+    Args:
+        plan: :func:`plan_net`'s rods and hardware.
+        g: gravitational acceleration (m/s^2).
+        seed: the multi-start's seed.
+        tolerance: largest acceptable error over the net's size (None: 1 %).
+        n_starts: the multi-start's starts.
+        progress: a :class:`rodcad.progress.Progress` (or None).
+    """
+    t0 = time.perf_counter()
+    t = plan.target
+    design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
+                        node_com=plan.node_com, pivots=plan.pivots, allow_compression=t.compression, g=g,
+                        n_starts=n_starts, seed=seed, refine=True)
+    eq = design.equilibrium
+    size = t.size
+    if eq.success:
+        node_err = np.linalg.norm(eq.positions - t.positions, axis=1)
+        end_err = np.linalg.norm(eq.ends - plan.target_ends, axis=2)
+        err = float(max(node_err.max(), end_err.max()))
+    else:
+        node_err = np.full(t.n, np.inf)
+        err = float("inf")
+    # sockets: each pivot moved against the force its rod pulls with, in the hub's frame
+    sockets = plan.pivots.copy()
+    swing = np.zeros((t.m, 2))
+    hw = plan.hardware
+    if eq.success and hw.is_hub:
+        for k in (0, 1):
+            node = t.edges[:, k]
+            R = eq.rotations[node]
+            f_body = np.einsum("mba,mb->ma", R, eq.rod_forces[:, k])
+            sockets[:, k] = socket_centres(plan.pivots[:, k], f_body, hw.clearance)
+            axis = np.einsum("mab,mb->ma", R, plan.pivots[:, k])
+            axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+            rod = eq.ends[:, 1 - k] - eq.ends[:, k]
+            rod /= np.linalg.norm(rod, axis=1, keepdims=True)
+            swing[:, k] = np.degrees(np.arccos(np.clip(np.sum(axis * rod, axis=1), -1, 1)))
+    tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
+    notes = [design.statics.message]
+    why = ""
+    if not design.statics.exact and np.all(~np.isfinite(design.statics.beyond)):
+        why = _imbalance(plan, design, g)
+        notes.append(why)
+    if design.refined:
+        notes.append(f"The masses were refined through the solver from the statics' best fit "
+                     f"({design.info.get('fit_error', float('nan')):.4g} mm -> "
+                     f"{design.info.get('refined_error', float('nan')):.4g} mm).")
+    if eq.alternatives:
+        notes.append(f"The multi-start ({n_starts} starts) found {len(eq.alternatives)} other stable shape(s)"
+                     + (", one hanging lower than the design's: a push may move the net there." if eq.lower else
+                        ", none lower than the design's."))
+    if t.dropped:
+        notes.append(f"{t.dropped} rod(s) between two anchored nodes were left out (the anchors hold both ends).")
+    masses = np.asarray(design.masses, float)
+    return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
+                    swing, time.perf_counter() - t0, notes, why)
+
+
+def _imbalance(plan: NetPlan, design: NetDesign, g: float) -> str:
+    """Where the statics' best fit leaves the largest imbalance, when no masses at all (any
+    positive mass, rods pushing or not) balance the target."""
+    t = plan.target
+    st = net_statics(t.positions, t.edges, plan.lengths, t.anchored, node_masses=plan.node_masses,
+                     node_com=plan.node_com, pivots=plan.pivots, g=g)
+    res = np.abs(st.residual(design.statics.tensions, design.statics.masses))
+    force = st.rows[:, 1] < 3
+    per_node = np.zeros(t.n)
+    np.maximum.at(per_node, st.rows[force, 0], res[force])
+    worst = np.argsort(-per_node, kind="stable")[:8]
+    worst = [int(k) for k in worst if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
+    return (f"No masses at all balance this target: some nodes' rods cannot pull them in every direction the "
+            f"load needs (the largest imbalance is at node(s) {worst}). A grid drawn over a rectangle and hung "
+            "from its corners is one such target: its straight border has nothing to pull it outward, so a "
+            "hanging net's border curves inward in plan; anchor the border, or give a target whose border does.")

@@ -197,7 +197,7 @@ def _bounds(mass_bounds, m: int) -> np.ndarray:
 
 def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
                       allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None,
-                      rotations=None) -> NetMassDesign:
+                      rotations=None, forces_only: bool = False) -> NetMassDesign:
     """Rod masses within bounds that make the target an equilibrium (see the module).
 
     Args:
@@ -207,6 +207,8 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
         mass_bounds: (m, 2) [lo, hi] per rod (g), 0 < lo <= hi; or one (2,) pair for all.
         allow_compression: let rods push (T < 0); by default every rod stays in tension.
         rotations: (n, 3, 3) node bodies' orientations at the target.
+        forces_only: balance the nodes' forces only, not the node bodies' moments (for a
+            caller that then turns the bodies' pivots to cancel the moments of these forces).
 
     Returns:
         NetMassDesign. E.g. masses of a net hung into its shape come back exactly when
@@ -220,6 +222,9 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
         raise ValueError("lengths must be the target's pivot distances (the target is a configuration of the rods)")
     bounds = _bounds(mass_bounds, m)
     st = statics_of(net, state)
+    if forces_only:
+        keep = st.rows[:, 1] < 3
+        st = NetStatics(st.A_T[keep], st.A_m[keep], st.b[keep], st.rows[keep], st.lengths)
     return _design(net, st, bounds, allow_compression)
 
 

@@ -28,7 +28,7 @@ from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.net import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["NET_STARTS", "NetCheck", "NetPlan", "design_net_plan", "length_range", "plan_net"]
+__all__ = ["NET_STARTS", "NetCheck", "NetPlan", "design_net_plan", "length_range", "orient_sockets", "plan_net"]
 
 #: Starts of the multi-start that looks for other stable shapes of a designed net.
 NET_STARTS = 8
@@ -145,6 +145,126 @@ def plan_net(target: NetTarget, catalog) -> NetPlan:
     return NetPlan(target, hw, pivots, lengths, rods, bounds, node_masses, node_com, (lo_hw, hi), degree)
 
 
+#: Rounds of :func:`orient_sockets` at most, and the pivot change (over the pivot radius) it stops at.
+ORIENT_ROUNDS = 12
+ORIENT_TOL = 1e-13
+#: Depth of the Anderson acceleration of :func:`orient_sockets`' fixed point.
+ANDERSON = 5
+
+
+def _rebuild(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
+    """The plan with new pivots: lengths, mass bounds and hub centres of mass follow."""
+    t, hw = plan.target, plan.hardware
+    ends = t.positions[t.edges] + pivots
+    lengths = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
+    rods = [hw.rod_numbers(float(L)) for L in lengths]
+    node_com = np.zeros((t.n, 3))
+    node_masses = plan.node_masses.copy()
+    dirs: list[list[np.ndarray]] = [[] for _ in range(t.n)]
+    for e, (i, j) in enumerate(t.edges):
+        dirs[i].append(pivots[e, 0] / np.linalg.norm(pivots[e, 0]))
+        dirs[j].append(pivots[e, 1] / np.linalg.norm(pivots[e, 1]))
+    for k in range(t.n):
+        node_masses[k], node_com[k] = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
+    return NetPlan(t, hw, pivots, lengths, rods, np.array([r.mass_range for r in rods], float), node_masses,
+                   node_com, plan.length_range, plan.degree)
+
+
+def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int]:
+    """Hub sockets turned so that the hubs balance at the target, as printed to order.
+
+    A socket on the line between two node points puts its rod's weight share off the hub's
+    centre: the hub would turn and the net leave its target. Each free hub's sockets are
+    instead turned (on the pivot sphere) toward the force its rod pulls with, the least
+    turn that makes the moments about the hub's centre, its own weight's included, vanish;
+    the rods' lengths follow. The forces come from the statics at the target, so the two
+    are iterated to a fixed point: the nodes' forces balanced (exactly where the mass
+    bounds allow, else their best fit), the sockets turned to cancel those forces' moments,
+    the rods' directions updated; a few rounds, the turns being a few degrees. A point node
+    has nothing to turn.
+
+    Returns:
+        (the plan with its pivots, lengths, bounds and hub centres of mass; rounds used).
+    """
+    from optimize import design_net_masses
+
+    t, hw = plan.target, plan.hardware
+    if not hw.is_hub:
+        return plan, 0
+    r = hw.pivot_radius
+    free = ~t.anchored_mask
+    axis = plan.pivots.copy()  # along the rods' lines between node points
+    rounds = 0
+    best, best_res = plan, np.inf
+    xs: list[np.ndarray] = []
+    gs: list[np.ndarray] = []
+    for rounds in range(1, ORIENT_ROUNDS + 1):
+        full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
+                                 node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
+                                 allow_compression=t.compression, g=g)
+        if full.exact:
+            return plan, rounds
+        if full.residual < best_res:
+            best, best_res = plan, full.residual
+        st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
+                               node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
+                               allow_compression=t.compression, g=g, forces_only=True)
+        ends = t.positions[t.edges] + plan.pivots
+        u = ends[:, 1] - ends[:, 0]
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        share = _shares(st.masses, g)
+        F = np.stack([st.tensions[:, None] * u, -st.tensions[:, None] * u], axis=1)
+        F[:, :, 2] -= share
+        new = plan.pivots.copy()
+        for k in np.flatnonzero(free):
+            at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+            if len(at) < 2:
+                continue
+            f = np.array([F[e, c] for e, c in at])
+            norm = np.linalg.norm(f, axis=1)
+            a = np.array([axis[e, c] for e, c in at])
+            cw = np.cross(plan.node_com[k], [0.0, 0.0, -g * plan.node_masses[k]])
+            A = np.hstack([-_skew(fq) for fq in f])
+            AAt = A @ A.T
+            for _ in range(6):  # the least turn from the rods' lines that cancels the moments
+                M = cw + np.sum(np.cross(a, f), axis=0)
+                if np.max(np.abs(M)) <= 1e-15 * float(norm.max()) * r:
+                    break
+                a = a + (A.T @ np.linalg.lstsq(AAt, -M, rcond=None)[0]).reshape(-1, 3)
+                a *= r / np.linalg.norm(a, axis=1, keepdims=True)
+            for q, (e, c) in enumerate(at):
+                new[e, c] = a[q]
+        change = float(np.max(np.abs(new - plan.pivots))) / r
+        if change <= ORIENT_TOL:
+            plan = _rebuild(plan, new)
+            break
+        # Anderson acceleration of the fixed point (the plain iteration converges linearly)
+        xs.append(plan.pivots.ravel().copy())
+        gs.append(new.ravel().copy())
+        del xs[:-ANDERSON], gs[:-ANDERSON]
+        nxt = new
+        if len(xs) >= 2:
+            fs = np.array(gs) - np.array(xs)
+            dF = np.diff(fs, axis=0).T
+            dG = np.diff(np.array(gs), axis=0).T
+            gamma = np.linalg.lstsq(dF, fs[-1], rcond=None)[0]
+            nxt = (gs[-1] - dG @ gamma).reshape(new.shape)
+            on = free[t.edges]
+            nxt[on] *= r / np.linalg.norm(nxt[on], axis=1, keepdims=True)
+            nxt[~on] = new[~on]
+        plan = _rebuild(plan, nxt)
+    return best, rounds
+
+
+def _shares(masses: np.ndarray, g: float) -> np.ndarray:
+    """(m, 2) each straight symmetric rod's weight at its two pivots (lever rule: half each)."""
+    return np.column_stack([0.5 * g * masses, 0.5 * g * masses])
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
 @dataclass
 class NetCheck:
     """A designed net, its exact equilibrium and how well it hangs on its target.
@@ -232,6 +352,12 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         progress: a :class:`rodcad.progress.Progress` (or None).
     """
     t0 = time.perf_counter()
+    lines = plan.pivots.copy()
+    plan, rounds = orient_sockets(plan, g=g)
+    turn = 0.0
+    if plan.hardware.is_hub:
+        cos = np.sum(lines * plan.pivots, axis=2) / plan.hardware.pivot_radius ** 2
+        turn = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
     t = plan.target
     design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
                         node_com=plan.node_com, pivots=plan.pivots, allow_compression=t.compression, g=g,
@@ -266,6 +392,10 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     if not design.statics.exact and np.all(~np.isfinite(design.statics.beyond)):
         why = _imbalance(plan, design, g)
         notes.append(why)
+    if turn > 0:
+        notes.append(f"The hubs' sockets are turned up to {turn:.3g} deg off the lines between the node points "
+                     f"(printed so; {rounds} round(s)), so that every hub balances at the target: a socket on the "
+                     "line would put its rod's weight share off the hub's centre and turn it.")
     if design.refined:
         notes.append(f"The masses were refined through the solver from the statics' best fit "
                      f"({design.info.get('fit_error', float('nan')):.4g} mm -> "

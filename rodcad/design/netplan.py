@@ -303,8 +303,16 @@ class NetCheck:
         return self.design.equilibrium
 
     @property
+    def compressed(self) -> np.ndarray:
+        """Rods in compression at the equilibrium, less those between two anchored nodes
+        (their tension is the anchors' business: nothing in the net sets it)."""
+        t = self.plan.target
+        c = self.equilibrium.compressed
+        return c[~t.anchored_mask[t.edges[c]].all(axis=1)] if c.size else c
+
+    @property
     def in_tension(self) -> bool:
-        return self.plan.target.compression or self.equilibrium.compressed.size == 0
+        return self.plan.target.compression or self.compressed.size == 0
 
     @property
     def meets_tolerance(self) -> bool:
@@ -331,7 +339,7 @@ class NetCheck:
                    "the closest; a catalog with a wider mass range, more anchored nodes or a target closer to a " \
                    "hanging shape would reach it"
         if not self.in_tension:
-            c = eq.compressed
+            c = self.compressed
             return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
                    "or anchor more nodes"
         over = np.argwhere(self.swing_deg > self.plan.hardware.swing_deg)

@@ -513,7 +513,8 @@ def _point_polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarra
 def centerline(points, curvature=None, per_rod: int = 24) -> np.ndarray:
     """The rods' centrelines as one polyline: straight chords, or for a rod of signed
     curvature k (1/mm; > 0 bulges to the right of p_i -> p_{i+1}, the rod frame's -y) the
-    arc of radius 1/|k| through both of its joints.
+    arc of radius 1/|k| through both of its joints (a half circle where the joints lie
+    further apart than 2/|k|, as pins in their holes can put them).
 
     Args:
         points: (N+1, 2) joints.
@@ -530,12 +531,14 @@ def centerline(points, curvature=None, per_rod: int = 24) -> np.ndarray:
             continue
         d = q - p
         c = float(np.hypot(*d))
-        rho = 1 / abs(k)
+        # a chord longer than the arc's diameter (joints moved by pin play): the half circle
+        rho = max(1 / abs(k), c / 2)
         x = np.linspace(0.0, c, per_rod + 1)[1:]
         t2 = (x - c / 2) ** 2
         # rho cos(psi) - sqrt(rho^2 - t^2), written without cancellation for large radii
-        y = np.sign(k) * (t2 - (c / 2) ** 2) / (np.sqrt(max(rho**2 - (c / 2) ** 2, 0.0))
-                                               + np.sqrt(np.maximum(rho**2 - t2, 0.0)))
+        with np.errstate(invalid="ignore", divide="ignore"):  # a half circle's far end: 0/0, set below
+            y = np.sign(k) * (t2 - (c / 2) ** 2) / (np.sqrt(max(rho**2 - (c / 2) ** 2, 0.0))
+                                                   + np.sqrt(np.maximum(rho**2 - t2, 0.0)))
         u = d / c
         v = np.array([-u[1], u[0]])
         arc = p + np.outer(x, u) + np.outer(y, v)

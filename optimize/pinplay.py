@@ -266,7 +266,7 @@ def _next_set(play: _Play, sides, primal, pside, dual, mode):
     return None
 
 
-def _start(play: _Play, spacings, masses, a, b, com, limits, end_limits, g, active0):
+def _start(play: _Play, spacings, masses, a, b, com, limits, end_limits, g, active0, theta0=None):
     """A start: the chain without play whose rods are longer by the gaps at their pins
     (its active set and reaction), or every joint free and the two-bar reaction."""
     chain = play.chain
@@ -278,7 +278,8 @@ def _start(play: _Play, spacings, masses, a, b, com, limits, end_limits, g, acti
     eside = np.zeros(2, dtype=int)
     lam = theta = None
     try:
-        r = solve_equilibrium(longer, masses, a, b, com=shifted, limits=limits, end_limits=end_limits, g=g)
+        r = solve_equilibrium(longer, masses, a, b, com=shifted, limits=limits, end_limits=end_limits, g=g,
+                              theta0=theta0)
         if np.all(np.isfinite(r.reaction)):
             side = np.asarray(r.active, dtype=int)
             eside = np.asarray(r.info.get("end_active", eside), dtype=int)
@@ -387,6 +388,7 @@ def solve_pin_play(
     max_iter: int | None = None,
     method: str = "auto",
     pinned=None,
+    theta0=None,
 ) -> PinPlayResult:
     """Static equilibrium of a chain whose pins sit in their holes with play.
 
@@ -408,6 +410,9 @@ def solve_pin_play(
         pinned: optional (N-1,) bool: joints with lo == hi that keep their pin and its play
             (a two-sided stop: the stops hold the bodies' angle, the pin still carries the
             force); the others with lo == hi are printed as one piece (no pin). None: none.
+        theta0: optional (N,) rod angles (rad) to start from (e.g. the designed chain's): the
+            chain without play is solved from them (:func:`optimize.solve_equilibrium`'s
+            ``theta0``), so a chain with several stable shapes stays in the one it is hung in.
         method: "auto" (the dual with the links, the fixed point where its active-set
             exchange fails), "dual" (no fallback) or "fixed-point" (only the fixed point over
             :func:`optimize.solve_equilibrium`; slower, for comparison).
@@ -441,7 +446,7 @@ def solve_pin_play(
     if max_iter is None:
         max_iter = 10 + 4 * chain.n
     side, eside, lam, theta0 = _start(play, chain.lengths, chain.masses, chain.anchor_a, chain.anchor_b,
-                              chain.com, chain.limits, ends, chain.g, active0)
+                              chain.com, chain.limits, ends, chain.g, active0, theta0)
     found = None if method == "fixed-point" else _exchange(play, side, eside, lam, theta0, max_iter)
     path = "exchange"
     status = 0

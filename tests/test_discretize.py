@@ -110,3 +110,15 @@ def test_curved_rods_follow_the_curve(form, params, before, after):
         np.testing.assert_allclose(k, 0.01, rtol=2e-3)  # the circle's own curvature, 1 / 100 mm
     if form == "triangle":
         assert not np.any(k)
+
+
+def test_centerline_of_joints_further_apart_than_the_arc_allows_is_a_half_circle():
+    """Pins in their holes can put a rod bent to a half circle's joints a little further apart
+    than its diameter: the centreline is then the half circle on their chord, finite."""
+    from optimize.discretize import centerline
+
+    c = 20.0 + 0.2  # the joints 0.2 mm further apart than a rod of radius 10 mm allows
+    cl = centerline(np.array([[0.0, 0.0], [c, 0.0]]), [0.1])
+    assert np.all(np.isfinite(cl))
+    assert np.allclose(np.hypot(cl[:, 0] - c / 2, cl[:, 1]), c / 2)  # on the circle on the chord
+    assert np.min(cl[:, 1]) == pytest.approx(-c / 2, rel=1e-3)  # bulging to the right of A -> B

@@ -227,12 +227,12 @@ def hole_frame(lengths, com, offsets, limits=None, end_limits=None):
     return spacings, com_h, lim, ends, turn
 
 
-def _solve(lengths, masses, com, offsets, clearance, anchors, limits, end_limits, g, pinned=None):
+def _solve(lengths, masses, com, offsets, clearance, anchors, limits, end_limits, g, pinned=None, theta0=None):
     spacings, com_h, lim, ends, _ = hole_frame(lengths, com, offsets, limits, end_limits)
     a, b = np.asarray(anchors, float)
     res = solve_pin_play(spacings, masses, a, b, clearance=clearance, com=com_h,
                          limits=lim if len(spacings) > 1 else None, end_limits=ends, g=g,
-                         pinned=pinned if len(spacings) > 1 else None)
+                         pinned=pinned if len(spacings) > 1 else None, theta0=theta0)
     return spacings, com_h, res
 
 
@@ -260,19 +260,20 @@ def as_printed(*, lengths, masses, com, plan: HolePlan, anchors, target, limits=
     n = len(lengths)
     lim = None if limits is None or n < 2 else np.asarray(limits, float)
     pinned = _pinned(plan, lim)
+    eq = design_equilibrium
+    theta0 = eq.angles if eq is not None and eq.success else None  # hung in the designed shape
     spacings, com_h, res = _solve(lengths, masses, com, plan.offsets, plan.clearance, anchors, lim, end_limits, g,
-                                  pinned)
+                                  pinned, theta0)
     tgt = np.asarray(target, float)
     unc = None
     if plan.compensated:
         try:
             unc = shape_distance(tgt, _solve(lengths, masses, com, np.zeros_like(plan.offsets), plan.clearance,
-                                             anchors, lim, end_limits, g, pinned)[2].points)
+                                             anchors, lim, end_limits, g, pinned, theta0)[2].points)
         except ValueError:
             unc = None
     notes: list[str] = []
     fb = mb = None
-    eq = design_equilibrium
     if eq is not None and eq.success:
         dm = np.asarray(masses if design_masses is None else design_masses, float)
         dc = np.asarray(com if design_com is None else design_com, float)
@@ -333,20 +334,26 @@ def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted | 
     """:func:`as_printed` for a designed chain of catalog rods with its :attr:`holes`: the
     as-built solids' masses and centres of mass where built, else the design's; the catalog's
     friction, pin radii and ``print.mass_tolerance``. None (and a note in ``chain.notes``)
-    where the chain with its play reaches no configuration (a taut chain)."""
+    where the chain with its play reaches no configuration (a taut chain) or its solve does
+    not converge."""
     _, radius, mu = pins_of(rods)
     b = chain.as_built
     hung_m, hung_c = (chain.masses, chain.com) if b is None else (b.masses, b.com)
     tol = float(chain.design.catalog.print_settings.get("mass_tolerance", 0.03))
     try:
-        return as_printed(lengths=chain.lengths, masses=hung_m, com=hung_c, plan=chain.holes,
-                          anchors=chain.design.anchors, target=chain.target_points, limits=chain.limits,
-                          end_limits=chain.end_limits, design_equilibrium=chain.equilibrium, design_masses=chain.masses,
-                          design_com=chain.com, pin_radius=radius, mu=mu, mass_tolerance=tol, g=chain.design.g,
-                          seed=chain.seed)
+        ap = as_printed(lengths=chain.lengths, masses=hung_m, com=hung_c, plan=chain.holes,
+                        anchors=chain.design.anchors, target=chain.target_points, limits=chain.limits,
+                        end_limits=chain.end_limits, design_equilibrium=chain.equilibrium, design_masses=chain.masses,
+                        design_com=chain.com, pin_radius=radius, mu=mu, mass_tolerance=tol, g=chain.design.g,
+                        seed=chain.seed)
     except ValueError as err:
         chain.notes.append(f"the chain as printed (every pin bearing in its holes) was not solved: {err}")
         return None
+    if not ap.result.success:  # no equilibrium found: its figures would be the solver's, not the chain's
+        chain.notes.append("the chain as printed (every pin bearing in its holes) was not solved: "
+                           f"{ap.result.message} Its figures are left out of the report.")
+        return None
+    return ap
 
 
 def joint_bands(problem, masses, robust: tuple[float, float, float, float], *, seed: int = 0) -> np.ndarray | None:

@@ -127,7 +127,14 @@ def net_summary(check, outdir: Path) -> str:
     """The terminal summary of a net build."""
     eq = check.equilibrium
     t = check.plan.target
+    st = check.design.statics
+    if st.exact:
+        masses = "masses exact from the statics"
+    elif check.design.refined:
+        masses = f"masses: the statics' best fit (residual {st.residual:.2g}), refined through the solver"
+    else:
+        masses = f"masses: the statics' best fit (residual {st.residual:.2g})"
     return (f"{t.n} nodes, {t.m} rods: hangs {check.error_mm:.3g} mm ({100 * check.rel_size:.3g} % of its size) "
             f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
-            f"{len(eq.alternatives)} other stable shape(s); {check.design.statics.message}\n"
+            f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
             f"wrote {outdir}/design.json, report.md, preview.png")

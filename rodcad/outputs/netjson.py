@@ -130,7 +130,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "tolerance": check.tolerance,
             "meets_tolerance": bool(check.meets_tolerance),
             "in_tension": bool(check.in_tension),
-            "compressed": [int(x) for x in eq.compressed],
+            "compressed": [int(x) for x in check.compressed],
             "generated": t.kind,
             "anchored": [int(x) for x in t.anchored],
             "anchored_as": t.anchored_as or None,

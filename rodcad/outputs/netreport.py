@@ -62,8 +62,8 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
               f"(its centreline's end) {check.error_mm:.3g} mm; mean node {float(np.mean(check.node_error)):.3g} mm.",
               f"- Multi-start: {eq.n_starts} starts, {len(eq.alternatives)} other stable shape(s)"
               + (" (one lower than the design's)." if eq.lower else "."),
-              f"- Rods in compression: {eq.compressed.size}"
-              + ("" if not eq.compressed.size else f" ({_list([int(x) for x in eq.compressed])})"
+              f"- Rods in compression: {check.compressed.size}"
+              + ("" if not check.compressed.size else f" ({_list([int(x) for x in check.compressed])})"
                  + (" (allowed)" if t.compression else " (not allowed)")) + ".",
               f"- Design time {check.time_s:.2f} s."]
     for note in check.notes[1:]:

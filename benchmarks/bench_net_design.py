@@ -27,7 +27,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from rodcad.design.loader import load_design  # noqa: E402
-from rodcad.design.netplan import design_net_plan, plan_net  # noqa: E402
+from rodcad.design.netcheck import design_net_plan
+from rodcad.design.netplan import plan_net  # noqa: E402
 
 GRID = """design: 1
 name: grid-{anchored}

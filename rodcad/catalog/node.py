@@ -238,6 +238,43 @@ class NodeHardware:
         solid = rho * v
         return NetRodNumbers(float(length), float(body), solid, (solid - rho * cavity, solid + max(add, 0.0)), n)
 
+    def rod_intervals(self, length: float) -> list[tuple[int, float, float]]:
+        """The masses a rod of ``length`` can be built at: per steel-ball count ``k`` (0 up to
+        what fits), (k, lightest g, heaviest g). The balls sit in a row at mid-length, the cavity
+        (two equal coaxial cylinders beside the row, or one at mid-length without balls,
+        ``min_wall`` from everything) takes the plastic off, as :mod:`rodcad.cad.net` builds
+        it. A short rod has little room beside its balls: its intervals leave gaps."""
+        rn = self.rod_numbers(length)
+        rho = self.density / 1000.0
+        v = rn.solid_mass / rho
+        ds = self.insert_diameter + self.insert_clearance
+        vs = math.pi / 6 * ds ** 3
+        mb = self.insert_density * math.pi / 6 * self.insert_diameter ** 3 / 1000.0
+        rc, w, body = self.rod_diameter / 2 - self.min_wall, self.min_wall, rn.body_length
+        out = []
+        for k in range(rn.balls + 1):
+            row = k * ds + max(k - 1, 0) * w
+            room = 2 * max((body - row) / 2 - 2 * w, 0.0) if k else max(body - 2 * w, 0.0)
+            hi = rho * (v - k * vs) + k * mb
+            out.append((k, hi - rho * math.pi * max(rc, 0.0) ** 2 * room, hi))
+        return out
+
+    def rod_fill(self, length: float, mass: float) -> tuple[int, float, float]:
+        """How a rod of ``length`` is made to weigh ``mass`` (:meth:`rod_intervals`).
+
+        Returns:
+            (balls, cavity volume mm^3, the mass it comes to g): the fewest balls whose
+            interval holds ``mass``, else the interval that comes nearest.
+        """
+        rho = self.density / 1000.0
+        best = None
+        for k, lo, hi in self.rod_intervals(length):
+            got = min(max(mass, lo), hi)
+            if best is None or abs(got - mass) < best[0] - 1e-12:
+                best = (abs(got - mass), k, (hi - got) / rho, got)
+        assert best is not None
+        return best[1], best[2], best[3]
+
     def shortest_rod(self) -> float:
         """The shortest rod the hardware makes (mm): both ends and a body of two walls."""
         return 2 * self.end_offset + 2 * self.min_wall

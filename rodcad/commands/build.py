@@ -113,15 +113,20 @@ def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> 
     from rodcad.netpipeline import build_net, write_net_outputs
     from rodcad.outputs.netreport import net_summary
 
-    if not args.no_cad and design.cad:
-        print("rodcad: the solids of a net (hubs, rods) are not made yet: writing the design only "
-              "(design.json, report.md, preview.png)", file=sys.stderr)
-    b = build_net(design, seed=args.seed, progress=progress)
+    b = build_net(design, seed=args.seed, cad=not args.no_cad and design.cad, progress=progress)
     target = outdir if b.ok else _best_fit(outdir)
     write_net_outputs(b, target, progress=progress)
     print(net_summary(b.check, target))
-    if not b.ok:
+    if b.solids is not None:
+        print(f"as built (the solids' masses and centres of mass): {b.solids.error_mm:.3g} mm "
+              f"({100 * b.solids.rel_size:.3g} % of its size) from the design")
+    if not b.check.ok:
         print(f"rodcad: {design.name} {b.limit()}; {outdir} left as it was, the best fit is in {target}",
               file=sys.stderr)
+        return 1
+    if not b.ok:
+        print(f"rodcad: {design.name}: as built (the solids' masses) it hangs {100 * b.solids.rel_size:.3g} % of its "
+              f"size from the design (tolerance {100 * b.check.tolerance:.3g} %); {outdir} left as it was, the "
+              f"design and its solids are in {target}", file=sys.stderr)
         return 1
     return 0

@@ -1,46 +1,26 @@
-"""Planning and physics of a net design: rods and hardware for the target, their masses,
-and the exact equilibrium's verdict.
+"""Rods and hardware laid on a net's target.
 
 :func:`plan_net` lays the catalog's node hardware on the target (a hub at every node, each
 rod's pivot ``pivot_radius`` from the hub's centre along the rod's target direction; a point
 node: the node itself), gives every rod its pivot-to-pivot length and its mass bounds
 (:meth:`rodcad.catalog.node.NodeHardware.rod_numbers`) and every node its hub's mass and
 centre of mass, and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) rods the catalog
-cannot print and nodes whose rods meet closer than the hub's sockets allow.
-
-:func:`design_net_plan` designs the masses with :func:`optimize.design_net` (exact where the
-bounds allow, else the best fit within them, refined through the solver, with the reason),
-solves the designed net from the target with a multi-start, and measures the fit: the
-largest distance of a simulated node or pivot from its target over the net's size (straight
-rods: their centrelines are no farther apart than their ends).
+cannot print and nodes whose rods meet closer than the hub's sockets allow. :func:`replan`
+moves the pivots (the hubs' sockets, :mod:`rodcad.design.nethubs`) and updates the rest;
+:func:`mass_segments` are the masses a rod can be built at.
 """
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from optimize import NetDesign, design_net, net_statics
-from rodcad.catalog.node import NetRodNumbers, NodeHardware, socket_centres
-from rodcad.design.fit import DEFAULT_TOLERANCE
+from rodcad.catalog.node import NetRodNumbers, NodeHardware
 from rodcad.design.net import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["NET_STARTS", "NetCheck", "net_starts", "NetPlan", "design_net_plan", "length_range", "orient_sockets", "plan_net"]
-
-#: Starts of the multi-start that looks for other stable shapes of a designed net (up to
-#: :data:`FULL_STARTS_NODES` nodes; fewer beyond, see :func:`net_starts`).
-NET_STARTS = 8
-FULL_STARTS_NODES = 50
-
-
-def net_starts(n: int) -> int:
-    """The multi-start's starts for a net of ``n`` nodes: 8 up to 50 nodes, then 400 / n (at
-    least 2). A start from a perturbed shape costs a restoration and tens of Newton steps (about
-    2 s for a 200-node net of hubs), so a 200-node design keeps within 10 s."""
-    return NET_STARTS if n <= FULL_STARTS_NODES else max(2, int(NET_STARTS * FULL_STARTS_NODES / n))
+__all__ = ["NetPlan", "POINT_WIDTH", "length_range", "mass_segments", "plan_net", "replan"]
 
 
 @dataclass
@@ -59,6 +39,8 @@ class NetPlan:
         node_com: (n, 3) hubs' centres of mass from the node point (mm, hub frame).
         length_range: (min, max) rod lengths the catalog prints (mm).
         degree: (n,) rods at each node.
+        segment: (m,) which segment of buildable masses each rod's bounds are (:func:`mass_segments`),
+            or None: the whole range (see :func:`rodcad.design.nethubs.buildable_bounds`).
     """
 
     target: NetTarget
@@ -71,6 +53,7 @@ class NetPlan:
     node_com: np.ndarray
     length_range: tuple[float, float]
     degree: np.ndarray
+    segment: np.ndarray | None = None
 
     @property
     def target_ends(self) -> np.ndarray:
@@ -154,17 +137,26 @@ def plan_net(target: NetTarget, catalog) -> NetPlan:
     return NetPlan(target, hw, pivots, lengths, rods, bounds, node_masses, node_com, (lo_hw, hi), degree)
 
 
-#: Rounds of :func:`orient_sockets` at most, and the pivot change (over the pivot radius) it stops at.
-ORIENT_ROUNDS = 12
-ORIENT_TOL = 1e-13
-#: A statics residual (over the force scale) this small ends the rounds: the design's
-#: refinement through the exact solver takes it to round-off.
-ORIENT_FINE = 1e-7
-#: Depth of the Anderson acceleration of :func:`orient_sockets`' fixed point.
-ANDERSON = 5
+#: A buildable interval narrower than this (relative) is one mass; it is given this width
+#: below it (the mass design's programs need a width; a microgram in a gram).
+POINT_WIDTH = 1e-6
 
 
-def _rebuild(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
+def mass_segments(hw, length: float) -> list[tuple[float, float]]:
+    """The masses a rod can be built at (:meth:`rodcad.catalog.node.NodeHardware.rod_intervals`)
+    as disjoint segments, ascending; a single mass given :data:`POINT_WIDTH` below it."""
+    segs: list[list[float]] = []
+    for _, lo, hi in sorted(hw.rod_intervals(length), key=lambda x: x[1]):
+        if hi - lo < POINT_WIDTH * hi:
+            lo = hi * (1 - POINT_WIDTH)
+        if segs and lo <= segs[-1][1]:
+            segs[-1][1] = max(segs[-1][1], hi)
+        else:
+            segs.append([lo, hi])
+    return [(a, b) for a, b in segs]
+
+
+def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     """The plan with new pivots: lengths, mass bounds and hub centres of mass follow."""
     t, hw = plan.target, plan.hardware
     ends = t.positions[t.edges] + pivots
@@ -178,278 +170,10 @@ def _rebuild(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
         dirs[j].append(pivots[e, 1] / np.linalg.norm(pivots[e, 1]))
     for k in range(t.n):
         node_masses[k], node_com[k] = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
-    return NetPlan(t, hw, pivots, lengths, rods, np.array([r.mass_range for r in rods], float), node_masses,
-                   node_com, plan.length_range, plan.degree)
-
-
-def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int]:
-    """Hub sockets turned so that the hubs balance at the target, as printed to order.
-
-    A socket on the line between two node points puts its rod's weight share off the hub's
-    centre: the hub would turn and the net leave its target. Each free hub's sockets are
-    instead turned (on the pivot sphere) toward the force its rod pulls with, the least
-    turn that makes the moments about the hub's centre, its own weight's included, vanish;
-    the rods' lengths follow. The forces come from the statics at the target, so the two
-    are iterated to a fixed point: the nodes' forces balanced (exactly where the mass
-    bounds allow, else their best fit), the sockets turned to cancel those forces' moments,
-    the rods' directions updated; a few rounds, the turns being a few degrees. A point node
-    has nothing to turn.
-
-    Returns:
-        (the plan with its pivots, lengths, bounds and hub centres of mass; rounds used).
-    """
-    from optimize import design_net_masses
-
-    t, hw = plan.target, plan.hardware
-    if not hw.is_hub:
-        return plan, 0
-    r = hw.pivot_radius
-    free = ~t.anchored_mask
-    axis = plan.pivots.copy()  # along the rods' lines between node points
-    rounds = 0
-    best, best_res, stall = plan, np.inf, 0
-    xs: list[np.ndarray] = []
-    gs: list[np.ndarray] = []
-    for rounds in range(1, ORIENT_ROUNDS + 1):
-        full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
-                                 node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 allow_compression=t.compression, g=g)
-        if full.exact or full.residual <= ORIENT_FINE:
-            return plan, rounds  # (this close, the refinement through the solver finishes it)
-        st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
-                               node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                               allow_compression=t.compression, g=g, forces_only=True)
-        if full.residual < 0.9 * best_res:
-            best, best_res, stall = plan, full.residual, 0
-        else:
-            if full.residual < best_res:
-                best, best_res = plan, full.residual
-            stall += 0 if st.exact else 1
-            if stall >= 2:  # the forces themselves do not balance: turning sockets will not reach it
-                break
-        ends = t.positions[t.edges] + plan.pivots
-        u = ends[:, 1] - ends[:, 0]
-        u /= np.linalg.norm(u, axis=1, keepdims=True)
-        share = _shares(st.masses, g)
-        F = np.stack([st.tensions[:, None] * u, -st.tensions[:, None] * u], axis=1)
-        F[:, :, 2] -= share
-        new = plan.pivots.copy()
-        for k in np.flatnonzero(free):
-            at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
-            if len(at) < 2:
-                continue
-            f = np.array([F[e, c] for e, c in at])
-            norm = np.linalg.norm(f, axis=1)
-            a = np.array([axis[e, c] for e, c in at])
-            cw = np.cross(plan.node_com[k], [0.0, 0.0, -g * plan.node_masses[k]])
-            A = np.hstack([-_skew(fq) for fq in f])
-            AAt = A @ A.T
-            for _ in range(6):  # the least turn from the rods' lines that cancels the moments
-                M = cw + np.sum(np.cross(a, f), axis=0)
-                if np.max(np.abs(M)) <= 1e-15 * float(norm.max()) * r:
-                    break
-                a = a + (A.T @ np.linalg.lstsq(AAt, -M, rcond=None)[0]).reshape(-1, 3)
-                a *= r / np.linalg.norm(a, axis=1, keepdims=True)
-            for q, (e, c) in enumerate(at):
-                new[e, c] = a[q]
-        change = float(np.max(np.abs(new - plan.pivots))) / r
-        if change <= ORIENT_TOL:
-            plan = _rebuild(plan, new)
-            break
-        # Anderson acceleration of the fixed point (the plain iteration converges linearly)
-        xs.append(plan.pivots.ravel().copy())
-        gs.append(new.ravel().copy())
-        del xs[:-ANDERSON], gs[:-ANDERSON]
-        nxt = new
-        if len(xs) >= 2:
-            fs = np.array(gs) - np.array(xs)
-            dF = np.diff(fs, axis=0).T
-            dG = np.diff(np.array(gs), axis=0).T
-            gamma = np.linalg.lstsq(dF, fs[-1], rcond=None)[0]
-            nxt = (gs[-1] - dG @ gamma).reshape(new.shape)
-            on = free[t.edges]
-            nxt[on] *= r / np.linalg.norm(nxt[on], axis=1, keepdims=True)
-            nxt[~on] = new[~on]
-        plan = _rebuild(plan, nxt)
-    return best, rounds
-
-
-def _shares(masses: np.ndarray, g: float) -> np.ndarray:
-    """(m, 2) each straight symmetric rod's weight at its two pivots (lever rule: half each)."""
-    return np.column_stack([0.5 * g * masses, 0.5 * g * masses])
-
-
-def _skew(a: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-
-
-@dataclass
-class NetCheck:
-    """A designed net, its exact equilibrium and how well it hangs on its target.
-
-    Attributes:
-        plan: the rods and hardware.
-        design: optimize's design (masses, statics verdict, equilibrium with alternatives).
-        masses: (m,) the designed rod masses (g).
-        error_mm: largest distance of a simulated node or pivot from its target (mm).
-        rel_size: that over the net's size.
-        node_error: (n,) each node's distance from its target (mm).
-        tolerance: the figure aimed at (design's tolerance or the default 1 %).
-        sockets: (m, 2, 3) where each rod's socket is printed (hub frame, mm): its pivot
-            moved ``clearance / 2`` against the rod's pull (rodcad.catalog.node).
-        swing_deg: (m, 2) each rod's turn from its socket's axis at the equilibrium (deg).
-        time_s: wall time of the design.
-        notes: things the user should know.
-        why: when no masses at all balance the target, where and why (else '').
-    """
-
-    plan: NetPlan
-    design: NetDesign
-    masses: np.ndarray
-    error_mm: float
-    rel_size: float
-    node_error: np.ndarray
-    tolerance: float
-    sockets: np.ndarray
-    swing_deg: np.ndarray
-    time_s: float
-    notes: list[str] = field(default_factory=list)
-    why: str = ""
-
-    @property
-    def equilibrium(self):
-        return self.design.equilibrium
-
-    @property
-    def compressed(self) -> np.ndarray:
-        """Rods in compression at the equilibrium, less those between two anchored nodes
-        (their tension is the anchors' business: nothing in the net sets it)."""
-        t = self.plan.target
-        c = self.equilibrium.compressed
-        return c[~t.anchored_mask[t.edges[c]].all(axis=1)] if c.size else c
-
-    @property
-    def in_tension(self) -> bool:
-        return self.plan.target.compression or self.compressed.size == 0
-
-    @property
-    def meets_tolerance(self) -> bool:
-        return bool(self.equilibrium.success and self.equilibrium.stable and self.rel_size <= self.tolerance)
-
-    @property
-    def ok(self) -> bool:
-        """Hangs within the tolerance, stable, in tension (unless allowed), rods within their swing."""
-        return self.meets_tolerance and self.in_tension and bool(np.all(self.swing_deg <= self.plan.hardware.swing_deg))
-
-    def limit(self) -> str:
-        """One line: what keeps the net off its target and what would reach it."""
-        pct = (f"hangs {100 * self.rel_size:.3g} % of its size off its target (tolerance "
-               f"{100 * self.tolerance:.3g} %)")
-        eq, st = self.equilibrium, self.design.statics
-        if not eq.success:
-            return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})"
-        if not eq.stable:
-            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one"
-        if not self.meets_tolerance and self.why:
-            return f"{pct}: {self.why}"
-        if not self.meets_tolerance:
-            return f"{pct}: {st.message} The best fit within the rods' mass ranges (refined through the solver) is " \
-                   "the closest; a catalog with a wider mass range, more anchored nodes or a target closer to a " \
-                   "hanging shape would reach it"
-        if not self.in_tension:
-            c = self.compressed
-            return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
-                   "or anchor more nodes"
-        over = np.argwhere(self.swing_deg > self.plan.hardware.swing_deg)
-        return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
-               f"than the {self.plan.hardware.swing_deg:.3g} deg the hub allows"
-
-
-def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,
-                    n_starts: int | None = None) -> NetCheck:
-    """Masses for the planned net, its exact equilibrium and its fit.
-
-    Args:
-        plan: :func:`plan_net`'s rods and hardware.
-        g: gravitational acceleration (m/s^2).
-        seed: the multi-start's seed.
-        tolerance: largest acceptable error over the net's size (None: 1 %).
-        n_starts: the multi-start's starts (None: :func:`net_starts`).
-    """
-    t0 = time.perf_counter()
-    n_starts = net_starts(plan.target.n) if n_starts is None else int(n_starts)
-    lines = plan.pivots.copy()
-    plan, rounds = orient_sockets(plan, g=g)
-    turn = 0.0
-    if plan.hardware.is_hub:
-        cos = np.sum(lines * plan.pivots, axis=2) / plan.hardware.pivot_radius ** 2
-        turn = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
-    t = plan.target
-    design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
-                        node_com=plan.node_com, pivots=plan.pivots, allow_compression=t.compression, g=g,
-                        n_starts=n_starts, seed=seed, refine=True)
-    eq = design.equilibrium
-    size = t.size
-    if eq.success:
-        node_err = np.linalg.norm(eq.positions - t.positions, axis=1)
-        end_err = np.linalg.norm(eq.ends - plan.target_ends, axis=2)
-        err = float(max(node_err.max(), end_err.max()))
-    else:
-        node_err = np.full(t.n, np.inf)
-        err = float("inf")
-    # sockets: each pivot moved against the force its rod pulls with, in the hub's frame
-    sockets = plan.pivots.copy()
-    swing = np.zeros((t.m, 2))
-    hw = plan.hardware
-    if eq.success and hw.is_hub:
-        for k in (0, 1):
-            node = t.edges[:, k]
-            R = eq.rotations[node]
-            f_body = np.einsum("mba,mb->ma", R, eq.rod_forces[:, k])
-            sockets[:, k] = socket_centres(plan.pivots[:, k], f_body, hw.clearance)
-            axis = np.einsum("mab,mb->ma", R, plan.pivots[:, k])
-            axis /= np.linalg.norm(axis, axis=1, keepdims=True)
-            rod = eq.ends[:, 1 - k] - eq.ends[:, k]
-            rod /= np.linalg.norm(rod, axis=1, keepdims=True)
-            swing[:, k] = np.degrees(np.arccos(np.clip(np.sum(axis * rod, axis=1), -1, 1)))
-    tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
-    notes = [design.statics.message]
-    why = ""
-    if not design.statics.exact and np.all(~np.isfinite(design.statics.beyond)) and design.statics.residual > 1e-4:
-        why = _imbalance(plan, design, g)
-        notes.append(why)
-    if turn > 0:
-        notes.append(f"The hubs' sockets are turned up to {turn:.3g} deg off the lines between the node points "
-                     f"(printed so; {rounds} round(s)), so that every hub balances at the target: a socket on the "
-                     "line would put its rod's weight share off the hub's centre and turn it.")
-    if design.refined:
-        notes.append(f"The masses were refined through the solver from the statics' best fit "
-                     f"({design.info.get('fit_error', float('nan')):.4g} mm -> "
-                     f"{design.info.get('refined_error', float('nan')):.4g} mm).")
-    if eq.alternatives:
-        notes.append(f"The multi-start ({n_starts} starts) found {len(eq.alternatives)} other stable shape(s)"
-                     + (", one hanging lower than the design's: a push may move the net there." if eq.lower else
-                        ", none lower than the design's."))
-    if t.dropped:
-        notes.append(f"{t.dropped} rod(s) between two anchored nodes were left out (the anchors hold both ends).")
-    masses = np.asarray(design.masses, float)
-    return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
-                    swing, time.perf_counter() - t0, notes, why)
-
-
-def _imbalance(plan: NetPlan, design: NetDesign, g: float) -> str:
-    """Where the statics' best fit leaves the largest imbalance, when no masses at all (any
-    positive mass, rods pushing or not) balance the target."""
-    t = plan.target
-    st = net_statics(t.positions, t.edges, plan.lengths, t.anchored, node_masses=plan.node_masses,
-                     node_com=plan.node_com, pivots=plan.pivots, g=g)
-    res = np.abs(st.residual(design.statics.tensions, design.statics.masses))
-    force = st.rows[:, 1] < 3
-    per_node = np.zeros(t.n)
-    np.maximum.at(per_node, st.rows[force, 0], res[force])
-    worst = np.argsort(-per_node, kind="stable")[:8]
-    worst = [int(k) for k in worst if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
-    return (f"No masses at all balance this target: some nodes' rods cannot pull them in every direction the "
-            f"load needs (the largest imbalance is at node(s) {worst}). A grid drawn over a rectangle and hung "
-            "from its corners is one such target: its straight border has nothing to pull it outward, so a "
-            "hanging net's border curves inward in plan; anchor the border, or give a target whose border does.")
+    bounds = np.array([r.mass_range for r in rods], float)
+    if plan.segment is not None:
+        for e, L in enumerate(lengths):
+            segs = mass_segments(hw, float(L))
+            bounds[e] = segs[min(int(plan.segment[e]), len(segs) - 1)]
+    return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,
+                   plan.segment)

@@ -27,19 +27,10 @@ def _v(a) -> list[float | None]:
 
 
 def rod_balls(check) -> np.ndarray:
-    """(m,) the steel balls each rod holds at its designed mass: none where a cavity makes it
-    light enough, else the fewest that bring it to its mass (a cavity trims the rest)."""
+    """(m,) the steel balls each rod holds at its designed mass (the fewest whose range holds
+    it: :meth:`rodcad.catalog.node.NodeHardware.rod_fill`)."""
     hw = check.plan.hardware
-    if hw.insert_diameter <= 0:
-        return np.zeros(check.plan.target.m, int)
-    ds = hw.insert_diameter + hw.insert_clearance
-    per = (hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 - hw.density * math.pi / 6 * ds ** 3) / 1000.0
-    out = np.zeros(check.plan.target.m, int)
-    for e, (rn, mass) in enumerate(zip(check.plan.rods, check.masses)):
-        extra = mass - rn.solid_mass
-        if extra > 1e-9 and per > 0:
-            out[e] = min(rn.balls, int(math.ceil(extra / per - 1e-9)))
-    return out
+    return np.array([hw.rod_fill(float(L), float(m))[0] for L, m in zip(check.plan.lengths, check.masses)], int)
 
 
 def net_bill(check, catalog) -> dict[str, Any]:
@@ -104,6 +95,8 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "mass_range": [rn.mass_range[0], rn.mass_range[1]],
             "solid_mass": rn.solid_mass,
             "steel_balls": int(balls[e]),
+            "cavity_mm3": hw.rod_fill(L, float(check.masses[e]))[1],
+            "buildable_mass": hw.rod_fill(L, float(check.masses[e]))[2],
             "body_length": rn.body_length,
             "diameter": hw.rod_diameter,
             "shape": "straight",

@@ -62,6 +62,8 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
               f"(its centreline's end) {check.error_mm:.3g} mm; mean node {float(np.mean(check.node_error)):.3g} mm.",
               f"- Multi-start: {eq.n_starts} starts, {len(eq.alternatives)} other stable shape(s)"
               + (" (one lower than the design's)." if eq.lower else "."),
+              f"- Rods slack (force within 0.1 % of the largest tension): "
+              f"{_list([int(x) for x in check.slack]) if check.slack.size else 'none'}.",
               f"- Rods in compression: {check.compressed.size}"
               + ("" if not check.compressed.size else f" ({_list([int(x) for x in check.compressed])})"
                  + (" (allowed)" if t.compression else " (not allowed)")) + ".",
@@ -117,9 +119,20 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                          + (f", with rods {_list(rods)} between them." if rods else "."))
         else:
             lines.append(f"{k + 1}. Nodes {_list(nodes)} on rods {_list(rods)}.")
-    lines += ["", "## Not built", "",
-              "This run designs the numbers only: the solids of the hubs and rods (STEP/STL, print.3mf) are not "
-              "made for nets yet.", ""]
+    if "as_built" in data:
+        ab, cad = data["as_built"], data["cad"]
+        lines += ["", "## As built", "",
+                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs (hubs/hub-NNN.step, .stl), "
+                  "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
+                  "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
+                  "Rods print lying on their side; drop each rod's steel balls into their sockets at the print's "
+                  "pause. With the solids' own masses and centres of mass the net hangs "
+                  f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
+                  f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
+    else:
+        lines += ["", "## Not built", "",
+                  "Designed without the solids (--no-cad): `rodcad build` without it writes rods/, hubs/ and "
+                  "assembly.step.", ""]
     return "\n".join(lines)
 
 
@@ -137,4 +150,5 @@ def net_summary(check, outdir: Path) -> str:
     return (f"{t.n} nodes, {t.m} rods: hangs {check.error_mm:.3g} mm ({100 * check.rel_size:.3g} % of its size) "
             f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
             f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
-            f"wrote {outdir}/design.json, report.md, preview.png")
+            f"wrote {outdir}/design.json, report.md, preview.png"
+            + (", rods/, hubs/, assembly.step" if (outdir / "assembly.step").exists() else ""))

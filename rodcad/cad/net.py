@@ -24,11 +24,14 @@ from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
 from rodcad.cad.solids import GeometryError, one_solid
 
-#: STL deflection of net parts (mm): small spheres and cylinders need a finer mesh than rods
-#: of chains for their STL to hold the solid's volume to 0.1 %.
-STL_DEFLECTION = 0.004
+#: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
+#: rods for its STL to hold the solid's volume well within 0.1 % (meshed to 0.004 mm it is
+#: 0.1 % short); a hub (a larger sphere, its volume larger for its area) is meshed as a
+#: chain's rods are, a finer mesh of its socket cones failing to weld closed.
+ROD_DEFLECTION = 0.0015
+HUB_DEFLECTION = 0.004
 
-__all__ = ["STL_DEFLECTION", "NetSolids", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
+__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -207,15 +210,15 @@ def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progre
     import matplotlib
 
     written = []
-    for sub, parts in (("rods", solids.rods), ("hubs", solids.hubs)):
+    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", solids.hubs, HUB_DEFLECTION)):
         if not parts:
             continue
         (folder / sub).mkdir(exist_ok=True)
         for k, s in enumerate(parts):
             step, stl = folder / sub / f"{s.label}.step", folder / sub / f"{s.label}.stl"
             export_step(s, step, name=s.label)
-            export_stl(s, stl, tolerance=STL_DEFLECTION)
-            check_files(step, stl, s.volume, deflection=STL_DEFLECTION)
+            export_stl(s, stl, tolerance=defl)
+            check_files(step, stl, s.volume, deflection=defl)
             written += [str(step.relative_to(folder)), str(stl.relative_to(folder))]
             if progress is not None:
                 progress.count(k + 1, len(parts))

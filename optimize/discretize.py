@@ -513,8 +513,7 @@ def _point_polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarra
 def centerline(points, curvature=None, per_rod: int = 24) -> np.ndarray:
     """The rods' centrelines as one polyline: straight chords, or for a rod of signed
     curvature k (1/mm; > 0 bulges to the right of p_i -> p_{i+1}, the rod frame's -y) the
-    arc of radius 1/|k| through both of its joints (a half circle where the joints lie
-    further apart than 2/|k|, as pins in their holes can put them).
+    arc of radius 1/|k| through both joints (a half circle where pin play puts them > 2/|k| apart).
 
     Args:
         points: (N+1, 2) joints.
@@ -531,8 +530,7 @@ def centerline(points, curvature=None, per_rod: int = 24) -> np.ndarray:
             continue
         d = q - p
         c = float(np.hypot(*d))
-        # a chord longer than the arc's diameter (joints moved by pin play): the half circle
-        rho = max(1 / abs(k), c / 2)
+        rho = max(1 / abs(k), c / 2)  # a chord longer than the diameter: the half circle
         x = np.linspace(0.0, c, per_rod + 1)[1:]
         t2 = (x - c / 2) ** 2
         # rho cos(psi) - sqrt(rho^2 - t^2), written without cancellation for large radii

@@ -126,7 +126,9 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
                   "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
                   "Rods print lying on their side; drop each rod's steel balls into their sockets at the print's "
-                  "pause. With the solids' own masses and centres of mass the net hangs "
+                  "pause. Not designed yet: how a rod's ball gets into its hub's socket (the mouths are narrower "
+                  "than the balls, to hold them under tension: a retaining clip or cap, or a split hub, is still "
+                  "to come). With the solids' own masses and centres of mass the net hangs "
                   f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
                   f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
     else:

@@ -254,3 +254,21 @@ def test_a_net_with_its_solids_hangs_as_designed(tmp_path):
     for got, want in zip(ab["masses"], [r["mass"] for r in data["net"]["rods"]]):
         assert got == pytest.approx(want, rel=1e-3)  # the B-rep's volume, to its modelling
     assert "## As built" in (out / "report.md").read_text()
+
+
+def test_an_obj_mesh_net_with_point_nodes_builds_from_its_design_file(tmp_path):
+    """End to end: a design naming its own catalog (point nodes) and an OBJ mesh beside it."""
+    (tmp_path / "point.yaml").write_text(PARAMETRIC.replace("  kind: hub", "  kind: point\n  mass: 0.5"))
+    (tmp_path / "fan.obj").write_text("v 0 0 0\nv 70 0 0\nv 70 70 0\nv 0 70 0\nv 35 35 -25\n"
+                                      "f 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n")
+    (tmp_path / "fan.yaml").write_text("design: 1\nname: fan\ncatalog: point.yaml\nnet:\n  mesh: fan.obj\n"
+                                       "  anchored: boundary\n")
+    code, out = _build(tmp_path, tmp_path / "fan.yaml")
+    assert code == 0
+    net = json.loads((out / "design.json").read_text())["net"]
+    assert len(net["nodes"]) == 5 and len(net["rods"]) == 4
+    assert all(nd["pivots"] is None and nd["rotation"] is None for nd in net["nodes"])
+    assert net["error"]["max_rel_size"] <= 1e-6 and net["stable"]
+    tensions = [r["tension"] for r in net["rods"]]
+    # four equal rods by symmetry (to the central quadratic program's accuracy on the masses)
+    assert max(tensions) == pytest.approx(min(tensions), rel=1e-4)

@@ -154,7 +154,7 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     """Masses for the planned net, its exact equilibrium and its fit.
 
     Args:
-        plan: :func:`plan_net`'s rods and hardware.
+        plan: :func:`rodcad.design.netplan.plan_net`'s rods and hardware.
         g: gravitational acceleration (m/s^2).
         seed: the multi-start's seed.
         tolerance: largest acceptable error over the net's size (None: 1 %).
@@ -175,12 +175,12 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     t = plan.target
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
               allow_compression=t.compression, g=g)
-    # the statics' masses, solved once from the target: refine them through the solver only
-    # where they hang measurably off (above 1e-6 of the size)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
-    # a step (a dense bounded least squares on hundreds of masses); the statics' best fit stays
+    # a step (a dense bounded least squares on hundreds of masses), so the statics' best fit
+    # stays; otherwise the statics' masses, solved once from the target, are refined through
+    # the solver only where they hang measurably off (above REFINE_ABOVE of the size)
     refine = not (t.n > FULL_REFINE_NODES and residual > ORIENT_USEFUL)
-    if not residual > ORIENT_USEFUL:  # (a statics that far off needs the refinement: no probe)
+    if not residual > ORIENT_USEFUL:  # (NaN for point nodes: probe)
         probe = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=1, refine=False,
                            **kw)
         refine = not (probe.equilibrium.success and probe.equilibrium.stable and probe.rel_error <= REFINE_ABOVE)

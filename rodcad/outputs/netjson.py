@@ -90,7 +90,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "mass": _f(check.masses[e]),
             "com": [L / 2, 0.0, 0.0],
             "tension": _f(eq.tensions[e]),
-            "ends": [_v(eq.ends[e, 0]), _v(eq.ends[e, 1]) ],
+            "ends": [_v(eq.ends[e, 0]), _v(eq.ends[e, 1])],
             "target_ends": [_v(plan.target_ends[e, 0]), _v(plan.target_ends[e, 1])],
             "mass_range": [rn.mass_range[0], rn.mass_range[1]],
             "solid_mass": rn.solid_mass,

@@ -116,7 +116,7 @@ def test_explicit_chain_reach_and_fixed_rods_are_checked():
 
 def test_no_target_and_no_chain_is_explained():
     got = problems(GOOD.replace("target: {form: arc, sag: 60}\n", ""))
-    assert got == ["d.yaml:1:1: give a 'target' to design a chain for, or an explicit 'chain' to simulate"]
+    assert got == ["d.yaml:1:1: give a 'target' to design a chain for, an explicit 'chain' to simulate, or a 'net'"]
 
 
 def test_every_example_validates():

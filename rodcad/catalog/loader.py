@@ -237,9 +237,14 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
             if nozzle is not None and key in settings and settings[key] > 0.8 * nozzle:
                 v.report_at(f"print.{key}", f"{format_number(settings[key])} mm is more than 0.8 of the printer's "
                             f"{format_number(nozzle)} mm nozzle: the layers would not bond")
+    node = None
+    if types and v.ok("node", schema_failed):
+        from rodcad.catalog.node import node_hardware
+
+        node = node_hardware(data.get("node") or {}, types[0], v)
     v.raise_if_any()
     return Catalog(data["name"], data.get("description", ""), path, tuple(types), tuple(families), printer,
-                   settings)
+                   settings, node)
 
 
 def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None

@@ -430,6 +430,7 @@ class Catalog:
         printer: the printer it is sized for, if given.
         print_settings: the catalog's ``print`` block (layer height, perimeters, ...), the
             profile every mass assumes besides 100 % infill.
+        node: the hardware at a net's nodes (:class:`rodcad.catalog.node.NodeHardware`).
     """
 
     name: str
@@ -439,6 +440,7 @@ class Catalog:
     families: tuple[Family, ...]
     printer: Printer | None = None
     print_settings: dict[str, Any] = field(default_factory=dict, compare=False)
+    node: Any = field(default=None, compare=False)  # rodcad.catalog.node.NodeHardware (nets)
 
     @cached_property
     def _by_name(self) -> dict[str, RodType]:

@@ -17,7 +17,7 @@ from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
 #: Longest design, catalog or family name (it names folders and files).
 MAX_NAME = 100
 
-__all__ = ["ListOrRange", "OneOrMany", "catalog_schema", "catalog_spec", "family_spec"]
+__all__ = ["ListOrRange", "OneOrMany", "catalog_schema", "catalog_spec", "family_spec", "node_spec"]
 
 
 class ListOrRange(OneOrList):
@@ -293,6 +293,43 @@ def _partial(spec: Any) -> Any:
     return spec
 
 
+def node_spec() -> Obj:
+    """Spec of a catalog's ``node`` block: the hardware at a net's nodes (see
+    :mod:`rodcad.catalog.node`; unset keys take :data:`rodcad.catalog.node.DEFAULT_NODE`)."""
+    from rodcad.catalog.node import DEFAULT_NODE, NODE_KINDS
+
+    d = DEFAULT_NODE
+    mm = dict(exclusive_minimum=0, maximum=200, unit="mm")
+    return Obj(
+        {
+            "kind": Field(Str(choices=NODE_KINDS), description="hub: a printed sphere with one ball socket per "
+                          "rod, a rigid body whose pose the solver finds; point: the rods pivot about one point "
+                          f"(a jump ring, a small shackle) (default {d['kind']})."),
+            "name": Field(Str(), description="Free text."),
+            "diameter": Field(Num(**mm), description=f"hub: the sphere's diameter (default {d['diameter']:g} mm)."),
+            "pivot_radius": Field(Num(**mm), description="hub: from the hub's centre to each rod's ball centre, "
+                                  f"its pivot (default {d['pivot_radius']:g} mm)."),
+            "ball": Field(Num(**mm), description="hub: diameter of the ball each rod ends in, printed with the rod "
+                          f"(default {d['ball']:g} mm)."),
+            "clearance": Field(Num(minimum=0, maximum=5, unit="mm"), description="hub: socket diameter minus ball "
+                               f"diameter (default {d['clearance']:g} mm); rodcad offsets each socket so the loaded "
+                               "ball sits on its pivot."),
+            "cone_deg": Field(Num(exclusive_minimum=0, exclusive_maximum=90, unit="deg"),
+                              description="hub: half-angle of each socket's opening cone, apex at the ball's centre "
+                              f"(default {d['cone_deg']:g} deg)."),
+            "neck": Field(Num(**mm), description="hub: diameter of a rod's neck between its ball and its body "
+                          f"(default {d['neck']:g} mm)."),
+            "rod_diameter": Field(Num(**mm), description=f"Net rods' round body (default {d['rod_diameter']:g} mm)."),
+            "gap": Field(Num(minimum=0, maximum=50, unit="mm"), description="hub: between the hub's surface and a "
+                         f"rod body's end face (default {d['gap']:g} mm)."),
+            "mass": Field(Num(minimum=0, maximum=1000, unit="g"), description="point: the part's mass "
+                          f"(default {d['mass']:g} g)."),
+        },
+        description="The hardware at a net's nodes (every rod turns freely in every direction); printed in the "
+        "families' material, rods weighed down with their steel balls.",
+    )
+
+
 def catalog_spec() -> Obj:
     """The spec of a whole catalog file."""
     family = family_spec()
@@ -351,6 +388,7 @@ def catalog_spec() -> Obj:
                 )
             ),
             "defaults": Field(defaults),
+            "node": Field(node_spec()),
             "families": Field(ListOf(entry, min_items=1), required=True,
                               description="Rod families, in the order their types are listed."),
         },

@@ -44,9 +44,6 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
-    from rodcad import pipeline
-    from rodcad.outputs.report import summary_text
-
     progress = Progress(quiet=args.quiet)
     design = load_design(args.design)
     outdir = Path(args.outdir) if args.outdir else Path("outputs") / design.name
@@ -64,6 +61,11 @@ def run(args: argparse.Namespace) -> int:
         return 2
     if design.chandelier is not None:
         return _chandelier(design, outdir, args, progress)
+    if design.net is not None:
+        return _net(design, outdir, args, progress)
+    from rodcad import pipeline
+    from rodcad.outputs.report import summary_text
+
     result = pipeline.build(design, method=args.method, seed=args.seed,
                             cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
     code = 0
@@ -103,5 +105,28 @@ def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progre
                if f > tol]
         print(f"rodcad: {'; '.join(off)} (tolerance {100 * tol:.3g} %); {outdir} left as it was, the best "
               f"achievable design is in {target}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
+    from rodcad.netpipeline import build_net, write_net_outputs
+    from rodcad.outputs.netreport import net_summary
+
+    b = build_net(design, seed=args.seed, cad=not args.no_cad and design.cad, progress=progress)
+    target = outdir if b.ok else _best_fit(outdir)
+    write_net_outputs(b, target, progress=progress)
+    print(net_summary(b.check, target))
+    if b.solids is not None:
+        print(f"as built (the solids' masses and centres of mass): {b.solids.error_mm:.3g} mm "
+              f"({100 * b.solids.rel_size:.3g} % of its size) from the design")
+    if not b.check.ok:
+        print(f"rodcad: {design.name} {b.limit()}; {outdir} left as it was, the best fit is in {target}",
+              file=sys.stderr)
+        return 1
+    if not b.ok:
+        print(f"rodcad: {design.name}: as built (the solids' masses) it hangs {100 * b.solids.rel_size:.3g} % of its "
+              f"size from the design (tolerance {100 * b.check.tolerance:.3g} %); {outdir} left as it was, the "
+              f"design and its solids are in {target}", file=sys.stderr)
         return 1
     return 0

@@ -88,7 +88,18 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
                 v.report_at("anchors", "the two anchors coincide")
                 anchors = None
 
-    if "anchors" not in data and "chandelier" not in data and v.ok("", schema_ok):
+    net = None
+    if "net" in data:  # a net takes its anchored nodes and target from the block
+        for key in ("anchors", "target", "chain", "chandelier"):
+            if key in data:
+                v.report_at(key, f"a net design takes no {key!r}: its nodes, rods and anchored nodes are "
+                            "in the 'net' block")
+        if v.ok("net", schema_ok):
+            from rodcad.design.net import net_target
+
+            net = net_target(data["net"], v, path.parent)
+        anchors = np.array([[0.0, 0.0], [1.0, 0.0]])  # unused for a net
+    elif "anchors" not in data and "chandelier" not in data and v.ok("", schema_ok):
         v.report_at("", "missing required key 'anchors' (or describe a 'chandelier')")
     if "chandelier" in data:  # a chandelier's chains take their anchors and targets from the block
         for key, where in (("anchors", "its pattern"), ("target", "chandelier.target or each chain's target"),
@@ -100,8 +111,8 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         placements, chain_targets = _chandelier(data["chandelier"], v)
         if placements is not None:
             anchors = np.array([[0.0, 0.0], [1.0, 0.0]])  # unused for a chandelier
-    if "target" not in data and "chain" not in data and "chandelier" not in data and v.ok("", schema_ok):
-        v.report_at("", "give a 'target' to design a chain for, or an explicit 'chain' to simulate")
+    if not any(k in data for k in ("target", "chain", "chandelier", "net")) and v.ok("", schema_ok):
+        v.report_at("", "give a 'target' to design a chain for, an explicit 'chain' to simulate, or a 'net'")
 
     names = catalog.names if catalog is not None else None
     by_name = {t.name: t for t in catalog} if catalog is not None else {}
@@ -177,7 +188,7 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
 
     # target
     form, params, curve = None, {}, None
-    if ok("target") and anchors is not None:
+    if ok("target") and anchors is not None and net is None:
         form, params, curve = _target(data["target"], anchors, v)
 
     v.problems.sort(key=lambda p: (p.file != display, p.line, p.column))
@@ -207,6 +218,7 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
         chandelier=_chandelier_spec(data.get("chandelier")),
         placements=placements,
         chain_targets=chain_targets,
+        net=net,
     )
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from rodcad.design.model import ANCHOR_STOP_MODES, DEFAULT_CATALOG, FUSE_MODES, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
+from rodcad.design.netspec import net_spec
 from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, Str
 
 #: Longest design, catalog or family name (it names folders and files).
@@ -167,6 +168,7 @@ def design_spec() -> Obj:
                            description="An explicit chain (for `rodcad simulate`): rod types and masses "
                            "from anchor A to anchor B."),
             "chandelier": Field(chandelier_spec()),
+            "net": Field(net_spec()),
             "constraints": Field(
                 Obj(
                     {
@@ -236,7 +238,8 @@ def design_spec() -> Obj:
             ),
         },
         title="rodcad design",
-        description="A hanging chain to design (target) or simulate (chain); units mm, g, deg.",
+        description="A hanging chain to design (target) or simulate (chain), or a net of rods (net); "
+        "units mm, g, deg.",
     )
 
 

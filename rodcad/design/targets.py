@@ -231,38 +231,63 @@ MAX_EXPRESSION_DEPTH = 60
 
 
 def _safe_eval(expr: str, x: np.ndarray) -> np.ndarray:
-    """Evaluate a y(x) expression on numbers only: every constant becomes a float, so
-    powers overflow to inf instead of building huge integers, and strings are refused."""
+    """Evaluate a y(x) expression on numbers only (see :func:`evaluate_expression`)."""
+    return evaluate_expression(expr, {"x": x}, what="y(x)")
+
+
+def evaluate_expression(expr: str, variables: dict[str, np.ndarray], *, what: str = "y(x)") -> np.ndarray:
+    """Evaluate an arithmetic expression of ``variables`` on numbers only.
+
+    Only numbers, the variables, ``pi``, ``e``, + - * / % ** and the functions sin, cos,
+    tan, exp, log, sqrt, abs, sinh, cosh, tanh, arcsin, arccos, arctan, minimum, maximum are
+    read; every constant becomes a float, so powers overflow to inf instead of building
+    huge integers, and strings, attributes, subscripts and keywords are refused.
+
+    Args:
+        expr: the expression, e.g. ``'0.002 * ((x - 80)**2 + (y - 80)**2) - 40'``.
+        variables: name -> array (all of one shape, or broadcastable).
+        what: how messages name the expression (``'z(x, y)'``).
+
+    Returns:
+        The values, broadcast to the variables' shape.
+
+    Raises:
+        ValueError: unreadable, unsupported or unknown names, in words.
+    """
     if len(expr) > MAX_EXPRESSION:
-        raise ValueError(f"the y(x) expression is {len(expr)} characters long; keep it under {MAX_EXPRESSION}")
+        raise ValueError(f"the {what} expression is {len(expr)} characters long; keep it under {MAX_EXPRESSION}")
     try:
         tree = ast.parse(expr, mode="eval")
     except (SyntaxError, RecursionError, MemoryError) as err:
-        raise ValueError(f"cannot read the y(x) expression: {getattr(err, 'msg', None) or 'it nests too deep'}") \
+        raise ValueError(f"cannot read the {what} expression: {getattr(err, 'msg', None) or 'it nests too deep'}") \
             from None
     if _depth(tree) > MAX_EXPRESSION_DEPTH:
-        raise ValueError(f"the y(x) expression nests more than {MAX_EXPRESSION_DEPTH} levels deep")
+        raise ValueError(f"the {what} expression nests more than {MAX_EXPRESSION_DEPTH} levels deep")
     allowed = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Call, ast.Name, ast.Load,
                ast.Constant, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd,
                ast.Mod)
+    names = ", ".join(variables)
     for node in ast.walk(tree):
         if not isinstance(node, allowed):
-            raise ValueError(f"unsupported syntax in y(x) expression: {type(node).__name__}")
-        if isinstance(node, ast.Name) and node.id not in {"x", *_SAFE_FUNCS, *_SAFE_CONSTS}:
-            raise ValueError(f"unknown name {node.id!r} in y(x) expression (use x, pi, sin, ...)")
-        if isinstance(node, ast.Call) and not isinstance(node.func, ast.Name):
-            raise ValueError("only plain function calls such as cos(x) are allowed")
+            raise ValueError(f"unsupported syntax in {what} expression: {type(node).__name__}")
+        if isinstance(node, ast.Name) and node.id not in {*variables, *_SAFE_FUNCS, *_SAFE_CONSTS}:
+            raise ValueError(f"unknown name {node.id!r} in {what} expression (use {names}, pi, sin, ...)")
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id not in _SAFE_FUNCS:
+            raise ValueError(f"unknown name {node.func.id!r} in {what} expression (use {names}, pi, sin, ...)")
+        if isinstance(node, ast.Call) and (not isinstance(node.func, ast.Name) or node.keywords):
+            raise ValueError(f"only plain calls of sin, cos, sqrt, ... are allowed in the {what} expression")
         if isinstance(node, ast.Constant):
             if not isinstance(node.value, (int, float)) or isinstance(node.value, bool):
-                raise ValueError(f"only numbers may stand in a y(x) expression, not {node.value!r}")
+                raise ValueError(f"only numbers may stand in a {what} expression, not {node.value!r}")
             node.value = float(node.value)  # no unbounded integer arithmetic (9**9**9)
-    env = {"x": x, **_SAFE_FUNCS, **_SAFE_CONSTS}
+    env = {**_SAFE_FUNCS, **_SAFE_CONSTS, **variables}
+    shape = np.broadcast_shapes(*(np.shape(a) for a in variables.values())) if variables else ()
     with np.errstate(all="ignore"):
         try:
-            y = eval(compile(tree, "<y(x)>", "eval"), {"__builtins__": {}}, env)  # noqa: S307
-        except (OverflowError, ZeroDivisionError, TypeError) as err:
-            raise ValueError(f"cannot evaluate the y(x) expression: {err}") from None
-    return np.broadcast_to(np.asarray(y, dtype=float), x.shape).copy()
+            y = eval(compile(tree, f"<{what}>", "eval"), {"__builtins__": {}}, env)  # noqa: S307
+        except (OverflowError, ZeroDivisionError, TypeError, ValueError) as err:
+            raise ValueError(f"cannot evaluate the {what} expression: {err}") from None
+    return np.broadcast_to(np.asarray(y, dtype=float), shape).copy()
 
 
 def _depth(node: ast.AST) -> int:

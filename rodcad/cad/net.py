@@ -1,0 +1,240 @@
+"""The solids of a net: printed hubs with ball sockets, round rods with ball ends, cavities and
+steel-ball sockets, their files and the assembly (the geometry of rodcad.catalog.node).
+
+Hub ``k`` (its own frame: origin the node point, axes the hub's at the target) is a sphere
+less, per rod, a socket sphere ``ball + clearance`` across at its printed centre (the pivot
+set back against the rod's pull, design.json's ``sockets``) and the opening cone (apex there,
+half-angle ``cone_deg``, along the pivot's direction from the hub's centre). Rod ``e`` (its
+frame: x from its pivot at node i to its pivot at node j, ``length`` apart) is a ball at each
+pivot, a neck to the body, the round body, and inside it the steel balls' closed sockets in a
+row at mid-length plus the cavity that trims the plastic to the designed mass (two equal
+coaxial cylinders beside the row, or one at mid-length): symmetric, so its centre of mass stays
+at mid-length.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
+
+from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
+from rodcad.cad.solids import GeometryError, one_solid
+
+#: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
+#: rods for its STL to hold the solid's volume well within 0.1 % (meshed to 0.004 mm it is
+#: 0.1 % short); a hub (a larger sphere, its volume larger for its area) is meshed as a
+#: chain's rods are, a finer mesh of its socket cones failing to weld closed.
+ROD_DEFLECTION = 0.0015
+HUB_DEFLECTION = 0.004
+
+__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
+
+
+def _plane(origin, direction) -> Plane:
+    """A plane at ``origin`` whose z axis is ``direction`` (its x axis any perpendicular)."""
+    d = np.asarray(direction, float)
+    d = d / np.linalg.norm(d)
+    x = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.cross(d, [1.0, 0.0, 0.0])
+    x /= np.linalg.norm(x)
+    return Plane(tuple(float(v) for v in origin), x_dir=tuple(float(v) for v in x), z_dir=tuple(float(v) for v in d))
+
+
+def _socket_tool(rs: float, cone_deg: float, h: float) -> Solid:
+    """A socket sphere of radius ``rs`` at the origin and its opening cone (apex at the origin,
+    half-angle ``cone_deg``, along +z to z = ``h``) as one solid of revolution (no boolean)."""
+    a = math.radians(cone_deg)
+    ti, ri = rs * math.cos(a), rs * math.sin(a)
+    top = h * math.tan(a)
+    edges = [
+        Edge.make_three_point_arc((0.0, 0.0, -rs), (rs, 0.0, 0.0), (ri, 0.0, ti)),
+        Edge.make_line((ri, 0.0, ti), (top, 0.0, h)),
+        Edge.make_line((top, 0.0, h), (0.0, 0.0, h)),
+        Edge.make_line((0.0, 0.0, h), (0.0, 0.0, -rs)),
+    ]
+    face = Face(Wire(edges))
+    return Solid.revolve(face, 360, Axis.Z)
+
+
+def hub_solid(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
+    """One hub: a sphere less a socket and an opening cone per rod.
+
+    Args:
+        hw: the :class:`rodcad.catalog.node.NodeHardware` (a hub).
+        sockets: (k, 3) the sockets' printed centres in the hub's frame (mm); each opens
+            along its centre's direction from the hub's centre.
+    """
+    tool = _socket_tool(hw.socket_radius, hw.cone_deg, hw.radius + 1.0)
+    solid = Solid.make_sphere(hw.radius)
+    for c in np.asarray(sockets, float).reshape(-1, 3):
+        placed = tool.moved(Location(_plane(c, c / np.linalg.norm(c))))
+        solid = one_solid(solid.cut(placed).clean(), "cutting the hub's sockets")
+    solid.label = name
+    return solid
+
+
+def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod") -> Solid:
+    """One net rod along +x, its pivots at x = 0 and x = ``length``.
+
+    Args:
+        hw: the node hardware (ball, neck, rod diameter, walls, steel balls).
+        length: pivot to pivot (mm).
+        balls: steel balls in closed sockets in a row at mid-length.
+        cavity: the cavity's volume (mm^3): two equal coaxial cylinders beside the balls,
+            or one at mid-length (:meth:`rodcad.catalog.node.NodeHardware.rod_fill`).
+    """
+    r, w = hw.rod_diameter / 2, hw.min_wall
+    e = hw.end_offset
+    body = length - 2 * e
+    parts = [Solid.make_cylinder(r, body, Plane((e, 0, 0), z_dir=(1, 0, 0)))]
+    if hw.is_hub:
+        for x0, d in ((0.0, 1.0), (length, -1.0)):
+            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0))))
+            parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
+    solid = parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
+    voids = []
+    ds = hw.insert_diameter + hw.insert_clearance
+    row = balls * ds + max(balls - 1, 0) * w
+    for k in range(balls):
+        cx = length / 2 - row / 2 + ds / 2 + k * (ds + w)
+        voids.append(Solid.make_sphere(ds / 2, Plane((cx, 0, 0))))
+    area = math.pi * (r - w) ** 2
+    if cavity > 1e-3 * area:  # (a cavity shorter than a thousandth of a mm is none)
+        if balls:
+            each = cavity / 2 / area
+            for sgn in (-1.0, 1.0):
+                start = length / 2 + sgn * (row / 2 + w)
+                voids.append(Solid.make_cylinder(r - w, each, Plane((start if sgn > 0 else start - each, 0, 0),
+                                                                    z_dir=(1, 0, 0))))
+        else:
+            lc = cavity / area
+            voids.append(Solid.make_cylinder(r - w, lc, Plane((length / 2 - lc / 2, 0, 0), z_dir=(1, 0, 0))))
+    if voids:
+        solid = one_solid(solid.cut(*voids), "cutting a rod's cavity and ball sockets")
+    solid.label = name
+    return solid
+
+
+@dataclass
+class NetSolids:
+    """The solids of a designed net and the net as built from them.
+
+    Attributes:
+        hubs: one solid per node (hub frame), or [] for point nodes.
+        rods: one solid per rod (rod frame).
+        rod_masses: (m,) as built: plastic from the solid plus its steel balls (g).
+        node_masses: (n,) hubs as built (g); node_com: (n, 3) their centres of mass (mm).
+        as_built: the equilibrium with these masses (optimize.NetResult).
+        error_mm, rel_size: its nodes and pivots against the design's simulated ones.
+    """
+
+    hubs: list
+    rods: list
+    rod_masses: np.ndarray
+    node_masses: np.ndarray
+    node_com: np.ndarray
+    as_built: object = None
+    error_mm: float = float("nan")
+    rel_size: float = float("nan")
+    files: list = field(default_factory=list)
+
+
+def build_net_solids(check, *, progress=None) -> NetSolids:
+    """Every hub and rod of a :class:`rodcad.design.netplan.NetCheck`, and the net re-solved
+    with the solids' masses and centres of mass.
+
+    Args:
+        check: the designed net (each rod's balls and cavity from NodeHardware.rod_fill).
+        progress: a progress step (``count``) or None.
+    """
+    from optimize import solve_net
+
+    plan = check.plan
+    t, hw = plan.target, plan.hardware
+    ball_mass = hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 / 1000.0
+    rho = hw.density / 1000.0
+    rods, rod_masses = [], np.zeros(t.m)
+    total = t.m + (t.n if hw.is_hub else 0)
+    for e in range(t.m):
+        k, cavity, _ = hw.rod_fill(float(plan.lengths[e]), float(check.masses[e]))
+        s = net_rod_solid(hw, float(plan.lengths[e]), k, cavity, name=f"rod-{e:03d}")
+        rods.append(s)
+        rod_masses[e] = rho * s.volume + k * ball_mass
+        if progress is not None:
+            progress.count(e + 1, total)
+    hubs = []
+    node_masses, node_com = plan.node_masses.copy(), plan.node_com.copy()
+    if hw.is_hub:
+        for k in range(t.n):
+            at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+            s = hub_solid(hw, np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3), name=f"hub-{k:03d}")
+            hubs.append(s)
+            node_masses[k] = rho * s.volume
+            node_com[k] = np.array(tuple(s.center(CenterOf.MASS)))
+            if progress is not None:
+                progress.count(t.m + k + 1, total)
+    eq = check.equilibrium
+    res = solve_net(eq.positions, t.edges, plan.lengths, rod_masses, t.anchored, node_masses=node_masses,
+                    node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations)
+    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res)
+    if res.success:
+        err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
+                  float(np.max(np.linalg.norm(res.ends - eq.ends, axis=2))))
+        out.error_mm, out.rel_size = err, err / t.size
+    return out
+
+
+def _matrix(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = R
+    m[:3, 3] = origin
+    return m
+
+
+def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    x = (p1 - p0) / np.linalg.norm(p1 - p0)
+    y = np.cross([0.0, 0.0, 1.0], x)
+    if np.linalg.norm(y) < 1e-9:
+        y = np.cross([0.0, 1.0, 0.0], x)
+    y /= np.linalg.norm(y)
+    return np.column_stack([x, y, np.cross(x, y)])
+
+
+def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progress=None) -> list[str]:
+    """rods/rod-NNN.step/.stl, hubs/hub-NNN.step/.stl (each checked: the STEP re-imports as one
+    valid solid of the same volume, the STL is watertight) and assembly.step: every part a
+    named solid where the designed net hangs, rods coloured light (blue) to heavy (red)."""
+    import matplotlib
+
+    written = []
+    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", solids.hubs, HUB_DEFLECTION)):
+        if not parts:
+            continue
+        (folder / sub).mkdir(exist_ok=True)
+        for k, s in enumerate(parts):
+            step, stl = folder / sub / f"{s.label}.step", folder / sub / f"{s.label}.stl"
+            export_step(s, step, name=s.label)
+            export_stl(s, stl, tolerance=defl)
+            check_files(step, stl, s.volume, deflection=defl)
+            written += [str(step.relative_to(folder)), str(stl.relative_to(folder))]
+            if progress is not None:
+                progress.count(k + 1, len(parts))
+    eq = check.equilibrium
+    m = solids.rod_masses
+    norm = matplotlib.colors.Normalize(float(m.min()), float(m.max()) if m.max() > m.min() else float(m.min()) + 1e-9)
+    cmap = matplotlib.colormaps["coolwarm"]
+    nodes = []
+    for e, s in enumerate(solids.rods):
+        p0, p1 = eq.ends[e]
+        color = tuple(float(c) for c in cmap(norm(m[e]))[:3])
+        nodes.append(AssemblyPart(s.label, s, _matrix(_rod_frame(p0, p1), p0), color))
+    for k, s in enumerate(solids.hubs):
+        nodes.append(AssemblyPart(s.label, s, _matrix(eq.rotations[k], eq.positions[k]), (0.8, 0.8, 0.8)))
+    if not nodes:  # pragma: no cover - a net has rods
+        raise GeometryError("nothing to assemble")
+    export_assembly(folder / "assembly.step", nodes, name=name)
+    written.append("assembly.step")
+    return written

@@ -1,0 +1,120 @@
+"""The pipeline of a net design: a design file with a ``net:`` block in, numbers, report and
+pictures out. It sequences the steps and owns none of them::
+
+    design.yaml + catalog -> load_design() (net: rodcad.design.net)   rodcad.design.loader
+    -> hardware, lengths, mass bounds, hub masses                      rodcad.design.netplan.plan_net
+    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.netplan.design_net_plan
+    -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net
+    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net*, rodcad.cad.net
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from rodcad.design.model import Design
+from rodcad.design.netcheck import NetCheck, design_net_plan
+from rodcad.design.netplan import plan_net
+from rodcad.outdir import staged_output
+from rodcad.outputs.design_json import print_profile, write_json
+from rodcad.outputs.netjson import net_json
+from rodcad.outputs.netpreview import plot_net
+from rodcad.outputs.netreport import net_report
+from rodcad.progress import Progress
+
+__all__ = ["NetBuild", "build_net", "write_net_outputs"]
+
+
+@dataclass
+class NetBuild:
+    """One run of a net design.
+
+    Attributes:
+        design: the validated design.
+        check: the designed net, its equilibrium and fit.
+        seed: the multi-start's seed.
+        solids: the hubs' and rods' solids and the net as built (with CAD), or None.
+    """
+
+    design: Design
+    check: NetCheck
+    seed: int
+    solids: Any = None  # rodcad.cad.net.NetSolids when the solids were built
+
+    @property
+    def ok(self) -> bool:
+        return self.check.ok and self.as_built_ok
+
+    @property
+    def as_built_ok(self) -> bool:
+        """Without CAD, or the net as built within the tolerance of the design."""
+        return self.solids is None or bool(self.solids.rel_size <= self.check.tolerance)
+
+    def limit(self) -> str:
+        return self.check.limit()
+
+
+def build_net(design: Design, *, seed: int | None = None, cad: bool = False,
+              progress: Progress | None = None) -> NetBuild:
+    """Design a net: hardware and rods on the target, masses, the exact equilibrium.
+
+    Raises:
+        DesignLimit: rods the catalog cannot print, nodes too crowded for the hubs.
+    """
+    progress = progress or Progress(quiet=True)
+    seed = design.seed if seed is None else int(seed)
+    t = design.net
+    with progress.step(f"laying hubs and rods on the target ({t.n} nodes, {t.m} rods)"):
+        plan = plan_net(t, design.catalog)
+    with progress.step("designing the masses and solving the net (exact equilibrium, multi-start)") as st:
+        st.note(f"{t.m} rods, mass bounds {plan.bounds[:, 0].min():.3g}-{plan.bounds[:, 1].max():.3g} g")
+        check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance)
+    solids = None
+    if cad:
+        from rodcad.cad.net import build_net_solids
+
+        with progress.step("building the hubs and rods (B-rep) and the net as built") as st:
+            solids = build_net_solids(check, progress=st)
+    return NetBuild(design, check, seed, solids)
+
+
+def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
+    """Write design.json, report.md and preview.png to ``outdir`` (staged: a failed run
+    leaves it as it was). Returns the data written to design.json."""
+    progress = progress or Progress(quiet=True)
+    d = b.design
+    with staged_output(Path(outdir)) as tmp:
+        files = []
+        if b.solids is not None:
+            from rodcad.cad.net import write_net_files
+
+            with progress.step("writing and checking rods/*, hubs/* (STEP, STL) and assembly.step") as st:
+                files = write_net_files(b.check, b.solids, tmp, name=d.name, progress=st)
+        with progress.step("writing design.json, report.md, preview.png"):
+            data = _write(b, tmp, files)
+    return data
+
+
+def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
+    """design.json (with the as-built net and the files when the solids were built), the
+    preview and report.md, into ``tmp``."""
+    d = b.design
+    data = net_json(b.check, name=d.name, seed=b.seed, catalog=d.catalog, print_profile=print_profile(d.catalog))
+    s = b.solids
+    if s is not None:
+        data["as_built"] = {"masses": [float(x) for x in s.rod_masses],
+                            "node_masses": [float(x) for x in s.node_masses],
+                            "node_com": [[float(v) for v in c] for c in s.node_com],
+                            "simulated": [[float(v) for v in p] for p in s.as_built.positions],
+                            "stable": bool(s.as_built.stable),
+                            "error": {"max_mm": float(s.error_mm), "max_rel_size": float(s.rel_size)},
+                            "note": "the net re-solved with the solids' masses and centres of mass, against the "
+                                    "design's simulated nodes and pivots"}
+        data["cad"] = {"hubs": len(s.hubs), "rods": len(s.rods), "files": files}
+    write_json(tmp / "design.json", data)
+    plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "
+             "its target", tmp / "preview.png")
+    (tmp / "report.md").write_text(net_report(b.check, data, title=d.name), encoding="utf-8")
+    return data

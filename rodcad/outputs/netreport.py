@@ -1,0 +1,156 @@
+"""report.md and the terminal summary of a designed net."""
+
+from __future__ import annotations
+
+from collections import deque
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["assembly_layers", "net_report", "net_summary"]
+
+
+def assembly_layers(edges: np.ndarray, anchored: np.ndarray, n: int) -> list[tuple[list[int], list[int]]]:
+    """The order to hang a net: (nodes, rods) per layer, breadth first from the anchored
+    nodes. Layer 0 holds the anchored nodes (and the rods between them); layer k the nodes
+    k rods away from an anchor and the rods that reach them from layer k - 1 or join them."""
+    adj: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+    for e, (i, j) in enumerate(edges):
+        adj[int(i)].append((int(j), e))
+        adj[int(j)].append((int(i), e))
+    layer = np.full(n, -1)
+    q = deque()
+    for a in anchored:
+        layer[int(a)] = 0
+        q.append(int(a))
+    while q:
+        i = q.popleft()
+        for j, _ in adj[i]:
+            if layer[j] < 0:
+                layer[j] = layer[i] + 1
+                q.append(j)
+    out = []
+    rod_layer = np.maximum(layer[edges[:, 0]], layer[edges[:, 1]])
+    for k in range(int(layer.max()) + 1):
+        out.append(([int(x) for x in np.flatnonzero(layer == k)], [int(x) for x in np.flatnonzero(rod_layer == k)]))
+    return out
+
+
+def _list(xs: list[int], most: int = 24) -> str:
+    s = ", ".join(map(str, xs[:most]))
+    return s + (f", ... ({len(xs)} in all)" if len(xs) > most else "")
+
+
+def net_report(check, data: dict[str, Any], *, title: str) -> str:
+    """report.md of a designed net."""
+    plan, eq = check.plan, check.equilibrium
+    t, hw = plan.target, plan.hardware
+    net = data["net"]
+    bom = data["bill_of_materials"]
+    lines = [f"# {title}", ""]
+    verdict = "meets" if check.ok else "misses"
+    lines += [f"A net of {t.m} rods and {t.n} nodes ({t.anchored.size} anchored), generated from "
+              f"'{t.kind}'. It {verdict} its tolerance: the simulated net hangs **{check.error_mm:.3g} mm** "
+              f"({100 * check.rel_size:.3g} % of its {t.size:.4g} mm size) from its target at worst "
+              f"(tolerance {100 * check.tolerance:.3g} %).", "",
+              "![from above and from the side](preview.png)", "", "## Fit and equilibrium", ""]
+    lines += [f"- Statics at the target: {check.design.statics.message}",
+              f"- Exact equilibrium of the designed net from the target: "
+              f"{'stable' if eq.stable else 'NOT stable'}, KKT residual {eq.kkt_residual:.2g}; {eq.message}",
+              f"- Largest distance of a node from its target {float(np.max(check.node_error)):.3g} mm, of a rod's pivot "
+              f"(its centreline's end) {check.error_mm:.3g} mm; mean node {float(np.mean(check.node_error)):.3g} mm.",
+              f"- Multi-start: {eq.n_starts} starts, {len(eq.alternatives)} other stable shape(s)"
+              + (" (one lower than the design's)." if eq.lower else "."),
+              f"- Rods slack (force within 0.1 % of the largest tension): "
+              f"{_list([int(x) for x in check.slack]) if check.slack.size else 'none'}.",
+              f"- Rods in compression: {check.compressed.size}"
+              + ("" if not check.compressed.size else f" ({_list([int(x) for x in check.compressed])})"
+                 + (" (allowed)" if t.compression else " (not allowed)")) + ".",
+              f"- Design time {check.time_s:.2f} s."]
+    for note in check.notes[1:]:
+        lines.append(f"- {note}")
+    lines += ["", "## Node hardware", ""]
+    if hw.is_hub:
+        lines += [f"Every node is a printed hub ({hw.name}): a {hw.diameter:g} mm sphere with one ball socket per rod, "
+                  f"its pivot {hw.pivot_radius:g} mm from the hub's centre along the rod's target direction. Each rod "
+                  f"ends in a {hw.ball:g} mm ball on a {hw.neck:g} mm neck; the sockets are {hw.clearance:g} mm wider "
+                  f"and open in a {hw.cone_deg:g} deg cone, so a rod turns {hw.swing_deg:.3g} deg from its socket's "
+                  f"axis in every direction (the designed net uses at most {float(np.max(check.swing_deg)):.3g} deg). "
+                  "Rods at a node must meet at "
+                  f"{hw.min_angle_deg:.3g} deg or more. The hubs are rigid bodies whose pose the solver found; their "
+                  f"masses ({float(plan.node_masses.min()):.3g}-{float(plan.node_masses.max()):.3g} g) and centres of "
+                  "mass count.", "",
+                  f"Free play: each socket is printed {hw.clearance / 2:g} mm back from its pivot against the "
+                  "rod's pull at the design (design.json: nodes[].sockets), so the loaded balls sit on the designed "
+                  f"pivots exactly; a rod without load rattles by up to {hw.clearance / 2:g} mm.", ""]
+    else:
+        lines += [f"Every node is one pivot point ({hw.name}, {hw.mass:g} g): the rods turn about it.", ""]
+    lines += ["## Rods", "",
+              "Straight round rods printed to order "
+              f"({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls).", "",
+              "| rod | nodes | length (mm) | mass (g) | range (g) | steel balls | tension (mN) |",
+              "|---:|---|---:|---:|---|---:|---:|"]
+    for r in net["rods"]:
+        lines.append(f"| {r['index']} | {r['nodes'][0]}-{r['nodes'][1]} | {r['length']:.2f} | {r['mass']:.3f} | "
+                     f"{r['mass_range'][0]:.2f}-{r['mass_range'][1]:.2f} | {r['steel_balls']} | "
+                     f"{r['tension']:.3g} |")
+    lines += ["", "## Nodes", "", "| node | anchored | rods | mass (g) | error (mm) |", "|---:|---|---:|---:|---:|"]
+    for nd in net["nodes"]:
+        err = nd["error_mm"]
+        lines.append(f"| {nd['index']} | {'yes' if nd['anchored'] else ''} | {nd['rods']} | {nd['mass']:.3f} | "
+                     f"{err:.3g} |" if err is not None else f"| {nd['index']} | | {nd['rods']} | {nd['mass']:.3f} | - |")
+    lines += ["", "## Bill of materials", ""]
+    lines.append(f"- {bom['rods']} rods ({bom['rod_plastic_g']:.1f} g of {bom['material']})")
+    if "hubs" in bom:
+        lines.append(f"- {bom['hubs']} printed hubs ({bom['hub_plastic_g']:.1f} g of {bom['material']})")
+    else:
+        lines.append(f"- {bom['point_parts']} x {bom['point_part']}")
+    if bom["steel_balls"]:
+        lines.append(f"- {bom['steel_balls']} steel balls, {bom['steel_ball']['diameter']:g} mm (inserted at a "
+                     "print pause)")
+    lines.append(f"- filament: {bom['filament_g']:.1f} g in all")
+    lines += ["", "## Assembly order", "",
+              "Hang the anchored hubs first, then work outward layer by layer: snap each rod's ball into its "
+              "hub's socket (rod numbers are in design.json and on the rods' files).", ""]
+    for k, (nodes, rods) in enumerate(assembly_layers(t.edges, t.anchored, t.n)):
+        if k == 0:
+            lines.append(f"{k + 1}. Anchored nodes {_list(nodes)} at their anchors"
+                         + (f", with rods {_list(rods)} between them." if rods else "."))
+        else:
+            lines.append(f"{k + 1}. Nodes {_list(nodes)} on rods {_list(rods)}.")
+    if "as_built" in data:
+        ab, cad = data["as_built"], data["cad"]
+        lines += ["", "## As built", "",
+                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs (hubs/hub-NNN.step, .stl), "
+                  "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
+                  "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
+                  "Rods print lying on their side; drop each rod's steel balls into their sockets at the print's "
+                  "pause. Not designed yet: how a rod's ball gets into its hub's socket (the mouths are narrower "
+                  "than the balls, to hold them under tension: a retaining clip or cap, or a split hub, is still "
+                  "to come). With the solids' own masses and centres of mass the net hangs "
+                  f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
+                  f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
+    else:
+        lines += ["", "## Not built", "",
+                  "Designed without the solids (--no-cad): `rodcad build` without it writes rods/, hubs/ and "
+                  "assembly.step.", ""]
+    return "\n".join(lines)
+
+
+def net_summary(check, outdir: Path) -> str:
+    """The terminal summary of a net build."""
+    eq = check.equilibrium
+    t = check.plan.target
+    st = check.design.statics
+    if st.exact:
+        masses = "masses exact from the statics"
+    elif check.design.refined:
+        masses = f"masses: the statics' best fit (residual {st.residual:.2g}), refined through the solver"
+    else:
+        masses = f"masses: the statics' best fit (residual {st.residual:.2g})"
+    return (f"{t.n} nodes, {t.m} rods: hangs {check.error_mm:.3g} mm ({100 * check.rel_size:.3g} % of its size) "
+            f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
+            f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
+            f"wrote {outdir}/design.json, report.md, preview.png"
+            + (", rods/, hubs/, assembly.step" if (outdir / "assembly.step").exists() else ""))

@@ -1,0 +1,274 @@
+"""Designing nets: exact masses where the bounds allow, the best fit and why where they do not,
+the designed net re-simulated by MuJoCo, design.json as contract.md gives it, exit codes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import mujoco_net
+import numpy as np
+import pytest
+from netgen import grid_net, jitter, random_grid
+
+from optimize import solve_net
+from rodcad.catalog.loader import catalog_from_text, load_catalog
+from rodcad.cli import main
+from rodcad.design.loader import load_design
+from rodcad.design.net import NetTarget
+from rodcad.design.netcheck import design_net_plan
+from rodcad.design.netplan import plan_net
+from rodcad.errors import DesignLimit
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples"
+PARAMETRIC = (ROOT / "catalogs" / "pla-parametric.yaml").read_text()
+
+
+@pytest.fixture(scope="module")
+def point_catalog():
+    """The default catalog with point nodes (0.5 g each): rods pivot about the node points."""
+    return catalog_from_text(PARAMETRIC.replace("  kind: hub", "  kind: point\n  mass: 0.5"), "point.yaml")
+
+
+def _hung(seed: int, anchored: str, cat):
+    """A random grid (up to 8 x 8 cells, rods 20-60 mm) hung with random masses within the
+    catalog's bounds: a target some masses reach. The first of the seed's grids whose rods the
+    catalog prints and that hangs with every rod in tension (rods between two anchors aside:
+    a hanging net's design keeps its rods in tension)."""
+    hw = cat.node
+    for k in range(40):
+        spec = random_grid(seed + 1000 * k, max_cells=8, anchored=anchored, rod=(20.0, 60.0))
+        if spec.lengths.min() < 20.0 or spec.lengths.max() > 60.0:
+            continue
+        bounds = np.array([hw.rod_numbers(float(L)).mass_range for L in spec.lengths])
+        masses = np.random.default_rng(seed).uniform(bounds[:, 0], bounds[:, 1])
+        res = solve_net(spec.positions, spec.edges, spec.lengths, masses, spec.anchored,
+                        node_masses=np.full(spec.n, hw.mass))
+        held = np.isin(spec.edges, spec.anchored).all(axis=1)
+        if res.success and res.stable and not np.any(~held[res.compressed]):
+            return NetTarget("nodes", res.positions, spec.edges, spec.anchored), masses
+    raise AssertionError("no random grid of this seed hangs in tension")  # pragma: no cover
+
+
+def _mujoco_agrees(check, seed: int, tol: float = 1e-4) -> float:
+    """MuJoCo's rest shape of the designed net (released from its equilibrium with other
+    masses) against the target, over the net's size."""
+    plan = check.plan
+    t = plan.target
+    kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots)
+    rng = np.random.default_rng(seed)
+    start = solve_net(t.positions, t.edges, plan.lengths, check.masses * rng.uniform(0.7, 1.3, t.m), t.anchored, **kw)
+    assert start.success
+    sim = mujoco_net.settle_net(start.positions, t.edges, plan.lengths, check.masses, t.anchored,
+                                rotations0=start.rotations, **kw)
+    assert sim["converged"] and sim["closure_error"] < 1e-6 * t.size
+    err = float(np.max(np.linalg.norm(sim["positions"] - t.positions, axis=1))) / t.size
+    assert err < tol, f"MuJoCo rests {err:.2e} of the size off the target"
+    assert np.max(np.linalg.norm(start.positions - t.positions, axis=1)) / t.size > 100 * err  # it travelled
+    return err
+
+
+@pytest.mark.parametrize("seed,anchored", [(101, "corners"), (102, "boundary"), (103, "corners"), (104, "boundary")])
+def test_random_hung_grids_are_designed_exactly(point_catalog, seed, anchored):
+    target, _ = _hung(seed, anchored, point_catalog)
+    plan = plan_net(target, point_catalog)
+    check = design_net_plan(plan, seed=seed)
+    st = check.design.statics
+    assert st.exact, st.message
+    assert check.rel_size <= 1e-6 and check.ok
+    assert np.all(check.masses >= plan.bounds[:, 0] * (1 - 1e-12))
+    assert np.all(check.masses <= plan.bounds[:, 1] * (1 + 1e-12))
+    assert check.compressed.size == 0
+    if seed == 101:
+        _mujoco_agrees(check, seed)
+
+
+@pytest.mark.parametrize("anchored", ["corners", "boundary"])
+def test_an_8_by_8_hung_grid_is_designed_exactly_and_agrees_with_mujoco(point_catalog, anchored):
+    cell = 38.0
+    spec = jitter(grid_net(8, 8, x=(0, 8 * cell), y=(0, 8 * cell), anchored=anchored,
+                           z=lambda x, y: 0.002 * ((x - 4 * cell) ** 2 + (y - 4 * cell) ** 2) - 70), 3.0, seed=11)
+    bounds = np.array([point_catalog.node.rod_numbers(float(L)).mass_range for L in spec.lengths])
+    masses = np.random.default_rng(11).uniform(bounds[:, 0], bounds[:, 1])
+    res = solve_net(spec.positions, spec.edges, spec.lengths, masses, spec.anchored, node_masses=np.full(spec.n, 0.5))
+    assert res.success and res.stable
+    # rigid rods hung from corners push along parts of the border: the design may let them
+    target = NetTarget("nodes", res.positions, spec.edges, spec.anchored, compression=bool(res.compressed.size))
+    check = design_net_plan(plan_net(target, point_catalog))
+    assert check.design.statics.exact and check.rel_size <= 1e-6 and check.ok
+    if anchored == "corners":
+        _mujoco_agrees(check, 11)
+
+
+def test_a_target_beyond_the_mass_bounds_gets_the_best_fit_and_why(point_catalog):
+    # a strip hung from its ends with one row of rods six times heavier than the other
+    spec = grid_net(6, 1, x=(0, 240), y=(0, 40), z=lambda x, y: 0.003 * (x - 120) ** 2 - 43.2,
+                    anchored=[0, 6, 7, 13])
+    bounds = np.array([point_catalog.node.rod_numbers(float(L)).mass_range for L in spec.lengths])
+    m = bounds.mean(axis=1)
+    m[:6] *= 6
+    res = solve_net(spec.positions, spec.edges, spec.lengths, m, spec.anchored, node_masses=np.full(spec.n, 0.5))
+    target = NetTarget("nodes", res.positions, spec.edges, spec.anchored)
+    check = design_net_plan(plan_net(target, point_catalog), seed=0)
+    st = check.design.statics
+    assert not st.exact
+    assert "rods [6, 7, 8, 9, 10, 11] less than their lower bound" in st.message
+    assert np.all(st.beyond[6:12] < 0)
+    assert check.rel_size > 1e-9  # off, if only a little (the best fit of a well-conditioned strip)
+    info = check.design.info
+    assert "refined_error" not in info or info["refined_error"] <= info["fit_error"]
+    assert check.equilibrium.success and check.equilibrium.stable
+    assert np.all(check.masses >= check.plan.bounds[:, 0] * (1 - 1e-12))
+
+
+STRIP = """design: 1
+name: strip
+net:
+  surface: {z: "0.003 * (x - 150)**2 - 67.5", x: [0, 300], y: [0, 60], u: 5, v: 1}
+  anchored: ends
+"""
+
+
+def test_hub_nets_are_designed_exactly_and_agree_with_mujoco(tmp_path):
+    (tmp_path / "strip.yaml").write_text(STRIP)
+    strip = load_design(tmp_path / "strip.yaml")
+    check = design_net_plan(plan_net(strip.net, strip.catalog), seed=0)
+    assert check.design.statics.exact and check.rel_size <= 1e-6 and check.ok
+    # the hubs' sockets were turned off the node-to-node lines, so that each hub balances
+    lines = strip.net.positions[strip.net.edges[:, 1]] - strip.net.positions[strip.net.edges[:, 0]]
+    lines /= np.linalg.norm(lines, axis=1, keepdims=True)
+    turned = np.degrees(np.arccos(np.clip(np.sum(lines * check.plan.pivots[:, 0], axis=1) / 7.5, -1, 1)))
+    assert turned.max() > 1.0
+    assert np.all(check.swing_deg <= check.plan.hardware.swing_deg)
+    # every rod's designed mass is one it can be built at (steel balls and a cavity)
+    hw = check.plan.hardware
+    for L, m in zip(check.plan.lengths, check.masses):
+        assert hw.rod_fill(float(L), float(m))[2] == pytest.approx(m, rel=1e-6)
+    _mujoco_agrees(check, 7)
+
+
+def test_a_grid_hung_from_its_corners_cannot_hang_in_a_surface_over_a_rectangle():
+    d = load_design(EXAMPLES / "dome.yaml")
+    check = design_net_plan(plan_net(d.net, d.catalog), seed=0)
+    assert not check.design.statics.exact and not check.ok
+    assert "No masses at all balance this target" in check.limit()
+    assert check.equilibrium.stable and 0.01 < check.rel_size < 0.2
+
+
+def test_rods_the_catalog_cannot_print_are_a_design_limit(point_catalog):
+    t = NetTarget("nodes", np.array([[0.0, 0, 0], [70, 0, -10], [140, 0, 0], [70, 15, -20]]),
+                  np.array([[0, 1], [1, 2], [1, 3]]), np.array([0, 2]))
+    with pytest.raises(DesignLimit, match=r"1 rod\(s\) would be longer than the 60 mm .* rods \[0\]|longer"):
+        plan_net(t, point_catalog)
+    with pytest.raises(DesignLimit, match=r"shorter than the 20 mm"):
+        plan_net(t, load_catalog("pla-parametric"))  # 15 mm between nodes 1 and 3 (less the hubs)
+
+
+# --------------------------------------------------------------------------- the command
+
+
+def _build(tmp_path: Path, design: Path, out: str = "out", *extra: str) -> tuple[int, Path]:
+    outdir = tmp_path / out
+    code = main(["build", str(design), "-o", str(outdir), "--no-cad", "-q", *extra])
+    return code, outdir
+
+
+def test_design_json_of_a_net_follows_the_contract_and_is_deterministic(tmp_path):
+    code, out = _build(tmp_path, EXAMPLES / "lampshade.yaml")
+    assert code == 0
+    data = json.loads((out / "design.json").read_text())
+    assert {"name", "units", "method", "seed", "time_s", "net"} <= set(data)
+    net = data["net"]
+    assert {"nodes", "rods", "error", "stable", "kkt_residual"} <= set(net)
+    assert set(net["error"]) >= {"max_mm", "max_rel_size"}
+    assert net["stable"] and net["kkt_residual"] < 1e-9 and net["error"]["max_rel_size"] <= 1e-6
+    for nd in net["nodes"]:
+        assert {"index", "target", "simulated", "anchored", "mass", "pivots", "rotation"} <= set(nd)
+        R = np.array(nd["rotation"])
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    for r in net["rods"]:
+        assert {"index", "nodes", "length", "mass", "com", "tension", "ends"} <= set(r)
+        a, b = np.array(r["ends"])
+        assert np.linalg.norm(b - a) == pytest.approx(r["length"], rel=1e-9)
+        assert r["tension"] > 0 and r["mass_range"][0] <= r["mass"] <= r["mass_range"][1]
+        for end, k in enumerate(r["nodes"]):  # each end is its node's point plus the turned pivot
+            nd = net["nodes"][k]
+            pivot = np.array(nd["pivots"][str(r["index"])])
+            np.testing.assert_allclose(np.array(nd["simulated"]) + np.array(nd["rotation"]) @ pivot,
+                                       r["ends"][end], atol=1e-9)
+    assert sum(nd["anchored"] for nd in net["nodes"]) == 12
+    bom = data["bill_of_materials"]
+    assert bom["hubs"] == 36 and bom["rods"] == 48
+    report = (out / "report.md").read_text()
+    assert "## Assembly order" in report and "## Bill of materials" in report and "tension (mN)" in report
+    assert (out / "preview.png").stat().st_size > 10_000
+    code, again = _build(tmp_path, EXAMPLES / "lampshade.yaml", "again")
+    second = json.loads((again / "design.json").read_text())
+    data.pop("time_s"), second.pop("time_s")
+    assert data == second
+
+
+def test_exit_codes_of_net_builds(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("design: 1\nname: bad\nnet:\n  surface: {z: 'x +', x: [0, 200], y: [0, 200], u: 5, v: 5}\n"
+                   "  anchored: corners\n")
+    code, out = _build(tmp_path, bad)
+    err = capsys.readouterr().err
+    assert code == 2 and not out.exists()
+    assert f"{bad}:4:16: net.surface.z: cannot read the z(x, y) expression" in err
+    dome = tmp_path / "dome.yaml"
+    dome.write_text("design: 1\nname: dome\nnet:\n  surface: {z: '0.002 * ((x - 60)**2 + (y - 60)**2) - 30', "
+                    "x: [0, 120], y: [0, 120], u: 3, v: 3}\n  anchored: corners\n")
+    code, out = _build(tmp_path, dome, "dome")
+    err = capsys.readouterr().err
+    assert code == 1 and not out.exists() and (tmp_path / "dome.best-fit" / "design.json").is_file()
+    assert "No masses at all balance this target" in err
+    far = tmp_path / "far.yaml"
+    far.write_text("design: 1\nname: far\nnet:\n  surface: {z: '0.001 * (x - 150)**2', x: [0, 300], y: [0, 200], "
+                   "u: 2, v: 2}\n  anchored: boundary\n")
+    code, out = _build(tmp_path, far, "far")
+    assert code == 1 and not out.exists()
+    assert "longer than the 60 mm the catalog prints" in capsys.readouterr().err
+
+
+def test_a_net_with_its_solids_hangs_as_designed(tmp_path):
+    """With CAD: every hub and rod a valid solid in its files (STEP re-read, STL watertight:
+    checked as written), the assembly one named solid per part, and the net re-solved with
+    the solids' masses and centres of mass within 0.2 % of its size of the design."""
+    from rodcad.cad.export import read_assembly
+
+    v = tmp_path / "v.yaml"
+    v.write_text("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
+                 "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
+    out = tmp_path / "v"
+    assert main(["build", str(v), "-o", str(out), "-q"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    assert data["cad"] == {"hubs": 3, "rods": 2, "files": data["cad"]["files"]}
+    for name in ("rods/rod-000", "rods/rod-001", "hubs/hub-000", "hubs/hub-001", "hubs/hub-002"):
+        assert (out / f"{name}.step").is_file() and (out / f"{name}.stl").is_file()
+    parts = dict(read_assembly(out / "assembly.step"))
+    assert sorted(parts) == ["hub-000", "hub-001", "hub-002", "rod-000", "rod-001"]
+    ab = data["as_built"]
+    assert ab["stable"] and ab["error"]["max_rel_size"] < 2e-3
+    for got, want in zip(ab["masses"], [r["mass"] for r in data["net"]["rods"]]):
+        assert got == pytest.approx(want, rel=1e-3)  # the B-rep's volume, to its modelling
+    assert "## As built" in (out / "report.md").read_text()
+
+
+def test_an_obj_mesh_net_with_point_nodes_builds_from_its_design_file(tmp_path):
+    """End to end: a design naming its own catalog (point nodes) and an OBJ mesh beside it."""
+    (tmp_path / "point.yaml").write_text(PARAMETRIC.replace("  kind: hub", "  kind: point\n  mass: 0.5"))
+    (tmp_path / "fan.obj").write_text("v 0 0 0\nv 70 0 0\nv 70 70 0\nv 0 70 0\nv 35 35 -25\n"
+                                      "f 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n")
+    (tmp_path / "fan.yaml").write_text("design: 1\nname: fan\ncatalog: point.yaml\nnet:\n  mesh: fan.obj\n"
+                                       "  anchored: boundary\n")
+    code, out = _build(tmp_path, tmp_path / "fan.yaml")
+    assert code == 0
+    net = json.loads((out / "design.json").read_text())["net"]
+    assert len(net["nodes"]) == 5 and len(net["rods"]) == 4
+    assert all(nd["pivots"] is None and nd["rotation"] is None for nd in net["nodes"])
+    assert net["error"]["max_rel_size"] <= 1e-6 and net["stable"]
+    tensions = [r["tension"] for r in net["rods"]]
+    # four equal rods by symmetry (to the central quadratic program's accuracy on the masses)
+    assert max(tensions) == pytest.approx(min(tensions), rel=1e-4)

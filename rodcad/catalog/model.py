@@ -96,9 +96,8 @@ def json_digest(data: Any) -> str:
 #: The catalog format this code reads (the ``catalog:`` key).
 CATALOG_FORMAT = 1
 
-#: Version of how :mod:`rodcad.cad` turns a :class:`RodGeometry` into a
-#: solid. Bump it with any change there: it is part of every disk-cache key
-#: (kept here so that cache hits need not import the CAD kernel).
+#: Version of how :mod:`rodcad.cad` turns a :class:`RodGeometry` into a solid. Bump it with any
+#: change there: it is part of every disk-cache key (here: cache hits need not import the kernel).
 GEOMETRY_VERSION = "1"
 
 #: Largest half-angle of a curved rod's arc (the arc spans at most twice this).

@@ -31,7 +31,6 @@ forbids stops, ``anchor_stops: none`` the fixture's, ``fuse: never`` fused piece
 from __future__ import annotations
 
 import dataclasses
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -49,6 +48,10 @@ __all__ = ["Allowed", "Decision", "EXTRA_ROUNDS", "HI", "LO", "LOCK", "MAX_ROUND
 
 #: Rounds of holding more joints both ways before the planner settles for what it has.
 MAX_ROUNDS = 10
+
+#: Rods x rounds of checking with the solver the loop may spend (each round's verdict costs
+#: about a multi-start of the chain): 60 rods get 6 rounds, 25 rods every round.
+ROUND_WORK = 400
 
 #: Rounds of holding one more joint once a design is accepted (on target, stable, nothing
 #: lower) but the multi-start still finds other, higher shapes.
@@ -136,7 +139,7 @@ def _mirror(j: int, n: int) -> int:
 
 def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.ndarray, kappa: np.ndarray,
            phi: np.ndarray, *, allowed: Allowed, end_limits: np.ndarray | None = None, mirrored: bool = False,
-           same: bool = False, n_starts: int = 12, seed: int = 0, budget_s: float = 20.0,
+           same: bool = False, n_starts: int = 12, seed: int = 0, work: int | None = None,
            report=None) -> Decision:
     """Decide every joint's and anchor's way of holding its bend (see the module's docstring).
 
@@ -149,10 +152,10 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
         mirrored: the target is its own mirror image: every choice is mirrored.
         same: one shell for every rod.
         n_starts, seed: the multi-start of each verdict.
-        budget_s: wall time (s) after which the loop stops holding more joints.
+        work: rods x rounds the loop may check before it stops holding more joints (default
+            :data:`ROUND_WORK`): counted, not timed, so a design is the same on every machine.
         report: called with a line of progress per round (or None).
     """
-    t0 = time.perf_counter()
     n = lengths.size
     r = pf.family.ranges
     assert r is not None
@@ -185,10 +188,8 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     notes: list[str] = []
     history: list[tuple[list[int], Verdict | None]] = []
     settled = 0
-    last = 0.0  # how long the last round took (s)
     robust = None  # (the first accepted design, its bands) once design option robust looked at it
     for rnd in range(MAX_ROUNDS + 1):
-        t_round = time.perf_counter()
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
                         end_limits=end_limits, fused=fused, spans=graded)
@@ -231,10 +232,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             best = d
         if verdict is None or (d.accepted and not verdict.others and allowed.robust is None) or not feasible:
             break
-        last = time.perf_counter() - t_round
-        if time.perf_counter() - t0 + last > budget_s:  # another round would overrun the budget
-            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) (its {budget_s:g} s "
-                         "budget)")
+        if (rnd + 2) * n > (ROUND_WORK if work is None else work):  # another round would pass the work budget
+            notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) (its work budget: "
+                         f"{ROUND_WORK if work is None else work} rod-rounds)")
             break
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
         if d.accepted:  # other shapes exist, all higher: hold one joint more, for a few rounds

@@ -49,3 +49,16 @@ def build_design(tmp_path_factory):
         assert main(["build", str(design), "-o", str(out), "-q", *options]) == 0
         return out, json.loads((out / "design.json").read_text())
     return build
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``slow`` (a few minutes each: MuJoCo releases of the heart with pin
+    friction) run when ``RODCAD_SLOW=1``; the same checks run on smaller chains always."""
+    import os
+
+    if os.environ.get("RODCAD_SLOW", "0").strip() == "1":
+        return
+    skip = pytest.mark.skip(reason="slow: set RODCAD_SLOW=1 to run it")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)

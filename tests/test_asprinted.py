@@ -35,7 +35,6 @@ def printed_semicircle(tmp_path_factory):
     return out, json.loads((out / "design.json").read_text())
 
 
-@pytest.mark.slow
 def test_printed_semicircle_hangs_on_its_target(printed_semicircle):
     """The semicircle as printed: holes measured on the STEP files where the compensation put
     them; the independent model hangs those rods within 0.05 % of the size of the target (in

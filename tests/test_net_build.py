@@ -244,7 +244,7 @@ def test_a_net_with_its_solids_hangs_as_designed(tmp_path):
     out = tmp_path / "v"
     assert main(["build", str(v), "-o", str(out), "-q"]) == 0
     data = json.loads((out / "design.json").read_text())
-    assert data["cad"] == {"hubs": 3, "rods": 2, "files": data["cad"]["files"]}
+    assert {k: data["cad"][k] for k in ("hubs", "rods")} == {"hubs": 3, "rods": 2}
     for name in ("rods/rod-000", "rods/rod-001", "hubs/hub-000", "hubs/hub-001", "hubs/hub-002"):
         assert (out / f"{name}.step").is_file() and (out / f"{name}.stl").is_file()
     parts = dict(read_assembly(out / "assembly.step"))

@@ -31,7 +31,7 @@ from rodcad.cad.solids import GeometryError, one_solid
 ROD_DEFLECTION = 0.0015
 HUB_DEFLECTION = 0.004
 
-__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
+__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -76,6 +76,14 @@ def hub_solid(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
     return solid
 
 
+def ball_positions(hw, length: float, balls: int) -> np.ndarray:
+    """(balls,) the steel balls' centres along a net rod (mm from its first pivot, on its
+    axis): a row at mid-length, ``min_wall`` apart."""
+    ds = hw.insert_diameter + hw.insert_clearance
+    row = balls * ds + max(balls - 1, 0) * hw.min_wall
+    return np.array([length / 2 - row / 2 + ds / 2 + k * (ds + hw.min_wall) for k in range(balls)], float)
+
+
 def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod") -> Solid:
     """One net rod along +x, its pivots at x = 0 and x = ``length``.
 
@@ -95,12 +103,9 @@ def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod
             parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0))))
             parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
     solid = parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
-    voids = []
     ds = hw.insert_diameter + hw.insert_clearance
     row = balls * ds + max(balls - 1, 0) * w
-    for k in range(balls):
-        cx = length / 2 - row / 2 + ds / 2 + k * (ds + w)
-        voids.append(Solid.make_sphere(ds / 2, Plane((cx, 0, 0))))
+    voids = [Solid.make_sphere(ds / 2, Plane((float(cx), 0, 0))) for cx in ball_positions(hw, length, balls)]
     area = math.pi * (r - w) ** 2
     if cavity > 1e-3 * area:  # (a cavity shorter than a thousandth of a mm is none)
         if balls:
@@ -129,6 +134,7 @@ class NetSolids:
         node_masses: (n,) hubs as built (g); node_com: (n, 3) their centres of mass (mm).
         as_built: the equilibrium with these masses (optimize.NetResult).
         error_mm, rel_size: its nodes and pivots against the design's simulated ones.
+        rod_balls: steel balls in each rod.
     """
 
     hubs: list
@@ -140,6 +146,7 @@ class NetSolids:
     error_mm: float = float("nan")
     rel_size: float = float("nan")
     files: list = field(default_factory=list)
+    rod_balls: list = field(default_factory=list)
 
 
 def build_net_solids(check, *, progress=None) -> NetSolids:
@@ -156,12 +163,13 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
     t, hw = plan.target, plan.hardware
     ball_mass = hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 / 1000.0
     rho = hw.density / 1000.0
-    rods, rod_masses = [], np.zeros(t.m)
+    rods, rod_masses, rod_balls = [], np.zeros(t.m), []
     total = t.m + (t.n if hw.is_hub else 0)
     for e in range(t.m):
         k, cavity, _ = hw.rod_fill(float(plan.lengths[e]), float(check.masses[e]))
         s = net_rod_solid(hw, float(plan.lengths[e]), k, cavity, name=f"rod-{e:03d}")
         rods.append(s)
+        rod_balls.append(int(k))
         rod_masses[e] = rho * s.volume + k * ball_mass
         if progress is not None:
             progress.count(e + 1, total)
@@ -179,7 +187,7 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
     eq = check.equilibrium
     res = solve_net(eq.positions, t.edges, plan.lengths, rod_masses, t.anchored, node_masses=node_masses,
                     node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations)
-    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res)
+    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls)
     if res.success:
         err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
                   float(np.max(np.linalg.norm(res.ends - eq.ends, axis=2))))

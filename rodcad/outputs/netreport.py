@@ -125,17 +125,37 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs (hubs/hub-NNN.step, .stl), "
                   "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
                   "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
-                  "Rods print lying on their side; drop each rod's steel balls into their sockets at the print's "
-                  "pause. Not designed yet: how a rod's ball gets into its hub's socket (the mouths are narrower "
+                  "Not designed yet: how a rod's ball gets into its hub's socket (the mouths are narrower "
                   "than the balls, to hold them under tension: a retaining clip or cap, or a split hub, is still "
                   "to come). With the solids' own masses and centres of mass the net hangs "
                   f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
                   f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
+        lines += _print_section(data)
     else:
         lines += ["", "## Not built", "",
                   "Designed without the solids (--no-cad): `rodcad build` without it writes rods/, hubs/ and "
                   "assembly.step.", ""]
     return "\n".join(lines)
+
+
+def _print_section(data: dict[str, Any]) -> list[str]:
+    """## Printing: the PrusaSlicer projects and how each part prints."""
+    files = data["cad"]["files"]
+    plates = [f for f in files if f.startswith("print") and f.endswith(".3mf")]
+    pr = data.get("print", {})
+    return ["## Printing", "",
+            f"{', '.join(plates)}: every rod and hub part on the printer's bed ({len(plates)} plate"
+            f"{'s' if len(plates) != 1 else ''}, split by the bed only); rods/rod-NNN.3mf and hubs/<part>.3mf: each "
+            f"part alone. PrusaSlicer projects with the print profile every mass assumes ({pr.get('material', '')}, "
+            f"{100 * pr.get('infill', 1.0):g} % infill, {pr.get('layer_height', '')} mm layers, "
+            f"{pr.get('perimeters', '')} perimeters).",
+            "",
+            "- Rods print lying along the bed on their round body, with support from the bed under the body and "
+            "the end balls (support is not part of a rod's mass: snap it off).",
+            "- Steel balls: the print pauses (M601) before the layer at the height of the rods' axes, its message "
+            "naming the rods and how many balls each takes. The sockets are then open about as wide as they are "
+            "round: drop each ball in and resume; the top half of each socket prints over its ball.",
+            "- Hub parts print as laid out in the projects (a whole hub on support).", ""]
 
 
 def net_summary(check, outdir: Path) -> str:
@@ -153,4 +173,4 @@ def net_summary(check, outdir: Path) -> str:
             f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
             f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
             f"wrote {outdir}/design.json, report.md, preview.png"
-            + (", rods/, hubs/, assembly.step" if (outdir / "assembly.step").exists() else ""))
+            + (", rods/, hubs/, assembly.step, print.3mf" if (outdir / "assembly.step").exists() else ""))

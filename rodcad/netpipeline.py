@@ -124,8 +124,9 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                             "error": {"max_mm": float(s.error_mm), "max_rel_size": float(s.rel_size)},
                             "note": "the net re-solved with the solids' masses and centres of mass, against the "
                                     "design's simulated nodes and pivots"}
-        parts = getattr(s, "hub_parts", None) or [(h, None, True) for h in s.hubs]
+        parts = s.hub_parts if s.hub_splits else [(h, None, True) for h in s.hubs]
         data["cad"] = {"hubs": len(s.hubs), "rods": len(s.rods), "hub_parts": [p[0].label for p in parts],
+                       "hubs_not_split": {h.parts[0].label: h.reason for h in s.hub_splits if not h.split},
                        "files": files}
     write_json(tmp / "design.json", data)
     plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "

@@ -245,10 +245,12 @@ def test_a_net_with_its_solids_hangs_as_designed(tmp_path):
     assert main(["build", str(v), "-o", str(out), "-q"]) == 0
     data = json.loads((out / "design.json").read_text())
     assert {k: data["cad"][k] for k in ("hubs", "rods")} == {"hubs": 3, "rods": 2}
-    for name in ("rods/rod-000", "rods/rod-001", "hubs/hub-000", "hubs/hub-001", "hubs/hub-002"):
+    halves = [f"hub-{k:03d}-{h}" for k in range(3) for h in "ab"]  # each hub in two halves (they take the balls)
+    assert data["cad"]["hub_parts"] == halves and data["cad"]["hubs_not_split"] == {}
+    for name in ("rods/rod-000", "rods/rod-001", *(f"hubs/{h}" for h in halves)):
         assert (out / f"{name}.step").is_file() and (out / f"{name}.stl").is_file()
     parts = dict(read_assembly(out / "assembly.step"))
-    assert sorted(parts) == ["hub-000", "hub-001", "hub-002", "rod-000", "rod-001"]
+    assert sorted(parts) == sorted([*halves, "rod-000", "rod-001"])
     ab = data["as_built"]
     assert ab["stable"] and ab["error"]["max_rel_size"] < 2e-3
     for got, want in zip(ab["masses"], [r["mass"] for r in data["net"]["rods"]]):

@@ -85,6 +85,11 @@ def test_prusaslicer_pauses_print_3mf_at_the_ball_layers_and_each_rod_weighs_its
         got, want = sliced.object_grams(stem, 1.75, 1.24, skip=NOT_ROD), _plastic(out, stem)
         lines.append(f"print.3mf {stem}: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%})")
         assert got == pytest.approx(want, rel=0.02), lines[-1]
+    for part in data["cad"]["hub_parts"]:  # the hub halves: on their flat faces, no support
+        got, want = sliced.object_grams(part, 1.75, 1.24, skip=NOT_ROD), _plastic(out, part, "hubs")
+        lines.append(f"print.3mf {part}: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%})")
+        assert got == pytest.approx(want, rel=0.02), lines[-1]
+        assert not set(sliced.objects[part]) & {"Support material", "Support material interface"}
     print("\n".join(lines))
 
 
@@ -104,3 +109,71 @@ def test_prusaslicer_slices_one_rod_file_alone_at_its_designed_plastic_with_its_
     print(f"{stem} alone: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%}); skirt and support "
           f"{sliced.grams(1.75, 1.24) - got:.3f} g")
     assert got == pytest.approx(want, rel=0.02)
+
+
+# --------------------------------------------------------------------------- hub halves
+
+
+def _hub(directions, tilt: float):
+    """A catalog hub with sockets along ``directions`` (tilted out of the xy plane by
+    alternately +-``tilt`` rad), its sockets' centres, and the hardware."""
+    import numpy as np
+
+    from rodcad.cad.net import hub_solid
+
+    hw = load_catalog("pla-parametric").node
+    d = np.array([[math.cos(a) * math.cos(t), math.sin(a) * math.cos(t), math.sin(t)]
+                  for a, t in zip(directions, [tilt * (-1) ** k for k in range(len(directions))])])
+    socks = d * (hw.pivot_radius - hw.clearance / 2)
+    return hub_solid(hw, socks, "hub-000"), socks, hw
+
+
+def _volume(shape) -> float:
+    """Volume of a boolean's result (None, a shape or a list of shapes), mm^3, integrated to
+    1e-9 (:func:`rodcad.cad.nethub.precise_volume`)."""
+    from rodcad.cad.nethub import precise_volume
+
+    if shape is None:
+        return 0.0
+    return float(sum(precise_volume(x) for x in shape)) if isinstance(shape, list) else precise_volume(shape)
+
+
+@pytest.mark.parametrize("directions", [(0.0, math.pi / 2, math.pi, 3 * math.pi / 2), (0.0, 2.0, 4.0), (0.3,)])
+def test_a_hub_splits_into_two_valid_halves_that_make_it_up_and_take_every_ball(directions):
+    """The halves are the hub cut in two: valid, disjoint, inside it, their volumes adding up
+    to its own (OCC's adaptive volume integration, to 1e-9 each: 1e-7 leaves it room); a rod's ball at its socket's
+    centre slides out of its half along the cut's normal without touching it (so it goes in)."""
+    import numpy as np
+    from build123d import Plane, Solid
+
+    from rodcad.cad.nethub import precise_volume, split_hub
+
+    hub, socks, hw = _hub(directions, 0.05)
+    sp = split_hub(hub, socks, hw, "hub-000")
+    assert sp.split and [p.label for p in sp.parts] == ["hub-000-a", "hub-000-b"]
+    a, b = sp.parts
+    assert a.is_valid and b.is_valid
+    v = precise_volume(hub)
+    assert precise_volume(a) + precise_volume(b) == pytest.approx(v, rel=1e-7)
+    assert _volume(a.intersect(b)) < 1e-6 * v
+    for p in sp.parts:
+        assert _volume(p.intersect(hub)) == pytest.approx(precise_volume(p), rel=1e-7)
+    n = sp.normal
+    for c in socks:
+        side = 1.0 if n @ c - sp.offset >= 0 else -1.0  # the half holding the socket's centre
+        half = a if side > 0 else b
+        out = -side * n
+        sweep = Solid.make_sphere(hw.ball / 2, Plane(tuple(c))).fuse(
+            Solid.make_cylinder(hw.ball / 2, 2 * hw.diameter, Plane(tuple(c), z_dir=tuple(out))))
+        assert _volume(half.intersect(sweep)) < 1e-6 * v, c
+    # the halves lie on their cut faces: the face's normal turned straight down
+    for p, m, up in zip(sp.parts, sp.print_matrices, (n, -n)):
+        np.testing.assert_allclose(np.asarray(m)[:3, :3] @ up, [0, 0, 1], atol=1e-12)
+
+
+def test_a_hub_whose_sockets_lie_far_off_any_plane_is_left_whole_with_the_reason():
+    from rodcad.cad.nethub import split_hub
+
+    hub, socks, hw = _hub((0.0, math.pi / 2, math.pi, 3 * math.pi / 2), 0.3)  # 2.1 mm up and down
+    sp = split_hub(hub, socks, hw, "hub-000")
+    assert not sp.split and sp.parts == [hub] and "off any plane" in sp.reason and sp.off_plane > 2.0

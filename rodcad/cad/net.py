@@ -22,6 +22,7 @@ import numpy as np
 from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
+from rodcad.cad.nethub import split_hub
 from rodcad.cad.solids import GeometryError, one_solid
 
 #: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
@@ -135,6 +136,8 @@ class NetSolids:
         as_built: the equilibrium with these masses (optimize.NetResult).
         error_mm, rel_size: its nodes and pivots against the design's simulated ones.
         rod_balls: steel balls in each rod.
+        hub_splits: per hub, its printed parts (:class:`rodcad.cad.nethub.HubSplit`: two
+            halves through its sockets' centres, where they take the balls).
     """
 
     hubs: list
@@ -147,6 +150,13 @@ class NetSolids:
     rel_size: float = float("nan")
     files: list = field(default_factory=list)
     rod_balls: list = field(default_factory=list)
+    hub_splits: list = field(default_factory=list)
+
+    @property
+    def hub_parts(self) -> list:
+        """Every printed hub part as (solid in its hub's frame, 4x4 laying it on the bed, needs
+        support): the halves of each split hub on their cut faces, a hub left whole on support."""
+        return [(p, m, not h.split) for h in self.hub_splits for p, m in zip(h.parts, h.print_matrices)]
 
 
 def build_net_solids(check, *, progress=None) -> NetSolids:
@@ -173,13 +183,15 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
         rod_masses[e] = rho * s.volume + k * ball_mass
         if progress is not None:
             progress.count(e + 1, total)
-    hubs = []
+    hubs, splits = [], []
     node_masses, node_com = plan.node_masses.copy(), plan.node_com.copy()
     if hw.is_hub:
         for k in range(t.n):
             at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
-            s = hub_solid(hw, np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3), name=f"hub-{k:03d}")
+            socks = np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3)
+            s = hub_solid(hw, socks, name=f"hub-{k:03d}")
             hubs.append(s)
+            splits.append(split_hub(s, socks, hw, s.label))
             node_masses[k] = rho * s.volume
             node_com[k] = np.array(tuple(s.center(CenterOf.MASS)))
             if progress is not None:
@@ -187,7 +199,7 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
     eq = check.equilibrium
     res = solve_net(eq.positions, t.edges, plan.lengths, rod_masses, t.anchored, node_masses=node_masses,
                     node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations)
-    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls)
+    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls, hub_splits=splits)
     if res.success:
         err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
                   float(np.max(np.linalg.norm(res.ends - eq.ends, axis=2))))
@@ -212,13 +224,15 @@ def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
 
 
 def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progress=None) -> list[str]:
-    """rods/rod-NNN.step/.stl, hubs/hub-NNN.step/.stl (each checked: the STEP re-imports as one
-    valid solid of the same volume, the STL is watertight) and assembly.step: every part a
-    named solid where the designed net hangs, rods coloured light (blue) to heavy (red)."""
+    """rods/rod-NNN.step/.stl, hubs/hub-NNN-a.step/.stl and -b (each hub's halves; hub-NNN
+    for a hub left whole) (each checked: the STEP re-imports as one valid solid of the same
+    volume, the STL is watertight) and assembly.step: every part a named solid where the
+    designed net hangs, rods coloured light (blue) to heavy (red)."""
     import matplotlib
 
     written = []
-    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", solids.hubs, HUB_DEFLECTION)):
+    hub_parts = [p for p, _, _ in solids.hub_parts] if solids.hub_splits else solids.hubs
+    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", hub_parts, HUB_DEFLECTION)):
         if not parts:
             continue
         (folder / sub).mkdir(exist_ok=True)
@@ -240,7 +254,9 @@ def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progre
         color = tuple(float(c) for c in cmap(norm(m[e]))[:3])
         nodes.append(AssemblyPart(s.label, s, _matrix(_rod_frame(p0, p1), p0), color))
     for k, s in enumerate(solids.hubs):
-        nodes.append(AssemblyPart(s.label, s, _matrix(eq.rotations[k], eq.positions[k]), (0.8, 0.8, 0.8)))
+        for i, p in enumerate(solids.hub_splits[k].parts if solids.hub_splits else [s]):
+            grey = 0.8 - 0.15 * i  # the halves of a hub in two greys
+            nodes.append(AssemblyPart(p.label, p, _matrix(eq.rotations[k], eq.positions[k]), (grey, grey, grey)))
     if not nodes:  # pragma: no cover - a net has rods
         raise GeometryError("nothing to assemble")
     export_assembly(folder / "assembly.step", nodes, name=name)

@@ -7,8 +7,8 @@ and hubs/<part>.3mf, each with the catalog's print profile (100 % infill) and a 
 Orientation. A rod lies along the bed's x axis on its round body (its axis ``rod_diameter
 / 2`` above the bed); its end balls (narrower than the body) and the underside of the body
 need support from the bed (``support_material`` on for the rod, on the build plate only, so
-none is printed inside its cavity or ball sockets). A hub part lies on its flat cut face
-(:mod:`rodcad.cad.net`), or, a whole sphere, on support.
+none is printed inside its cavity or ball sockets). A hub half lies on its flat cut face
+(:mod:`rodcad.cad.nethub`); a hub left whole (its sockets off every plane) on support.
 
 Steel balls. A rod's ball sockets are spheres on its axis (the mass model's,
 :meth:`rodcad.catalog.node.NodeHardware.rod_numbers`). A sphere only lets its ball in near
@@ -82,7 +82,7 @@ class NetPrintPart:
 def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]:
     """Every part of a built net to print: its rods (lying along x on their body) and its
     hub parts (``solids.hub_parts`` when the hubs are split, each on its flat face by its
-    own print matrix; else whole hubs on support).
+    own print matrix, :mod:`rodcad.cad.nethub`; a hub left whole on support).
 
     Args:
         check: the designed net (:class:`rodcad.design.netcheck.NetCheck`).
@@ -103,7 +103,7 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
             print_settings=dict(ROD_SETTINGS),
             socket_centers=np.column_stack([xs, np.zeros((k, 2))]) if k else np.zeros((0, 3)),
             socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0))
-    hub_parts = getattr(solids, "hub_parts", None) or [(s, np.eye(4), True) for s in solids.hubs]
+    hub_parts = solids.hub_parts if solids.hub_splits else [(s, np.eye(4), True) for s in solids.hubs]
     for i, (s, matrix, needs_support) in enumerate(hub_parts):
         parts.append(NetPrintPart(
             len(solids.rods) + i, s, float(s.volume), np.asarray(matrix, float), s.label, "hubs",

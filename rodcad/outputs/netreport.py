@@ -110,9 +110,21 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
         lines.append(f"- {bom['steel_balls']} steel balls, {bom['steel_ball']['diameter']:g} mm (inserted at a "
                      "print pause)")
     lines.append(f"- filament: {bom['filament_g']:.1f} g in all")
-    lines += ["", "## Assembly order", "",
-              "Hang the anchored hubs first, then work outward layer by layer: snap each rod's ball into its "
-              "hub's socket (rod numbers are in design.json and on the rods' files).", ""]
+    lines += ["", "## Assembly order", ""]
+    if hw.is_hub:
+        lines += ["Each hub prints as two halves (hub-NNN-a and -b) cut through its sockets' centres; a socket's "
+                  "mouth is narrower than a rod's ball, so the balls go in before the hub is closed. For each hub: lay "
+                  "the end ball of each of its rods in its socket in either half (open at the cut, wider than the "
+                  "ball), the rod's neck in the half cone; when all its rods are in, put the other half on, the "
+                  "sockets aligned, and glue the flat faces (or clamp them with a band until the glue sets). Its "
+                  "balls then turn freely in closed sockets.", ""]
+        whole = data.get("cad", {}).get("hubs_not_split") or {}
+        for hub, why in whole.items():
+            lines.append(f"- {hub} is printed whole ({why}): its balls cannot be put in; move its rods or its node.")
+        if whole:
+            lines.append("")
+    lines += ["Hang the anchored hubs first, then work outward layer by layer, closing each hub on its rods "
+              "(rod numbers are in design.json and on the rods' files).", ""]
     for k, (nodes, rods) in enumerate(assembly_layers(t.edges, t.anchored, t.n)):
         if k == 0:
             lines.append(f"{k + 1}. Anchored nodes {_list(nodes)} at their anchors"
@@ -122,12 +134,11 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     if "as_built" in data:
         ab, cad = data["as_built"], data["cad"]
         lines += ["", "## As built", "",
-                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs (hubs/hub-NNN.step, .stl), "
+                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs in {len(cad['hub_parts'])} "
+                  "parts (hubs/hub-NNN-a.step, .stl and -b: each hub's two halves), "
                   "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
                   "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
-                  "Not designed yet: how a rod's ball gets into its hub's socket (the mouths are narrower "
-                  "than the balls, to hold them under tension: a retaining clip or cap, or a split hub, is still "
-                  "to come). With the solids' own masses and centres of mass the net hangs "
+                  "With the solids' own masses and centres of mass the net hangs "
                   f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
                   f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
         lines += _print_section(data)
@@ -155,7 +166,9 @@ def _print_section(data: dict[str, Any]) -> list[str]:
             "- Steel balls: the print pauses (M601) before the layer at the height of the rods' axes, its message "
             "naming the rods and how many balls each takes. The sockets are then open about as wide as they are "
             "round: drop each ball in and resume; the top half of each socket prints over its ball.",
-            "- Hub parts print as laid out in the projects (a whole hub on support).", ""]
+            "- Hub halves print on their flat cut faces, without support (the half sockets and cones are small "
+            "domes over the bed)"
+            + ("; the hubs left whole print on support." if data["cad"].get("hubs_not_split") else "."), ""]
 
 
 def net_summary(check, outdir: Path) -> str:

@@ -22,7 +22,7 @@ import numpy as np
 from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
-from rodcad.cad.nethub import split_hub
+from rodcad.cad.nethub import split_hub, split_plane
 from rodcad.cad.solids import GeometryError, one_solid
 
 #: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
@@ -60,16 +60,20 @@ def _socket_tool(rs: float, cone_deg: float, h: float) -> Solid:
     return Solid.revolve(face, 360, Axis.Z)
 
 
-def hub_solid(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
+def hub_solid(hw, sockets: np.ndarray, name: str = "hub", *, pole=None) -> Solid:
     """One hub: a sphere less a socket and an opening cone per rod.
 
     Args:
         hw: the :class:`rodcad.catalog.node.NodeHardware` (a hub).
         sockets: (k, 3) the sockets' printed centres in the hub's frame (mm); each opens
             along its centre's direction from the hub's centre.
+        pole: the sphere's polar axis (its parametrisation only; default z): the normal of
+            the plane the hub is cut along (:mod:`rodcad.cad.nethub`), so that the cut meets
+            no pole and the seam crosses it (a cut through the poles leaves faces that
+            do not mesh closed).
     """
     tool = _socket_tool(hw.socket_radius, hw.cone_deg, hw.radius + 1.0)
-    solid = Solid.make_sphere(hw.radius)
+    solid = Solid.make_sphere(hw.radius) if pole is None else Solid.make_sphere(hw.radius, _plane((0, 0, 0), pole))
     for c in np.asarray(sockets, float).reshape(-1, 3):
         placed = tool.moved(Location(_plane(c, c / np.linalg.norm(c))))
         solid = one_solid(solid.cut(placed).clean(), "cutting the hub's sockets")
@@ -189,7 +193,7 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
         for k in range(t.n):
             at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
             socks = np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3)
-            s = hub_solid(hw, socks, name=f"hub-{k:03d}")
+            s = hub_solid(hw, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
             hubs.append(s)
             splits.append(split_hub(s, socks, hw, s.label))
             node_masses[k] = rho * s.volume

@@ -118,7 +118,7 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   "ball), the rod's neck in the half cone; when all its rods are in, put the other half on, the "
                   "sockets aligned, and glue the flat faces (or clamp them with a band until the glue sets). Its "
                   "balls then turn freely in closed sockets.", ""]
-        whole = data.get("cad", {}).get("hubs_not_split") or {}
+        whole = (data.get("cad") or {}).get("hubs_not_split") or {}
         for hub, why in whole.items():
             lines.append(f"- {hub} is printed whole ({why}): its balls cannot be put in; move its rods or its node.")
         if whole:

@@ -148,6 +148,20 @@ def test_hub_nets_are_designed_exactly_and_agree_with_mujoco(tmp_path):
     _mujoco_agrees(check, 7)
 
 
+def test_the_net_design_raises_no_warning(tmp_path):
+    """With every warning an error, the hub strip (whose interior-point QP ends with a slack on
+    a bound by round-off: numpy's divide by zero in optimize.boxqp before) and the lampshade
+    design exactly."""
+    import warnings
+
+    (tmp_path / "strip.yaml").write_text(STRIP)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for design in (load_design(tmp_path / "strip.yaml"), load_design(EXAMPLES / "lampshade.yaml")):
+            check = design_net_plan(plan_net(design.net, design.catalog), seed=0)
+            assert check.design.statics.exact and check.rel_size <= 1e-6 and check.ok
+
+
 def test_a_grid_hung_from_its_corners_cannot_hang_in_a_surface_over_a_rectangle():
     d = load_design(EXAMPLES / "dome.yaml")
     check = design_net_plan(plan_net(d.net, d.catalog), seed=0)

@@ -103,7 +103,8 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     lines += ["", "## Bill of materials", ""]
     lines.append(f"- {bom['rods']} rods ({bom['rod_plastic_g']:.1f} g of {bom['material']})")
     if "hubs" in bom:
-        lines.append(f"- {bom['hubs']} printed hubs ({bom['hub_plastic_g']:.1f} g of {bom['material']})")
+        lines.append(f"- {bom['hubs']} printed hubs ({bom['hub_plastic_g']:.1f} g of {bom['material']}), each in two "
+                     "halves glued together over its rods' balls (a glue for the material, e.g. cyanoacrylate)")
     else:
         lines.append(f"- {bom['point_parts']} x {bom['point_part']}")
     if bom["steel_balls"]:
@@ -165,7 +166,9 @@ def _print_section(data: dict[str, Any]) -> list[str]:
             "the end balls (support is not part of a rod's mass: snap it off).",
             "- Steel balls: the print pauses (M601) before the layer at the height of the rods' axes, its message "
             "naming the rods and how many balls each takes. The sockets are then open about as wide as they are "
-            "round: drop each ball in and resume; the top half of each socket prints over its ball.",
+            "round: drop each ball in (it stands about 3 mm proud of the print), check that it sits at the bottom of "
+            "its socket, and resume; the top half of each socket prints around and over its ball, the nozzle "
+            "passing close to it in the first layers: watch them.",
             "- Hub halves print on their flat cut faces, without support (the half sockets and cones are small "
             "domes over the bed)"
             + ("; the hubs left whole print on support." if data["cad"].get("hubs_not_split") else "."), ""]

@@ -44,6 +44,21 @@ class BoxQPResult:
     message: str
 
 
+def _slack(x: np.ndarray, bound: np.ndarray, has: np.ndarray, sign: float) -> np.ndarray:
+    """``sign * (x - bound)`` where ``has`` (1 elsewhere), never below the spacing of floats at
+    the bound: an interior point that round-off puts on (or past) a bound keeps a slack as
+    small as the arithmetic resolves, so its barrier terms stay finite."""
+    out = np.ones_like(x)
+    b = bound[has]
+    out[has] = np.maximum(sign * (x[has] - b), np.spacing(np.maximum(np.abs(b), 1.0)))
+    return out
+
+
+def _ratio(num: np.ndarray, den: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """``num / den`` where ``mask``, 0 elsewhere (the division is done only where masked)."""
+    return np.divide(num, den, out=np.zeros(np.broadcast(num, den).shape), where=mask)
+
+
 def _step_to_boundary(v: np.ndarray, dv: np.ndarray) -> float:
     neg = dv < 0
     return float(np.min(-v[neg] / dv[neg])) if neg.any() else np.inf
@@ -83,8 +98,8 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
     success = False
     it = 0
     for it in range(1, max_iter + 1):
-        sl = np.where(has_lo, x - lo, 1.0)
-        su = np.where(has_hi, hi - x, 1.0)
+        sl = _slack(x, lo, has_lo, 1.0)
+        su = _slack(x, hi, has_hi, -1.0)
         rd = q * x + c - At @ y - zl + zu          # dual residual
         rp = b - A @ x                              # primal residual
         nb = int(has_lo.sum() + has_hi.sum())
@@ -93,7 +108,7 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
                 and mu <= tol * scale:
             success = True
             break
-        d = q + np.where(has_lo, zl / sl, 0.0) + np.where(has_hi, zu / su, 0.0) + reg
+        d = q + _ratio(zl, sl, has_lo) + _ratio(zu, su, has_hi) + reg
         N = (A @ sp.diags(1.0 / d) @ At + sp.identity(k) * (reg * scale)).tocsc()
         try:
             lu = splu(N, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
@@ -105,11 +120,11 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
         def newton(target_l, target_u):
             rl = np.where(has_lo, target_l - sl * zl, 0.0)   # desired change in sl*zl
             ru = np.where(has_hi, target_u - su * zu, 0.0)
-            rhs_x = -rd + np.where(has_lo, rl / sl, 0.0) - np.where(has_hi, ru / su, 0.0)
+            rhs_x = -rd + _ratio(rl, sl, has_lo) - _ratio(ru, su, has_hi)
             dy = lu.solve(rp - A @ (rhs_x / d))
             dx = (rhs_x + At @ dy) / d
-            dzl = np.where(has_lo, (rl - zl * dx) / sl, 0.0)
-            dzu = np.where(has_hi, (ru + zu * dx) / su, 0.0)
+            dzl = _ratio(rl - zl * dx, sl, has_lo)
+            dzu = _ratio(ru + zu * dx, su, has_hi)
             return dx, dy, dzl, dzu
 
         # predictor (affine scaling)

@@ -6,6 +6,7 @@ pictures out. It sequences the steps and owns none of them::
     -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.netplan.design_net_plan
     -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net
     -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net*, rodcad.cad.net
+    -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.netprint
 """
 
 from __future__ import annotations
@@ -90,11 +91,22 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
         if b.solids is not None:
             from rodcad.cad.net import write_net_files
 
+            from rodcad.cad.netprint import write_net_print_files
+
             with progress.step("writing and checking rods/*, hubs/* (STEP, STL) and assembly.step") as st:
                 files = write_net_files(b.check, b.solids, tmp, name=d.name, progress=st)
+            with progress.step("writing print.3mf (PrusaSlicer projects, one per bed) and rods/*.3mf, hubs/*.3mf"):
+                files += write_net_print_files(b.check, b.solids, tmp, printer=d.catalog.printer,
+                                               profile=print_profile(d.catalog), ball_name=_ball_name(d.catalog))
         with progress.step("writing design.json, report.md, preview.png"):
             data = _write(b, tmp, files)
     return data
+
+
+def _ball_name(catalog) -> str:
+    """The name of the steel balls that weigh the net's rods down ('' without)."""
+    balls = next(iter(catalog)).balls
+    return str(balls.name) if balls is not None else ""
 
 
 def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
@@ -112,7 +124,10 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                             "error": {"max_mm": float(s.error_mm), "max_rel_size": float(s.rel_size)},
                             "note": "the net re-solved with the solids' masses and centres of mass, against the "
                                     "design's simulated nodes and pivots"}
-        data["cad"] = {"hubs": len(s.hubs), "rods": len(s.rods), "files": files}
+        parts = s.hub_parts if s.hub_splits else [(h, None, True) for h in s.hubs]
+        data["cad"] = {"hubs": len(s.hubs), "rods": len(s.rods), "hub_parts": [p[0].label for p in parts],
+                       "hubs_not_split": {h.parts[0].label: h.reason for h in s.hub_splits if not h.split},
+                       "files": files}
     write_json(tmp / "design.json", data)
     plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "
              "its target", tmp / "preview.png")

@@ -14,16 +14,14 @@ skirt and support left out) times the density must be its designed plastic mass 
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
-import shutil
-import subprocess
 import zipfile
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from gcode_util import NOT_ROD, needs_slicer, read_gcode, slice_file
 
 from rodcad.cad.printfile import (
     CONFIG_FILE,
@@ -39,9 +37,6 @@ from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Printer
 
-PRUSA = shutil.which("prusa-slicer")
-needs_slicer = pytest.mark.skipif(PRUSA is None, reason="prusa-slicer is not on PATH (Debian: apt-get install "
-                                                          "prusa-slicer): the G-code checks need the slicer")
 #: (type, where in its mass range) per chain position: heavy rods with balls whose socket
 #: roofs fall in different layers (two identical ones sharing theirs) and a light one with
 #: cavities only; then a rod printed to order (catalog pla-parametric), curved (it rests on
@@ -281,89 +276,6 @@ def test_a_rod_whose_chamber_is_filled_pauses_to_pour_its_shot_beside_the_others
 
 
 # --------------------------------------------------------------------------- PrusaSlicer
-
-#: Extrusion types (PrusaSlicer's ``;TYPE:``) that are not part of any rod.
-NOT_ROD = ("Skirt/Brim", "Support material", "Support material interface", "Wipe tower")
-
-
-def slice_file(src: Path, gcode: Path, *extra: str) -> str:
-    run = subprocess.run([PRUSA, "--dont-arrange", *extra, "--export-gcode", str(src), "--output", str(gcode)],
-                         capture_output=True, text=True, timeout=300)
-    said = [line for line in (run.stdout + run.stderr).splitlines() if "[trace]" not in line]
-    assert run.returncode == 0 and gcode.exists(), f"{src.name}: " + "\n".join(said[-20:])
-    errors = [line for line in said if re.search(r"error|warning", line, re.I)]
-    assert errors == [], f"{src.name}: {errors}"
-    return gcode.read_text()
-
-
-@dataclasses.dataclass
-class Sliced:
-    """What a G-code says, read from PrusaSlicer's comments and moves.
-
-    Attributes:
-        pauses: (print_z, message) per M601, the message of the M117 just before it.
-        types: {(print_z, object): extrusion types printed in that layer of that object}.
-        filament: {extrusion type: filament (mm) it extrudes}.
-        early: print_z of every M601 that came after an extrusion of its layer.
-    """
-
-    pauses: list[tuple[float, str]]
-    types: dict[tuple[float, str], set[str]]
-    filament: dict[str, float]
-    early: list[float]
-
-    def grams(self, diameter: float, density: float, *, skip: tuple[str, ...] = ()) -> float:
-        mm = sum(v for k, v in self.filament.items() if k not in skip)
-        return mm * math.pi * diameter**2 / 4 * density / 1000
-
-
-def read_gcode(gcode: str) -> Sliced:
-    """Layers (``;Z:``), objects (``; printing object``), types (``;TYPE:``), pauses (M117 +
-    M601) and the filament of every extruding move (absolute or relative E, G92 resets;
-    retractions and the E-only moves that undo them are left out)."""
-    z, obj, kind, message = 0.0, "", "", ""
-    absolute, e = True, 0.0
-    out = Sliced([], {}, {}, [])
-    extruded = False
-    for line in gcode.splitlines():
-        if line.startswith(";Z:"):
-            z, extruded = float(line[3:]), False
-            continue
-        if line.startswith("; printing object "):
-            obj = line.split()[3]
-            continue
-        if line.startswith("; stop printing object"):
-            obj = ""
-            continue
-        if line.startswith(";TYPE:"):
-            kind = line[6:]
-            out.types.setdefault((z, obj), set()).add(kind)
-            continue
-        words = line.split(";")[0].split()
-        if not words:
-            continue
-        code, args = words[0], {w[0]: w[1:] for w in words[1:] if w}
-        if code == "M117":
-            message = line.split(";")[0][5:].strip()
-        elif code == "M601":
-            out.pauses.append((z, message))
-            if extruded:
-                out.early.append(z)
-        elif code == "M82":
-            absolute = True
-        elif code == "M83":
-            absolute = False
-        elif code == "G92" and "E" in args:
-            e = float(args["E"])
-        elif code in ("G0", "G1", "G2", "G3") and "E" in args:
-            v = float(args["E"])
-            d = v - e if absolute else v
-            e = v if absolute else e
-            if d > 0 and ("X" in args or "Y" in args):
-                out.filament[kind] = out.filament.get(kind, 0.0) + d
-                extruded = True
-    return out
-
 
 @needs_slicer
 def test_prusaslicer_pauses_the_plate_just_before_the_layer_that_closes_each_named_rods_sockets(project, rods,

@@ -22,6 +22,7 @@ import numpy as np
 from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
+from rodcad.cad.nethub import split_hub, split_plane
 from rodcad.cad.solids import GeometryError, one_solid
 
 #: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
@@ -31,7 +32,7 @@ from rodcad.cad.solids import GeometryError, one_solid
 ROD_DEFLECTION = 0.0015
 HUB_DEFLECTION = 0.004
 
-__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
+__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -59,21 +60,33 @@ def _socket_tool(rs: float, cone_deg: float, h: float) -> Solid:
     return Solid.revolve(face, 360, Axis.Z)
 
 
-def hub_solid(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
+def hub_solid(hw, sockets: np.ndarray, name: str = "hub", *, pole=None) -> Solid:
     """One hub: a sphere less a socket and an opening cone per rod.
 
     Args:
         hw: the :class:`rodcad.catalog.node.NodeHardware` (a hub).
         sockets: (k, 3) the sockets' printed centres in the hub's frame (mm); each opens
             along its centre's direction from the hub's centre.
+        pole: the sphere's polar axis (its parametrisation only; default z): the normal of
+            the plane the hub is cut along (:mod:`rodcad.cad.nethub`), so that the cut meets
+            no pole and the seam crosses it (a cut through the poles leaves faces that
+            do not mesh closed).
     """
     tool = _socket_tool(hw.socket_radius, hw.cone_deg, hw.radius + 1.0)
-    solid = Solid.make_sphere(hw.radius)
+    solid = Solid.make_sphere(hw.radius) if pole is None else Solid.make_sphere(hw.radius, _plane((0, 0, 0), pole))
     for c in np.asarray(sockets, float).reshape(-1, 3):
         placed = tool.moved(Location(_plane(c, c / np.linalg.norm(c))))
         solid = one_solid(solid.cut(placed).clean(), "cutting the hub's sockets")
     solid.label = name
     return solid
+
+
+def ball_positions(hw, length: float, balls: int) -> np.ndarray:
+    """(balls,) the steel balls' centres along a net rod (mm from its first pivot, on its
+    axis): a row at mid-length, ``min_wall`` apart."""
+    ds = hw.insert_diameter + hw.insert_clearance
+    row = balls * ds + max(balls - 1, 0) * hw.min_wall
+    return np.array([length / 2 - row / 2 + ds / 2 + k * (ds + hw.min_wall) for k in range(balls)], float)
 
 
 def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod") -> Solid:
@@ -95,12 +108,9 @@ def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod
             parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0))))
             parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
     solid = parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
-    voids = []
     ds = hw.insert_diameter + hw.insert_clearance
     row = balls * ds + max(balls - 1, 0) * w
-    for k in range(balls):
-        cx = length / 2 - row / 2 + ds / 2 + k * (ds + w)
-        voids.append(Solid.make_sphere(ds / 2, Plane((cx, 0, 0))))
+    voids = [Solid.make_sphere(ds / 2, Plane((float(cx), 0, 0))) for cx in ball_positions(hw, length, balls)]
     area = math.pi * (r - w) ** 2
     if cavity > 1e-3 * area:  # (a cavity shorter than a thousandth of a mm is none)
         if balls:
@@ -129,6 +139,9 @@ class NetSolids:
         node_masses: (n,) hubs as built (g); node_com: (n, 3) their centres of mass (mm).
         as_built: the equilibrium with these masses (optimize.NetResult).
         error_mm, rel_size: its nodes and pivots against the design's simulated ones.
+        rod_balls: steel balls in each rod.
+        hub_splits: per hub, its printed parts (:class:`rodcad.cad.nethub.HubSplit`: two
+            halves through its sockets' centres, where they take the balls).
     """
 
     hubs: list
@@ -140,6 +153,14 @@ class NetSolids:
     error_mm: float = float("nan")
     rel_size: float = float("nan")
     files: list = field(default_factory=list)
+    rod_balls: list = field(default_factory=list)
+    hub_splits: list = field(default_factory=list)
+
+    @property
+    def hub_parts(self) -> list:
+        """Every printed hub part as (solid in its hub's frame, 4x4 laying it on the bed, needs
+        support): the halves of each split hub on their cut faces, a hub left whole on support."""
+        return [(p, m, not h.split) for h in self.hub_splits for p, m in zip(h.parts, h.print_matrices)]
 
 
 def build_net_solids(check, *, progress=None) -> NetSolids:
@@ -156,22 +177,25 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
     t, hw = plan.target, plan.hardware
     ball_mass = hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 / 1000.0
     rho = hw.density / 1000.0
-    rods, rod_masses = [], np.zeros(t.m)
+    rods, rod_masses, rod_balls = [], np.zeros(t.m), []
     total = t.m + (t.n if hw.is_hub else 0)
     for e in range(t.m):
         k, cavity, _ = hw.rod_fill(float(plan.lengths[e]), float(check.masses[e]))
         s = net_rod_solid(hw, float(plan.lengths[e]), k, cavity, name=f"rod-{e:03d}")
         rods.append(s)
+        rod_balls.append(int(k))
         rod_masses[e] = rho * s.volume + k * ball_mass
         if progress is not None:
             progress.count(e + 1, total)
-    hubs = []
+    hubs, splits = [], []
     node_masses, node_com = plan.node_masses.copy(), plan.node_com.copy()
     if hw.is_hub:
         for k in range(t.n):
             at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
-            s = hub_solid(hw, np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3), name=f"hub-{k:03d}")
+            socks = np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3)
+            s = hub_solid(hw, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
             hubs.append(s)
+            splits.append(split_hub(s, socks, hw, s.label))
             node_masses[k] = rho * s.volume
             node_com[k] = np.array(tuple(s.center(CenterOf.MASS)))
             if progress is not None:
@@ -179,7 +203,7 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
     eq = check.equilibrium
     res = solve_net(eq.positions, t.edges, plan.lengths, rod_masses, t.anchored, node_masses=node_masses,
                     node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations)
-    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res)
+    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls, hub_splits=splits)
     if res.success:
         err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
                   float(np.max(np.linalg.norm(res.ends - eq.ends, axis=2))))
@@ -204,13 +228,15 @@ def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
 
 
 def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progress=None) -> list[str]:
-    """rods/rod-NNN.step/.stl, hubs/hub-NNN.step/.stl (each checked: the STEP re-imports as one
-    valid solid of the same volume, the STL is watertight) and assembly.step: every part a
-    named solid where the designed net hangs, rods coloured light (blue) to heavy (red)."""
+    """rods/rod-NNN.step/.stl, hubs/hub-NNN-a.step/.stl and -b (each hub's halves; hub-NNN
+    for a hub left whole) (each checked: the STEP re-imports as one valid solid of the same
+    volume, the STL is watertight) and assembly.step: every part a named solid where the
+    designed net hangs, rods coloured light (blue) to heavy (red)."""
     import matplotlib
 
     written = []
-    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", solids.hubs, HUB_DEFLECTION)):
+    hub_parts = [p for p, _, _ in solids.hub_parts] if solids.hub_splits else solids.hubs
+    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", hub_parts, HUB_DEFLECTION)):
         if not parts:
             continue
         (folder / sub).mkdir(exist_ok=True)
@@ -232,7 +258,9 @@ def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progre
         color = tuple(float(c) for c in cmap(norm(m[e]))[:3])
         nodes.append(AssemblyPart(s.label, s, _matrix(_rod_frame(p0, p1), p0), color))
     for k, s in enumerate(solids.hubs):
-        nodes.append(AssemblyPart(s.label, s, _matrix(eq.rotations[k], eq.positions[k]), (0.8, 0.8, 0.8)))
+        for i, p in enumerate(solids.hub_splits[k].parts if solids.hub_splits else [s]):
+            grey = 0.8 - 0.15 * i  # the halves of a hub in two greys
+            nodes.append(AssemblyPart(p.label, p, _matrix(eq.rotations[k], eq.positions[k]), (grey, grey, grey)))
     if not nodes:  # pragma: no cover - a net has rods
         raise GeometryError("nothing to assemble")
     export_assembly(folder / "assembly.step", nodes, name=name)

@@ -168,13 +168,19 @@ def _rod_tag(tag: str) -> str:
     return f"piece {tag}" if "-" in tag else f"rod {tag}"
 
 
+def _tag(rod: FabricatedRod) -> str:
+    """A part's tag in pause messages: its ``print_tag`` (a net rod's number), else its file
+    stem's first field ('03' of '03_rod')."""
+    return str(getattr(rod, "print_tag", "") or rod.file_stem.split("_")[0])
+
+
 def _message(placements: Sequence[Placement], z: float) -> str:
     """What to do at the pause at ``z``: e.g. 'insert 4 balls of 6 mm (2 in each of rods
     00, 03)', 'pour 12.5 g of tungsten shot into rod 04'."""
     by_d: dict[tuple[float, str], list[tuple[str, int]]] = {}
     parts, pours = [], []
     for p in placements:
-        tag = p.rod.file_stem.split("_")[0]
+        tag = _tag(p.rod)
         n = p.pauses.get(z, 0)
         if n:
             kind = (float(p.rod.ball_diameter or 0.0), str(getattr(p.rod, "ball_name", "") or ""))
@@ -279,7 +285,8 @@ def _placed_vertices(mesh: _Mesh, placement: Placement) -> np.ndarray:
 def _write_plate(plate: Plate, path: Path, printer: Printer | None, prof: PrintProfile,
                  meshes: dict[int, _Mesh]) -> Path:
     objects = [SlicerObject(p.rod.file_stem, _placed_vertices(meshes[id(p.rod.solid)], p),
-                            meshes[id(p.rod.solid)].triangles, bool(p.rod.print_note)) for p in plate.placements]
+                            meshes[id(p.rod.solid)].triangles, bool(p.rod.print_note),
+                            dict(getattr(p.rod, "print_settings", None) or {})) for p in plate.placements]
     return write_3mf(path, objects, plate.pauses, profile=prof, printer=printer)
 
 
@@ -347,7 +354,8 @@ def write_print_files(rods: Sequence[FabricatedRod], outdir: str | Path, *, prin
     """Write OUTDIR/print.3mf (and print-2.3mf, ... when one bed is not enough; see
     :func:`write_print_3mf`) and OUTDIR/rods/NN_TYPE.3mf for every rod, each a project of
     that rod alone with the same settings and its own pauses (:func:`write_rod_3mf`); each
-    distinct solid is tessellated once.
+    distinct solid is tessellated once. A part with a ``print_folder`` (e.g. a net's hub
+    parts: 'hubs') has its own project there instead of in rods/.
 
     Returns:
         The paths written: the plates, then the rods' 3MF files.
@@ -358,5 +366,6 @@ def write_print_files(rods: Sequence[FabricatedRod], outdir: str | Path, *, prin
     written = _write_plates(rods, outdir / "print.3mf", printer, prof, 5.0, 5.0, meshes)
     for rod in rods:  # rods sharing a solid share its mesh, each under its own name
         (plate,) = _plan([rod], prof, printer, 5.0, 5.0, meshes)
-        written.append(_write_plate(plate, outdir / "rods" / f"{rod.file_stem}.3mf", printer, prof, meshes))
+        folder = str(getattr(rod, "print_folder", "") or "rods")
+        written.append(_write_plate(plate, outdir / folder / f"{rod.file_stem}.3mf", printer, prof, meshes))
     return written

@@ -34,7 +34,7 @@ import io
 import math
 import zipfile
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import quoteattr
@@ -148,12 +148,15 @@ class SlicerObject:
         vertices: (n, 3) mm, on the bed.
         triangles: (m, 3) vertex indices.
         support: the slicer adds support under it (a rod resting on its arc).
+        settings: further per-object settings (PrusaSlicer keys, e.g.
+            ``support_material_buildplate_only``).
     """
 
     name: str
     vertices: np.ndarray
     triangles: np.ndarray
     support: bool = False
+    settings: Mapping[str, str] = field(default_factory=dict)
 
 
 def bed(printer: Printer | None) -> tuple[tuple[float, float, float], float]:
@@ -221,14 +224,17 @@ def pause_xml(pauses: Mapping[float, str], pause_gcode: str = "M601") -> str:
     return "\n".join(lines) + "\n"
 
 
-def model_config(objects: Sequence[tuple[int, str, int, bool]]) -> str:
-    """Metadata/Slic3r_PE_model.config: (resource id, name, triangles, support) per object."""
+def model_config(objects: Sequence[tuple[Any, ...]]) -> str:
+    """Metadata/Slic3r_PE_model.config: (resource id, name, triangles, support[, settings])
+    per object."""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', "<config>"]
-    for rid, name, ntri, support in objects:
+    for rid, name, ntri, support, *more in objects:
         lines.append(f' <object id="{rid}" instances_count="1">')
         lines.append(f'  <metadata type="object" key="name" value={quoteattr(name)}/>')
         if support:  # a rod resting on its arc: support under the rising ends
             lines.append('  <metadata type="object" key="support_material" value="1"/>')
+        for key, value in (more[0] if more else {}).items():
+            lines.append(f'  <metadata type="object" key={quoteattr(str(key))} value={quoteattr(str(value))}/>')
         lines.append(f'  <volume firstid="0" lastid="{ntri - 1}">')
         lines.append(f'   <metadata type="volume" key="name" value={quoteattr(name)}/>')
         lines.append("  </volume>")
@@ -275,7 +281,7 @@ def write_3mf(path: str | Path, objects: Sequence[SlicerObject], pauses: Mapping
     prof = PrintProfile.from_mapping(profile)
     package, info = package_3mf(objects)
     extra = {CONFIG_FILE: slicer_config(prof, printer),
-             MODEL_CONFIG_FILE: model_config([(*i, o.support) for i, o in zip(info, objects)])}
+             MODEL_CONFIG_FILE: model_config([(*i, o.support, o.settings) for i, o in zip(info, objects)])}
     if pauses:
         extra[PAUSES_FILE] = pause_xml(pauses, prof.pause_gcode)
     path = Path(path)

@@ -103,16 +103,29 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     lines += ["", "## Bill of materials", ""]
     lines.append(f"- {bom['rods']} rods ({bom['rod_plastic_g']:.1f} g of {bom['material']})")
     if "hubs" in bom:
-        lines.append(f"- {bom['hubs']} printed hubs ({bom['hub_plastic_g']:.1f} g of {bom['material']})")
+        lines.append(f"- {bom['hubs']} printed hubs ({bom['hub_plastic_g']:.1f} g of {bom['material']}), each in two "
+                     "halves glued together over its rods' balls (a glue for the material, e.g. cyanoacrylate)")
     else:
         lines.append(f"- {bom['point_parts']} x {bom['point_part']}")
     if bom["steel_balls"]:
         lines.append(f"- {bom['steel_balls']} steel balls, {bom['steel_ball']['diameter']:g} mm (inserted at a "
                      "print pause)")
     lines.append(f"- filament: {bom['filament_g']:.1f} g in all")
-    lines += ["", "## Assembly order", "",
-              "Hang the anchored hubs first, then work outward layer by layer: snap each rod's ball into its "
-              "hub's socket (rod numbers are in design.json and on the rods' files).", ""]
+    lines += ["", "## Assembly order", ""]
+    if hw.is_hub:
+        lines += ["Each hub prints as two halves (hub-NNN-a and -b) cut through its sockets' centres; a socket's "
+                  "mouth is narrower than a rod's ball, so the balls go in before the hub is closed. For each hub: lay "
+                  "the end ball of each of its rods in its socket in either half (open at the cut, wider than the "
+                  "ball), the rod's neck in the half cone; when all its rods are in, put the other half on, the "
+                  "sockets aligned, and glue the flat faces (or clamp them with a band until the glue sets). Its "
+                  "balls then turn freely in closed sockets.", ""]
+        whole = (data.get("cad") or {}).get("hubs_not_split") or {}
+        for hub, why in whole.items():
+            lines.append(f"- {hub} is printed whole ({why}): its balls cannot be put in; move its rods or its node.")
+        if whole:
+            lines.append("")
+    lines += ["Hang the anchored hubs first, then work outward layer by layer, closing each hub on its rods "
+              "(rod numbers are in design.json and on the rods' files).", ""]
     for k, (nodes, rods) in enumerate(assembly_layers(t.edges, t.anchored, t.n)):
         if k == 0:
             lines.append(f"{k + 1}. Anchored nodes {_list(nodes)} at their anchors"
@@ -122,20 +135,43 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     if "as_built" in data:
         ab, cad = data["as_built"], data["cad"]
         lines += ["", "## As built", "",
-                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs (hubs/hub-NNN.step, .stl), "
+                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs in {len(cad['hub_parts'])} "
+                  "parts (hubs/hub-NNN-a.step, .stl and -b: each hub's two halves), "
                   "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
                   "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
-                  "Rods print lying on their side; drop each rod's steel balls into their sockets at the print's "
-                  "pause. Not designed yet: how a rod's ball gets into its hub's socket (the mouths are narrower "
-                  "than the balls, to hold them under tension: a retaining clip or cap, or a split hub, is still "
-                  "to come). With the solids' own masses and centres of mass the net hangs "
+                  "With the solids' own masses and centres of mass the net hangs "
                   f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
                   f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
+        lines += _print_section(data)
     else:
         lines += ["", "## Not built", "",
                   "Designed without the solids (--no-cad): `rodcad build` without it writes rods/, hubs/ and "
                   "assembly.step.", ""]
     return "\n".join(lines)
+
+
+def _print_section(data: dict[str, Any]) -> list[str]:
+    """## Printing: the PrusaSlicer projects and how each part prints."""
+    files = data["cad"]["files"]
+    plates = [f for f in files if f.startswith("print") and f.endswith(".3mf")]
+    pr = data.get("print", {})
+    return ["## Printing", "",
+            f"{', '.join(plates)}: every rod and hub part on the printer's bed ({len(plates)} plate"
+            f"{'s' if len(plates) != 1 else ''}, split by the bed only); rods/rod-NNN.3mf and hubs/<part>.3mf: each "
+            f"part alone. PrusaSlicer projects with the print profile every mass assumes ({pr.get('material', '')}, "
+            f"{100 * pr.get('infill', 1.0):g} % infill, {pr.get('layer_height', '')} mm layers, "
+            f"{pr.get('perimeters', '')} perimeters).",
+            "",
+            "- Rods print lying along the bed on their round body, with support from the bed under the body and "
+            "the end balls (support is not part of a rod's mass: snap it off).",
+            "- Steel balls: the print pauses (M601) before the layer at the height of the rods' axes, its message "
+            "naming the rods and how many balls each takes. The sockets are then open about as wide as they are "
+            "round: drop each ball in (it stands about 3 mm proud of the print), check that it sits at the bottom of "
+            "its socket, and resume; the top half of each socket prints around and over its ball, the nozzle "
+            "passing close to it in the first layers: watch them.",
+            "- Hub halves print on their flat cut faces, without support (the half sockets and cones are small "
+            "domes over the bed)"
+            + ("; the hubs left whole print on support." if data["cad"].get("hubs_not_split") else "."), ""]
 
 
 def net_summary(check, outdir: Path) -> str:
@@ -153,4 +189,4 @@ def net_summary(check, outdir: Path) -> str:
             f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
             f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
             f"wrote {outdir}/design.json, report.md, preview.png"
-            + (", rods/, hubs/, assembly.step" if (outdir / "assembly.step").exists() else ""))
+            + (", rods/, hubs/, assembly.step, print.3mf" if (outdir / "assembly.step").exists() else ""))

@@ -1,0 +1,179 @@
+"""A net's print files (issue 27): print.3mf, rods/rod-NNN.3mf and hubs/*.3mf carry every
+part a user prints with the catalog's print profile and a pause at the layer where each
+rod's steel balls go in. Sliced by PrusaSlicer (when installed): the G-code pauses exactly
+there, each message naming the rods, and each rod's plastic (its own extrusion by feature,
+skirt and support left out) is its designed plastic (density x its solid's volume) within
+2 %: the slicer's extrusion model against the B-rep (tests/test_printfile.py checks the
+same for chains)."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import zipfile
+from pathlib import Path
+
+import pytest
+from gcode_util import NOT_ROD, needs_slicer, read_gcode, slice_file
+
+from rodcad.catalog.loader import load_catalog
+from rodcad.cli import main
+
+V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
+         "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """A small hub net (3 hubs, 2 rods holding steel balls) built with its solids."""
+    tmp = tmp_path_factory.mktemp("netprint")
+    (tmp / "v.yaml").write_text(V_NET)
+    out = tmp / "v"
+    assert main(["build", str(tmp / "v.yaml"), "-o", str(out), "-q"]) == 0
+    return out, json.loads((out / "design.json").read_text())
+
+
+def _plastic(out: Path, stem: str, folder: str = "rods") -> float:
+    """Grams of PLA in a part: its STEP's volume times the catalog's density."""
+    from build123d import import_step
+
+    return float(import_step(str(out / folder / f"{stem}.step")).volume) * 1.24 / 1000
+
+
+def _pause_layer(hw, layer: float) -> float:
+    """The top of the first layer sliced (at mid-height) at or above a rod's axis: rods lie on
+    their body, the sockets' centres ``rod_diameter / 2`` above the bed."""
+    axis = hw.rod_diameter / 2
+    return math.ceil((axis + layer / 2) / layer - 1e-9) * layer
+
+
+def test_the_print_files_hold_every_part_and_design_json_and_the_report_name_them(built):
+    out, data = built
+    files = data["cad"]["files"]
+    want = ["print.3mf", "rods/rod-000.3mf", "rods/rod-001.3mf"] + [f"hubs/{p}.3mf" for p in data["cad"]["hub_parts"]]
+    assert set(want) <= set(files) and all((out / f).is_file() for f in want)
+    with zipfile.ZipFile(out / "print.3mf") as z:
+        config = z.read("Metadata/Slic3r_PE.config").decode()
+        names = re.findall(r'key="name" value="([^"]+)"', z.read("Metadata/Slic3r_PE_model.config").decode())
+    assert "; fill_density = 100%" in config and "; layer_height = 0.2" in config
+    assert sorted(set(names)) == sorted(["rod-000", "rod-001", *data["cad"]["hub_parts"]])
+    report = (out / "report.md").read_text()
+    assert "print.3mf" in report and "rods/rod-NNN.3mf" in report
+
+
+@needs_slicer
+def test_prusaslicer_pauses_print_3mf_at_the_ball_layers_and_each_rod_weighs_its_design(built, tmp_path):
+    out, data = built
+    hw = load_catalog("pla-parametric").node
+    layer = data["print"]["layer_height"]
+    sliced = read_gcode(slice_file(out / "print.3mf", tmp_path / "print.gcode"))
+    with_balls = {f"{r['index']:03d}": r["steel_balls"] for r in data["net"]["rods"] if r["steel_balls"]}
+    assert with_balls  # the test net's rods are weighed down
+    z = _pause_layer(hw, layer)
+    assert [p for p, _ in sliced.pauses] == pytest.approx([z], abs=1e-6) and sliced.early == []
+    msg = sliced.pauses[0][1]
+    assert f"insert {sum(with_balls.values())} balls of 6 mm" in msg
+    assert set(re.findall(r"rod (\d{3})", msg)) == set(with_balls)
+    # at the pause the print stands one layer below z: each socket's opening there admits its ball
+    below = hw.rod_diameter / 2 - (z - layer)
+    rs = (hw.insert_diameter + hw.insert_clearance) / 2
+    assert 2 * math.sqrt(rs**2 - below**2) > hw.insert_diameter
+    lines = []
+    for r in data["net"]["rods"]:
+        stem = f"rod-{r['index']:03d}"
+        got, want = sliced.object_grams(stem, 1.75, 1.24, skip=NOT_ROD), _plastic(out, stem)
+        lines.append(f"print.3mf {stem}: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%})")
+        assert got == pytest.approx(want, rel=0.02), lines[-1]
+    for part in data["cad"]["hub_parts"]:  # the hub halves: on their flat faces, no support
+        got, want = sliced.object_grams(part, 1.75, 1.24, skip=NOT_ROD), _plastic(out, part, "hubs")
+        lines.append(f"print.3mf {part}: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%})")
+        assert got == pytest.approx(want, rel=0.02), lines[-1]
+        assert not set(sliced.objects[part]) & {"Support material", "Support material interface"}
+    print("\n".join(lines))
+
+
+@needs_slicer
+def test_prusaslicer_slices_one_rod_file_alone_at_its_designed_plastic_with_its_pause(built, tmp_path):
+    out, data = built
+    hw = load_catalog("pla-parametric").node
+    r = max(data["net"]["rods"], key=lambda r: r["steel_balls"])
+    stem = f"rod-{r['index']:03d}"
+    gcode = slice_file(out / "rods" / f"{stem}.3mf", tmp_path / f"{stem}.gcode")
+    assert re.search(r"^; fill_density = 100%$", gcode, re.M)
+    sliced = read_gcode(gcode)
+    assert [p for p, _ in sliced.pauses] == pytest.approx([_pause_layer(hw, 0.2)], abs=1e-6)
+    assert sliced.pauses[0][1].startswith(f"insert {r['steel_balls']} ball") and sliced.early == []
+    assert "Support material" in sliced.filament  # a round rod lies on support
+    got, want = sliced.object_grams(stem, 1.75, 1.24, skip=NOT_ROD), _plastic(out, stem)
+    print(f"{stem} alone: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%}); skirt and support "
+          f"{sliced.grams(1.75, 1.24) - got:.3f} g")
+    assert got == pytest.approx(want, rel=0.02)
+
+
+# --------------------------------------------------------------------------- hub halves
+
+
+def _hub(directions, tilt: float):
+    """A catalog hub with sockets along ``directions`` (tilted out of the xy plane by
+    alternately +-``tilt`` rad), its sockets' centres, and the hardware."""
+    import numpy as np
+
+    from rodcad.cad.net import hub_solid
+
+    hw = load_catalog("pla-parametric").node
+    d = np.array([[math.cos(a) * math.cos(t), math.sin(a) * math.cos(t), math.sin(t)]
+                  for a, t in zip(directions, [tilt * (-1) ** k for k in range(len(directions))])])
+    socks = d * (hw.pivot_radius - hw.clearance / 2)
+    return hub_solid(hw, socks, "hub-000"), socks, hw
+
+
+def _volume(shape) -> float:
+    """Volume of a boolean's result (None, a shape or a list of shapes), mm^3, integrated to
+    1e-9 (:func:`rodcad.cad.nethub.precise_volume`)."""
+    from rodcad.cad.nethub import precise_volume
+
+    if shape is None:
+        return 0.0
+    return float(sum(precise_volume(x) for x in shape)) if isinstance(shape, list) else precise_volume(shape)
+
+
+@pytest.mark.parametrize("directions", [(0.0, math.pi / 2, math.pi, 3 * math.pi / 2), (0.0, 2.0, 4.0), (0.3,)])
+def test_a_hub_splits_into_two_valid_halves_that_make_it_up_and_take_every_ball(directions):
+    """The halves are the hub cut in two: valid, disjoint, inside it, their volumes adding up
+    to its own (OCC's adaptive volume integration, to 1e-9 each: 1e-7 leaves it room); a rod's ball at its socket's
+    centre slides out of its half along the cut's normal without touching it (so it goes in)."""
+    import numpy as np
+    from build123d import Plane, Solid
+
+    from rodcad.cad.nethub import precise_volume, split_hub
+
+    hub, socks, hw = _hub(directions, 0.05)
+    sp = split_hub(hub, socks, hw, "hub-000")
+    assert sp.split and [p.label for p in sp.parts] == ["hub-000-a", "hub-000-b"]
+    a, b = sp.parts
+    assert a.is_valid and b.is_valid
+    v = precise_volume(hub)
+    assert precise_volume(a) + precise_volume(b) == pytest.approx(v, rel=1e-7)
+    assert _volume(a.intersect(b)) < 1e-6 * v
+    for p in sp.parts:
+        assert _volume(p.intersect(hub)) == pytest.approx(precise_volume(p), rel=1e-7)
+    n = sp.normal
+    for c in socks:
+        side = 1.0 if n @ c - sp.offset >= 0 else -1.0  # the half holding the socket's centre
+        half = a if side > 0 else b
+        out = -side * n
+        sweep = Solid.make_sphere(hw.ball / 2, Plane(tuple(c))).fuse(
+            Solid.make_cylinder(hw.ball / 2, 2 * hw.diameter, Plane(tuple(c), z_dir=tuple(out))))
+        assert _volume(half.intersect(sweep)) < 1e-6 * v, c
+    # the halves lie on their cut faces: the face's normal turned straight down
+    for p, m, up in zip(sp.parts, sp.print_matrices, (n, -n)):
+        np.testing.assert_allclose(np.asarray(m)[:3, :3] @ up, [0, 0, 1], atol=1e-12)
+
+
+def test_a_hub_whose_sockets_lie_far_off_any_plane_is_left_whole_with_the_reason():
+    from rodcad.cad.nethub import split_hub
+
+    hub, socks, hw = _hub((0.0, math.pi / 2, math.pi, 3 * math.pi / 2), 0.3)  # 2.1 mm up and down
+    sp = split_hub(hub, socks, hw, "hub-000")
+    assert not sp.split and sp.parts == [hub] and "off any plane" in sp.reason and sp.off_plane > 2.0

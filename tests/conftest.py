@@ -17,6 +17,7 @@ fast joint-limit function (test_jointlimits.py).
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -30,7 +31,13 @@ from rodcad.cli import main
 
 @pytest.fixture(scope="session", autouse=True)
 def session_cache(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("rodcad-cache")
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        # pytest-xdist: the workers share one cache (writes are atomic), so each catalog's
+        # numbers are computed once per run, not once per worker
+        folder = tmp_path_factory.getbasetemp().parent / "rodcad-cache"
+        folder.mkdir(exist_ok=True)
+    else:
+        folder = tmp_path_factory.mktemp("rodcad-cache")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("RODCAD_CACHE_DIR", str(folder))
         mp.setenv("RODCAD_SEED_CACHE", "1")
@@ -54,8 +61,6 @@ def build_design(tmp_path_factory):
 def pytest_collection_modifyitems(config, items):
     """Tests marked ``slow`` (a few minutes each: MuJoCo releases of the heart with pin
     friction) run when ``RODCAD_SLOW=1``; the same checks run on smaller chains always."""
-    import os
-
     if os.environ.get("RODCAD_SLOW", "0").strip() == "1":
         return
     skip = pytest.mark.skip(reason="slow: set RODCAD_SLOW=1 to run it")

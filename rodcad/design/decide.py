@@ -189,6 +189,7 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
     history: list[tuple[list[int], Verdict | None]] = []
     settled = 0
     robust = None  # (the first accepted design, its bands) once design option robust looked at it
+    budget = ROUND_WORK if work is None else work
     for rnd in range(MAX_ROUNDS + 1):
         rigid = {j: (float(deg[j]), LOCK) for j in sorted(locks | fused)}
         bare = lay_rods(catalog, pf, points, lengths, kappa, phi, rigid, limits=False, same=same,
@@ -232,9 +233,9 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             best = d
         if verdict is None or (d.accepted and not verdict.others and allowed.robust is None) or not feasible:
             break
-        if (rnd + 2) * n > (ROUND_WORK if work is None else work):  # another round would pass the work budget
+        if (rnd + 2) * n > budget:  # another round would pass the work budget
             notes.append(f"the planner stopped holding joints after {rnd + 1} round(s) (its work budget: "
-                         f"{ROUND_WORK if work is None else work} rod-rounds)")
+                         f"{budget} rod-rounds)")
             break
         new = _to_hold(verdict.culprits, n, locks | fused, printable, can_fuse)
         if d.accepted:  # other shapes exist, all higher: hold one joint more, for a few rounds

@@ -112,7 +112,7 @@ def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
         lines.append(
             f"- **Pin friction** (coefficient {ap.mu:g}): the chain can come to rest anywhere within "
             f"{fb.band:.3g} mm ({fb.band * pct:.3g} % of its size) of its design"
-            + ("" if getattr(fb, "tight", True) else " (an upper bound: its many stops make the exact band costly)")
+            + ("" if fb.tight else " (an upper bound: its many stops make the exact band costly)")
             + f", most at joint {j}. To settle it "
             "onto its design, tap it lightly a few times once it hangs: each tap frees the pins for a moment and "
             "gravity moves the chain toward its design.")

@@ -180,7 +180,7 @@ def plan_net(target: NetTarget, catalog) -> NetPlan:
                             + "; a larger hub (node.diameter and node.pivot_radius) or a net with wider angles")
     bends = target.bends
     if np.any(bends > 0):
-        flat = [e for e in np.flatnonzero(bends > 0) if lengths[e] - 2 * hw.end_offset <= 0
+        flat = [int(e) for e in np.flatnonzero(bends > 0) if lengths[e] - 2 * hw.end_offset <= 0
                 or bent_swing_deg(hw, rod_arc(hw, float(lengths[e]), float(bends[e]))) <= 0]
         if flat:
             problems.append(f"{len(flat)} bent rod(s) would touch their hub with the edge of their body's end face "

@@ -17,6 +17,7 @@ from pathlib import Path
 import mujoco_net
 import numpy as np
 import pytest
+from gcode_util import NOT_ROD, needs_slicer, read_gcode, slice_file
 from netgen import random_grid
 
 from optimize import solve_net
@@ -182,7 +183,17 @@ def test_a_mirror_symmetric_bent_net_is_designed_symmetric(hub_catalog, tmp_path
     _mujoco_agrees(check, 3)
 
 
-def test_a_small_bent_net_builds_its_solids_files_and_flat_print(tmp_path):
+@pytest.fixture(scope="module")
+def bent_v(tmp_path_factory):
+    """A V of two bent rods (bend 0.15) between three hubs, built with its solids and files."""
+    tmp = tmp_path_factory.mktemp("bent")
+    (tmp / "v.yaml").write_text(V_NET + "  bend: 0.15\n")
+    out = tmp / "v"
+    assert main(["build", str(tmp / "v.yaml"), "-o", str(out), "-q"]) == 0
+    return out, json.loads((out / "design.json").read_text())
+
+
+def test_a_small_bent_net_builds_its_solids_files_and_flat_print(bent_v):
     """With CAD: a V of two bent rods between three hubs. Every part a valid solid in its files
     (checked as written), the rods in the assembly bowing down in the vertical plane through
     their chords, the net as built (the solids' masses and centres of mass) within 0.2 % of
@@ -191,10 +202,7 @@ def test_a_small_bent_net_builds_its_solids_files_and_flat_print(tmp_path):
 
     from rodcad.cad.export import assembly_leaves
 
-    (tmp_path / "v.yaml").write_text(V_NET + "  bend: 0.15\n")
-    out = tmp_path / "v"
-    assert main(["build", str(tmp_path / "v.yaml"), "-o", str(out), "-q"]) == 0
-    data = json.loads((out / "design.json").read_text())
+    out, data = bent_v
     net = data["net"]
     assert net["error"]["max_rel_size"] <= 1e-6 and net["stable"]
     ab = data["as_built"]
@@ -227,6 +235,25 @@ def test_a_small_bent_net_builds_its_solids_files_and_flat_print(tmp_path):
 
     zs = np.array([float(v) for v in re.findall(r'<vertex [^>]*z="([-0-9.eE+]+)"', text)])
     assert zs.size and np.ptp(zs) == pytest.approx(9.0, abs=0.05)
+
+
+@needs_slicer
+def test_prusaslicer_slices_a_bent_rod_flat_at_its_designed_plastic_with_its_pause(bent_v, tmp_path):
+    """The bent rod's file alone: its pause before the layer at its axis (its balls' centres
+    lie at the axis's height, the arc flat on the bed) and its plastic within 2 % of its solid's
+    (the slicer's extrusion model against the B-rep, as tests/test_netprint.py for straight rods)."""
+    from build123d import import_step
+
+    out, data = bent_v
+    r = max(data["net"]["rods"], key=lambda r: r["steel_balls"])
+    assert r["steel_balls"] > 0
+    stem = f"rod-{r['index']:03d}"
+    sliced = read_gcode(slice_file(out / "rods" / f"{stem}.3mf", tmp_path / f"{stem}.gcode"))
+    axis = 9.0 / 2
+    assert [p for p, _ in sliced.pauses] == pytest.approx([math.ceil((axis + 0.1) / 0.2 - 1e-9) * 0.2], abs=1e-6)
+    got = sliced.object_grams(stem, 1.75, 1.24, skip=NOT_ROD)
+    want = float(import_step(str(out / "rods" / f"{stem}.step")).volume) * 1.24 / 1000
+    assert got == pytest.approx(want, rel=0.02)
 
 
 def test_bend_errors_in_the_design_file(tmp_path, capsys):

@@ -87,6 +87,31 @@ def test_the_bend_scales_the_bow_and_a_straight_rod_is_the_limit(hub_catalog):
     assert rod_arc(hw, 60.0, 0.0) is None
 
 
+def test_the_statics_of_an_off_axis_centre_of_mass_are_the_lever_rule_on_where_it_hangs():
+    """A bent rod's weight reaches its pivots as vertical shares (plus its axial tension): the
+    share at a pivot is the weight times the horizontal distance of the hanging centre of mass
+    from the other pivot over the chord's horizontal length (moments about that pivot). Its
+    centre of mass hangs below the chord in the vertical plane through it (the lowest roll)."""
+    from optimize import net_statics
+
+    rng = np.random.default_rng(5)
+    x = np.array([[0, 0, 0], [40, 10, -25], [90, -5, 12]], float)  # node 1 free, rods tilted both ways
+    edges = np.array([[0, 1], [1, 2]])
+    L = np.linalg.norm(x[edges[:, 1]] - x[edges[:, 0]], axis=1)
+    com = np.column_stack([L * rng.uniform(0.3, 0.7, 2), rng.uniform(1, 6, 2), np.zeros(2)])
+    st = net_statics(x, edges, L, [0, 2], com=com, g=1.0)
+    row = int(np.flatnonzero((st.rows[:, 0] == 1) & (st.rows[:, 1] == 2))[0])
+    shares = -st.A_m.toarray()[row]  # node 1's vertical force per unit rod mass
+    for e, (i, j) in enumerate(edges):
+        u = (x[j] - x[i]) / L[e]
+        down = np.array([0.0, 0.0, -1.0]) + u[2] * u
+        down /= np.linalg.norm(down)
+        c = x[i] + com[e, 0] * u + com[e, 1] * down  # where the centre of mass hangs
+        h = (x[j] - x[i])[:2]
+        at_j = float((c - x[i])[:2] @ h / (h @ h))  # share at pivot j: lever about pivot i
+        assert shares[e] == pytest.approx(at_j if j == 1 else 1 - at_j, rel=1e-12)
+
+
 def _hung_bent(seed: int, cat, bend: float):
     """A random grid of bent rods (point nodes) hung with random masses within their bounds,
     each rod's centre of mass its fill's: a target those masses reach."""

@@ -22,6 +22,7 @@ import numpy as np
 from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
+from rodcad.cad.netbent import bent_rod_solid, bent_socket_centres
 from rodcad.cad.nethub import split_hub, split_plane
 from rodcad.cad.solids import GeometryError, one_solid
 
@@ -142,6 +143,8 @@ class NetSolids:
         rod_balls: steel balls in each rod.
         hub_splits: per hub, its printed parts (:class:`rodcad.cad.nethub.HubSplit`: two
             halves through its sockets' centres, where they take the balls).
+        rod_com: (m, 3) each rod's centre of mass as built (rod frame, mm): a bent rod's measured
+            on its solid (bowing toward -z), a straight rod's at mid-length.
     """
 
     hubs: list
@@ -155,6 +158,7 @@ class NetSolids:
     files: list = field(default_factory=list)
     rod_balls: list = field(default_factory=list)
     hub_splits: list = field(default_factory=list)
+    rod_com: np.ndarray | None = None
 
     @property
     def hub_parts(self) -> list:
@@ -179,9 +183,17 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
     rho = hw.density / 1000.0
     rods, rod_masses, rod_balls = [], np.zeros(t.m), []
     total = t.m + (t.n if hw.is_hub else 0)
+    arcs, flen = plan.arcs, plan.fill_lengths
+    rod_com = np.column_stack([plan.lengths / 2, np.zeros((t.m, 2))])
     for e in range(t.m):
-        k, cavity, _ = hw.rod_fill(float(plan.lengths[e]), float(check.masses[e]))
-        s = net_rod_solid(hw, float(plan.lengths[e]), k, cavity, name=f"rod-{e:03d}")
+        k, cavity, _ = hw.rod_fill(float(flen[e]), float(check.masses[e]))
+        if arcs[e] is None:
+            s = net_rod_solid(hw, float(plan.lengths[e]), k, cavity, name=f"rod-{e:03d}")
+        else:  # measured on the solid: its plastic's centre of mass and its steel balls
+            s = bent_rod_solid(hw, arcs[e], k, cavity, name=f"rod-{e:03d}")
+            moment = rho * s.volume * np.array(tuple(s.center(CenterOf.MASS)))
+            moment += ball_mass * bent_socket_centres(hw, arcs[e], k).sum(axis=0)
+            rod_com[e] = moment / (rho * s.volume + k * ball_mass)
         rods.append(s)
         rod_balls.append(int(k))
         rod_masses[e] = rho * s.volume + k * ball_mass
@@ -202,8 +214,10 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
                 progress.count(t.m + k + 1, total)
     eq = check.equilibrium
     res = solve_net(eq.positions, t.edges, plan.lengths, rod_masses, t.anchored, node_masses=node_masses,
-                    node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations)
-    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls, hub_splits=splits)
+                    node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations,
+                    com=rod_com if plan.bent else None)
+    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls, hub_splits=splits,
+                    rod_com=rod_com)
     if res.success:
         err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
                   float(np.max(np.linalg.norm(res.ends - eq.ends, axis=2))))
@@ -219,6 +233,8 @@ def _matrix(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
 
 
 def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """The rod frame in the world: x along the chord, y horizontal, z = x cross y the upward
+    side of the chord (a bent rod, bowing toward -z, hangs so)."""
     x = (p1 - p0) / np.linalg.norm(p1 - p0)
     y = np.cross([0.0, 0.0, 1.0], x)
     if np.linalg.norm(y) < 1e-9:

@@ -8,7 +8,9 @@ Orientation. A rod lies along the bed's x axis on its round body (its axis ``rod
 / 2`` above the bed); its end balls (narrower than the body) and the underside of the body
 need support from the bed (``support_material`` on for the rod, on the build plate only, so
 none is printed inside its cavity or ball sockets). A hub half lies on its flat cut face
-(:mod:`rodcad.cad.nethub`); a hub left whole (its sockets off every plane) on support.
+(:mod:`rodcad.cad.nethub`); a hub left whole (its sockets off every plane) on support. A bent
+rod (:mod:`rodcad.cad.netbent`) is turned a quarter turn about its chord so that its arc lies
+flat on the bed (:data:`FLAT_ARC`), its steel balls' centres at its axis's height as on a straight rod.
 
 Steel balls. A rod's ball sockets are spheres on its axis (the mass model's,
 :meth:`rodcad.catalog.node.NodeHardware.rod_numbers`). A sphere only lets its ball in near
@@ -32,9 +34,14 @@ from pathlib import Path
 import numpy as np
 
 from rodcad.cad.net import ball_positions
+from rodcad.cad.netbent import bent_socket_centres
 from rodcad.cad.printfile import write_print_files
 
 __all__ = ["NetPrintPart", "net_print_parts", "write_net_print_files"]
+
+#: A bent rod's print matrix: a quarter turn about x, its arc (in the rod frame's xz plane,
+#: bowing toward -z) into the bed's plane, its balls' centres at its axis's height.
+FLAT_ARC = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 #: What a rod asks of PrusaSlicer besides support (per object).
 ROD_SETTINGS = {"support_material_buildplate_only": "1"}
@@ -93,16 +100,22 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
     plan = check.plan
     hw = plan.hardware
     parts = []
+    arcs = plan.arcs
     for e, s in enumerate(solids.rods):
         k = int(solids.rod_balls[e]) if solids.rod_balls else 0
-        xs = ball_positions(hw, float(plan.lengths[e]), k)
+        if arcs[e] is None:
+            centres = np.column_stack([ball_positions(hw, float(plan.lengths[e]), k), np.zeros((k, 2))])
+            matrix, note = np.eye(4), "lies on its round body along x"
+        else:  # turned about x so that its arc lies in the bed's plane (the bow toward +y)
+            centres = bent_socket_centres(hw, arcs[e], k)
+            matrix, note = FLAT_ARC.copy(), "lies on its round body, its arc flat on the bed"
         parts.append(NetPrintPart(
-            e, s, float(s.volume), np.eye(4), s.label, "rods", f"{e:03d}",
-            socket_roofs=tuple(0.0 for _ in xs), ball_count=k,
+            e, s, float(s.volume), matrix, s.label, "rods", f"{e:03d}",
+            socket_roofs=tuple(0.0 for _ in range(k)), ball_count=k,
             ball_diameter=float(hw.insert_diameter) if k else None, ball_name=ball_name if k else "",
-            print_note="lies on its round body along x: support from the bed under the body and the end balls",
+            print_note=f"{note}: support from the bed under the body and the end balls",
             print_settings=dict(ROD_SETTINGS),
-            socket_centers=np.column_stack([xs, np.zeros((k, 2))]) if k else np.zeros((0, 3)),
+            socket_centers=centres if k else np.zeros((0, 3)),
             socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0))
     hub_parts = solids.hub_parts if solids.hub_splits else [(s, np.eye(4), True) for s in solids.hubs]
     for i, (s, matrix, needs_support) in enumerate(hub_parts):

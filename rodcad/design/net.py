@@ -44,6 +44,8 @@ class NetTarget:
         compression: rods may push.
         shape: (u, v) cells, (rings, spokes), or ().
         written: the block as written (for design.json and the report).
+        rod_bends: (m,) each rod's bend (sagitta over chord of its body's arc, 0 straight;
+            :mod:`rodcad.catalog.netbend`), or None: every rod straight.
     """
 
     kind: str
@@ -55,6 +57,12 @@ class NetTarget:
     compression: bool = False
     shape: tuple[int, ...] = ()
     written: dict[str, Any] = field(default_factory=dict)
+    rod_bends: np.ndarray | None = None
+
+    @property
+    def bends(self) -> np.ndarray:
+        """(m,) each rod's bend (0: straight)."""
+        return np.zeros(self.m) if self.rod_bends is None else self.rod_bends
 
     @property
     def n(self) -> int:
@@ -269,11 +277,28 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
         v.report_at(where, f"nodes {i} and {j} are in the same place: their rod would have no length")
         return None
     _topology(pos, edges, mask, kind, v)
+    bends = _bends(net, edges.shape[0], v)
     if not v.ok("net"):
         return None
     return NetTarget(kind=kind, positions=pos, edges=edges, anchored=anchored, anchored_as=anchored_as,
                      dropped=dropped, compression=bool(net.get("compression", False)), shape=layout.shape,
-                     written=dict(net))
+                     written=dict(net), rod_bends=bends)
+
+
+def _bends(net: dict, m: int, v: Any) -> np.ndarray | None:
+    """Each rod's bend from ``net.bend`` (every rod) and ``net.bends`` (listed rods, later
+    entries over earlier ones); rods named that do not exist are reported at their key."""
+    if "bend" not in net and "bends" not in net:
+        return None
+    out = np.full(m, float(net.get("bend", 0.0)))
+    for i, entry in enumerate(net.get("bends", [])):
+        for j, e in enumerate(entry["rods"]):
+            if e >= m:
+                v.report_at(f"net.bends[{i}].rods[{j}]", f"rod {e} does not exist (the net's rods are 0 to {m - 1}, "
+                            "numbered as design.json's net.rods)", fallback="net.bends")
+            else:
+                out[e] = float(entry["bend"])
+    return out if np.any(out > 0) else None
 
 
 def _topology(pos: np.ndarray, edges: np.ndarray, mask: np.ndarray, kind: str, v: Any) -> None:

@@ -12,6 +12,7 @@ ends).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -23,7 +24,7 @@ from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.nethubs import buildable_bounds, orient_sockets
 from rodcad.design.netplan import NetPlan
 
-__all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts"]
+__all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts", "settle_com"]
 
 
 #: After the rods' bounds are narrowed to buildable masses, the sockets are turned again
@@ -41,6 +42,14 @@ FULL_REFINE_NODES = 100
 #: A rod whose force is within this share of the net's largest tension hangs slack: neither
 #: pulling nor pushing to speak of (a rigid rod takes it either way).
 SLACK = 1e-3
+
+#: A bent net's masses and centres of mass are consistent when the centres of mass move less
+#: than this share of the net's size in a round (:func:`settle_com`); at most COM_ROUNDS rounds.
+COM_TOL = 1e-12
+COM_ROUNDS = 30
+#: The designed masses' own centres of mass differ from those designed with by more than this
+#: share of the size (the refinement moved the masses): the net is solved again with them.
+COM_RECHECK = 1e-9
 
 #: Starts of the multi-start that looks for other stable shapes of a designed net (up to
 #: :data:`FULL_STARTS_NODES` nodes; fewer beyond, see :func:`net_starts`).
@@ -123,7 +132,7 @@ class NetCheck:
     @property
     def ok(self) -> bool:
         """Hangs within the tolerance, stable, in tension (unless allowed), rods within their swing."""
-        return self.meets_tolerance and self.in_tension and bool(np.all(self.swing_deg <= self.plan.hardware.swing_deg))
+        return self.meets_tolerance and self.in_tension and bool(np.all(self.swing_deg <= self.plan.swing_limits[:, None]))
 
     def limit(self) -> str:
         """One line: what keeps the net off its target and what would reach it."""
@@ -144,9 +153,9 @@ class NetCheck:
             c = self.compressed
             return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
                    "or anchor more nodes"
-        over = np.argwhere(self.swing_deg > self.plan.hardware.swing_deg)
+        over = np.argwhere(self.swing_deg > self.plan.swing_limits[:, None])
         return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
-               f"than the {self.plan.hardware.swing_deg:.3g} deg the hub allows"
+               f"than the {self.plan.swing_limits[over[0][0]]:.3g} deg the hub allows"
 
 
 def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,
@@ -173,8 +182,11 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         cos = np.sum(lines * plan.pivots, axis=2) / plan.hardware.pivot_radius ** 2
         turn = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
     t = plan.target
+    com_rounds = 0
+    if plan.bent:
+        plan, com_rounds = settle_com(plan, g=g)
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-              allow_compression=t.compression, g=g)
+              allow_compression=t.compression, g=g, com=plan.statics_com)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
     # a step (a dense bounded least squares on hundreds of masses), so the statics' best fit
     # stays; otherwise the statics' masses, solved once from the target, are refined through
@@ -186,6 +198,21 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         refine = not (probe.equilibrium.success and probe.equilibrium.stable and probe.rel_error <= REFINE_ABOVE)
     design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
                         refine=refine, **kw)
+    recheck = False
+    if plan.bent:
+        final = plan.rod_com(design.masses)
+        if np.max(np.abs(final - plan.com)) > COM_RECHECK * t.size:
+            # the refinement moved the masses, and with them the bent rods' centres of mass: the
+            # verdict is on the rods as they will be built
+            from optimize import solve_net
+
+            eq0 = design.equilibrium
+            res = solve_net(t.positions, t.edges, plan.lengths, design.masses, t.anchored, node_masses=plan.node_masses,
+                            node_com=plan.node_com, pivots=plan.pivots, com=final, g=g, n_starts=n_starts, seed=seed,
+                            node_rotations0=eq0.rotations if eq0.success else None)
+            design = dataclasses.replace(design, equilibrium=res)
+            plan = dataclasses.replace(plan, com=final)
+            recheck = True
     eq = design.equilibrium
     size = t.size
     if eq.success:
@@ -224,6 +251,13 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         notes.append(f"The hubs' sockets are turned up to {turn:.3g} deg off the lines between the node points "
                      f"(printed so; {rounds} round(s)), so that every hub balances at the target: a socket on the "
                      "line would put its rod's weight share off the hub's centre and turn it.")
+    if plan.bent:
+        bent = int(np.count_nonzero(t.bends > 0))
+        notes.append(f"{bent} rod(s) are printed bent; each hangs with its bow below its chord, in the vertical "
+                     "plane through it (a rod on ball joints turns freely about its chord, so its centre of mass "
+                     "hangs as low as it can), and its centre of mass off the chord enters the design "
+                     f"({com_rounds} round(s) of masses and centres of mass to a fixed point)"
+                     + ("; re-solved with the centres of mass of the refined masses." if recheck else "."))
     if design.refined:
         notes.append(f"The masses were refined through the solver from the statics' best fit "
                      f"({design.info.get('fit_error', float('nan')):.4g} mm -> "
@@ -239,12 +273,35 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
                     swing, time.perf_counter() - t0, notes, why)
 
 
+def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> tuple[NetPlan, int]:
+    """A bent net's masses and its rods' centres of mass made consistent: a bent rod's centre of
+    mass moves with its fill (steel balls at mid-arc, the cavity beside them), so the statics'
+    masses and the centres of mass they imply are iterated to a fixed point (the centres of
+    mass move by fractions of a mm for grams: a few rounds). Returns (the plan with ``com``,
+    rounds used)."""
+    from optimize import design_net_masses
+
+    t = plan.target
+    com = plan.statics_com
+    used = 0
+    for used in range(1, rounds + 1):
+        st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
+                               node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
+                               allow_compression=t.compression, g=g)
+        new = plan.rod_com(st.masses)
+        change = float(np.max(np.abs(new - com)))
+        com = new
+        if change <= COM_TOL * t.size:
+            break
+    return dataclasses.replace(plan, com=com), used
+
+
 def _imbalance(plan: NetPlan, design: NetDesign, g: float) -> str:
     """Where the statics' best fit leaves the largest imbalance, when no masses at all (any
     positive mass, rods pushing or not) balance the target."""
     t = plan.target
     st = net_statics(t.positions, t.edges, plan.lengths, t.anchored, node_masses=plan.node_masses,
-                     node_com=plan.node_com, pivots=plan.pivots, g=g)
+                     node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com, g=g)
     res = np.abs(st.residual(design.statics.tensions, design.statics.masses))
     force = st.rows[:, 1] < 3
     per_node = np.zeros(t.n)

@@ -53,12 +53,12 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     for rounds in range(1, ORIENT_ROUNDS + 1):
         full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 allow_compression=t.compression, g=g)
+                                 com=plan.statics_com, allow_compression=t.compression, g=g)
         if full.exact or full.residual <= ORIENT_FINE:
             return plan, rounds, full.residual  # (this close, the refinement through the solver finishes it)
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                               allow_compression=t.compression, g=g, forces_only=True)
+                               com=plan.statics_com, allow_compression=t.compression, g=g, forces_only=True)
         if full.residual < 0.9 * best_res:
             best, best_res, stall = plan, full.residual, 0
         else:
@@ -70,7 +70,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
         ends = t.positions[t.edges] + plan.pivots
         u = ends[:, 1] - ends[:, 0]
         u /= np.linalg.norm(u, axis=1, keepdims=True)
-        share = _shares(st.masses, g)
+        share = _shares(st.masses, g, u, plan.statics_com, plan.lengths)
         F = np.stack([st.tensions[:, None] * u, -st.tensions[:, None] * u], axis=1)
         F[:, :, 2] -= share
         new = plan.pivots.copy()
@@ -130,10 +130,10 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
     def statics(bounds):
         return design_net_masses(t.positions, t.edges, plan.lengths, bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 allow_compression=t.compression, g=g)
+                                 com=plan.statics_com, allow_compression=t.compression, g=g)
 
     st = statics(plan.bounds)
-    segs = [mass_segments(hw, float(L)) for L in plan.lengths]
+    segs = [mass_segments(hw, float(L)) for L in plan.fill_lengths]
     choice = []
     snapped = 0
     for e, m in enumerate(st.masses):
@@ -162,12 +162,22 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
         if not moved:
             break
     return NetPlan(t, hw, plan.pivots, plan.lengths, plan.rods, best[0], plan.node_masses, plan.node_com,
-                   plan.length_range, plan.degree, np.array(best[1], int)), snapped
+                   plan.length_range, plan.degree, np.array(best[1], int), plan.com), snapped
 
 
-def _shares(masses: np.ndarray, g: float) -> np.ndarray:
-    """(m, 2) each straight symmetric rod's weight at its two pivots (lever rule: half each)."""
-    return np.column_stack([0.5 * g * masses, 0.5 * g * masses])
+def _shares(masses: np.ndarray, g: float, u: np.ndarray, com, lengths: np.ndarray) -> np.ndarray:
+    """(m, 2) each rod's weight at its two pivots: half each for a rod with its centre of mass
+    on its axis at mid-length; a bent rod's off-axis centre of mass moves ``q = r s / (L
+    sqrt(1 - s^2))`` of it to the upper pivot (:mod:`optimize.netmodel`; ``s`` the chord's
+    vertical direction cosine, ``r`` the centre of mass's distance from the chord)."""
+    if com is None:
+        return np.column_stack([0.5 * g * masses, 0.5 * g * masses])
+    com = np.asarray(com, float)
+    t = com[:, 0] / lengths
+    r = np.linalg.norm(com[:, 1:], axis=1)
+    s = u[:, 2]
+    q = r * s / (lengths * np.sqrt(np.maximum(1 - s * s, 1e-300)))
+    return np.column_stack([g * masses * (1 - t - q), g * masses * (t + q)])
 
 
 def _skew(a: np.ndarray) -> np.ndarray:

@@ -16,11 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rodcad.catalog.netbend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
 from rodcad.catalog.node import NetRodNumbers, NodeHardware
 from rodcad.design.net import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["NetPlan", "POINT_WIDTH", "length_range", "mass_segments", "plan_net", "replan"]
+__all__ = ["NetPlan", "POINT_WIDTH", "fill_lengths", "length_range", "mass_segments", "plan_net", "replan"]
 
 
 @dataclass
@@ -41,6 +42,8 @@ class NetPlan:
         degree: (n,) rods at each node.
         segment: (m,) which segment of buildable masses each rod's bounds are (:func:`mass_segments`),
             or None: the whole range (see :func:`rodcad.design.nethubs.buildable_bounds`).
+        com: (m, 3) each rod's centre of mass (along, below the chord, 0) (mm) the statics use
+            (:meth:`rod_com` of the masses designed last; straight rods at mid-length).
     """
 
     target: NetTarget
@@ -54,11 +57,62 @@ class NetPlan:
     length_range: tuple[float, float]
     degree: np.ndarray
     segment: np.ndarray | None = None
+    com: np.ndarray | None = None
 
     @property
     def target_ends(self) -> np.ndarray:
         """(m, 2, 3) the rods' pivots at the target (mm)."""
         return self.target.positions[self.target.edges] + self.pivots
+
+    @property
+    def arcs(self) -> list[NetRodArc | None]:
+        """Each rod's arc (:mod:`rodcad.catalog.netbend`), None where it is straight."""
+        return [rod_arc(self.hardware, float(L), float(b)) for L, b in zip(self.lengths, self.target.bends)]
+
+    @property
+    def bent(self) -> bool:
+        return bool(np.any(self.target.bends > 0))
+
+    @property
+    def fill_lengths(self) -> np.ndarray:
+        """(m,) the straight length each rod weighs and is filled as (its own when straight)."""
+        return fill_lengths(self.hardware, self.lengths, self.target.bends)
+
+    @property
+    def swing_limits(self) -> np.ndarray:
+        """(m,) how far each rod may turn in its sockets (deg): a bent rod's tilted end face
+        comes nearer the hub (:func:`rodcad.catalog.netbend.bent_swing_deg`)."""
+        hw = self.hardware
+        return np.array([hw.swing_deg if a is None else min(hw.swing_deg, bent_swing_deg(hw, a))
+                         for a in self.arcs], float)
+
+    def rod_com(self, masses) -> np.ndarray:
+        """(m, 3) each rod's centre of mass at ``masses`` (g): (along, below the chord, 0) mm,
+        in closed form (:func:`rodcad.catalog.netbend.bent_rod_com`); straight: (L / 2, 0, 0)."""
+        out = np.zeros((self.target.m, 3))
+        out[:, 0] = self.lengths / 2
+        for e, a in enumerate(self.arcs):
+            if a is not None:
+                out[e] = bent_rod_com(self.hardware, a, float(masses[e]))[0]
+        return out
+
+    @property
+    def statics_com(self) -> np.ndarray | None:
+        """The centres of mass the statics use: :attr:`com` for a bent net, else None (on the axis
+        at mid-length)."""
+        if not self.bent:
+            return None
+        return self.com if self.com is not None else self.rod_com(self.bounds.mean(axis=1))
+
+
+def fill_lengths(hw, lengths, bends) -> np.ndarray:
+    """(m,) per rod, the straight length it weighs and is filled as (:mod:`rodcad.catalog.netbend`)."""
+    out = np.asarray(lengths, float).copy()
+    for e, (L, b) in enumerate(zip(lengths, bends)):
+        a = rod_arc(hw, float(L), float(b))
+        if a is not None:
+            out[e] = a.fill_length
+    return out
 
 
 def length_range(catalog) -> tuple[float, float]:
@@ -124,9 +178,18 @@ def plan_net(target: NetTarget, catalog) -> NetPlan:
             problems.append(f"at {len(worst)} node(s) rods meet closer than the hub's sockets allow ({need:.3g} deg): "
                             + ", ".join(f"node {k} at {a:.3g} deg" for a, k in worst[:6])
                             + "; a larger hub (node.diameter and node.pivot_radius) or a net with wider angles")
+    bends = target.bends
+    if np.any(bends > 0):
+        flat = [int(e) for e in np.flatnonzero(bends > 0) if lengths[e] - 2 * hw.end_offset <= 0
+                or bent_swing_deg(hw, rod_arc(hw, float(lengths[e]), float(bends[e]))) <= 0]
+        if flat:
+            problems.append(f"{len(flat)} bent rod(s) would touch their hub with the edge of their body's end face "
+                            f"(square to the arc, tilted off square to the chord): rods {flat[:8]} bent "
+                            f"{', '.join(f'{bends[e]:.3g}' for e in flat[:8])}; bend them less, or a catalog with a "
+                            "larger node.gap")
     if problems:
         raise DesignLimit("; ".join(problems))
-    rods = [hw.rod_numbers(float(L)) for L in lengths]
+    rods = [hw.rod_numbers(float(L)) for L in fill_lengths(hw, lengths, bends)]
     bounds = np.array([rn.mass_range for rn in rods], float)
     node_masses = np.zeros(n)
     node_com = np.zeros((n, 3))
@@ -161,7 +224,8 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     t, hw = plan.target, plan.hardware
     ends = t.positions[t.edges] + pivots
     lengths = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
-    rods = [hw.rod_numbers(float(L)) for L in lengths]
+    flen = fill_lengths(hw, lengths, t.bends)
+    rods = [hw.rod_numbers(float(L)) for L in flen]
     node_com = np.zeros((t.n, 3))
     node_masses = plan.node_masses.copy()
     dirs: list[list[np.ndarray]] = [[] for _ in range(t.n)]
@@ -172,7 +236,7 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
         node_masses[k], node_com[k] = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
     bounds = np.array([r.mass_range for r in rods], float)
     if plan.segment is not None:
-        for e, L in enumerate(lengths):
+        for e, L in enumerate(flen):
             segs = mass_segments(hw, float(L))
             bounds[e] = segs[min(int(plan.segment[e]), len(segs) - 1)]
     return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,

@@ -13,6 +13,7 @@ from typing import Any
 
 import yaml
 
+from rodcad.catalog.netbend import MAX_BEND
 from rodcad.yamlio import MISSING, TAG_NULL, Validator
 from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, OneOrList, Spec, Str
 
@@ -104,6 +105,20 @@ def net_spec() -> Obj:
                               description="The nodes held where they are: a list of node indices, or for a "
                               "generated net " + "; ".join(f"'{k}': {d}" for k, d in ANCHOR_SETS.items())
                               + ". Rods between two anchored nodes of a generated set are left out."),
+            "bend": Field(Num(minimum=0, maximum=round(MAX_BEND, 4)),
+                          description="Every rod printed bent: its body's arc bows this share of its chord "
+                          "below the chord at mid-length (sagitta over chord; 0: straight; at most "
+                          f"{MAX_BEND:.4f}, an arc of 120 deg). A rod on ball joints turns freely about its "
+                          "chord, so the bow hangs in the vertical plane through the chord, below it: its size "
+                          "is chosen, its plane is not."),
+            "bends": Field(ListOf(Obj({
+                "rods": Field(ListOf(Num(integer=True, minimum=0), min_items=1, unique=True), required=True,
+                              description="Rod indices (as design.json's net.rods: the order of 'edges', or of "
+                              "the generated rods)."),
+                "bend": Field(Num(minimum=0, maximum=round(MAX_BEND, 4)), required=True,
+                              description="Their bend (sagitta over chord; 0: straight)."),
+            }, description="A bend for some rods."), min_items=1),
+                description="Bends per rod, over 'bend' (later entries over earlier ones)."),
             "compression": Field(Bool(), default=False,
                                  description="Let rods push (by default every rod of a hanging net stays in "
                                  "tension)."),

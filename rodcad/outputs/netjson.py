@@ -30,7 +30,7 @@ def rod_balls(check) -> np.ndarray:
     """(m,) the steel balls each rod holds at its designed mass (the fewest whose range holds
     it: :meth:`rodcad.catalog.node.NodeHardware.rod_fill`)."""
     hw = check.plan.hardware
-    return np.array([hw.rod_fill(float(L), float(m))[0] for L, m in zip(check.plan.lengths, check.masses)], int)
+    return np.array([hw.rod_fill(float(L), float(m))[0] for L, m in zip(check.plan.fill_lengths, check.masses)], int)
 
 
 def net_bill(check, catalog) -> dict[str, Any]:
@@ -80,26 +80,34 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
         })
     balls = rod_balls(check)
     rods = []
+    arcs = plan.arcs
+    com = plan.com if plan.com is not None else plan.rod_com(check.masses)
     for e in range(t.m):
         rn = plan.rods[e]
         L = float(plan.lengths[e])
+        Lf = float(plan.fill_lengths[e])
+        arc = arcs[e]
         rods.append({
             "index": e,
             "nodes": [int(x) for x in t.edges[e]],
             "length": L,
             "mass": _f(check.masses[e]),
-            "com": [L / 2, 0.0, 0.0],
+            "com": _v(com[e]),
             "tension": _f(eq.tensions[e]),
             "ends": [_v(eq.ends[e, 0]), _v(eq.ends[e, 1])],
             "target_ends": [_v(plan.target_ends[e, 0]), _v(plan.target_ends[e, 1])],
             "mass_range": [rn.mass_range[0], rn.mass_range[1]],
             "solid_mass": rn.solid_mass,
             "steel_balls": int(balls[e]),
-            "cavity_mm3": hw.rod_fill(L, float(check.masses[e]))[1],
-            "buildable_mass": hw.rod_fill(L, float(check.masses[e]))[2],
+            "cavity_mm3": hw.rod_fill(Lf, float(check.masses[e]))[1],
+            "buildable_mass": hw.rod_fill(Lf, float(check.masses[e]))[2],
             "body_length": rn.body_length,
             "diameter": hw.rod_diameter,
-            "shape": "straight",
+            "shape": "straight" if arc is None else "bent",
+            "bend": None if arc is None else {"bend": arc.bend, "sagitta": arc.sagitta, "radius": arc.radius,
+                                              "half_angle_deg": float(np.degrees(arc.half_angle)),
+                                              "plane": "vertical through the chord, bowing down"},
+            "swing_limit_deg": _f(plan.swing_limits[e]) if hw.is_hub else None,
             "swing_deg": _v(check.swing_deg[e]),
         })
     st = check.design.statics

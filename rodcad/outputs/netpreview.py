@@ -13,7 +13,8 @@ def plot_net(check, title: str, *paths: Path) -> None:
     """Two orthographic views of a :class:`rodcad.design.netplan.NetCheck`, saved to every path.
 
     Left: from above (x, y); right: from the side (x, z). The target's rods are thin dashed
-    grey lines between the target nodes; the simulated rods (pivot to pivot) thick,
+    grey lines between the target nodes; the simulated rods (pivot to pivot, a bent rod along its
+    arc bowing down) thick,
     coloured from light (blue) to heavy (red) by mass with a colour bar in grams; nodes are
     dots (hubs as circles to scale), anchored nodes black triangles.
     """
@@ -35,7 +36,7 @@ def plot_net(check, title: str, *paths: Path) -> None:
         ax.add_collection(LineCollection(tgt, colors="0.55", linestyles="--", linewidths=1.0, label="target",
                                          zorder=1))
         if eq.success:
-            sim = eq.ends[:, :, [a, b]]
+            sim = [c[:, [a, b]] for c in _centrelines(plan, eq.ends)]
             lc = LineCollection(sim, cmap=cmap, norm=norm, linewidths=3.5, zorder=2)
             lc.set_array(masses)
             ax.add_collection(lc)
@@ -64,3 +65,21 @@ def plot_net(check, title: str, *paths: Path) -> None:
     for p in paths:
         fig.savefig(p, dpi=110)
     plt.close(fig)
+
+
+def _centrelines(plan, ends: np.ndarray, samples: int = 16) -> list[np.ndarray]:
+    """Each rod's centreline in the world (mm): pivot to pivot, a bent rod's body along its arc
+    bowing down in the vertical plane through its chord (the pose it hangs in)."""
+    out = []
+    for (p0, p1), arc in zip(ends, plan.arcs):
+        if arc is None:
+            out.append(np.array([p0, p1]))
+            continue
+        x = (p1 - p0) / np.linalg.norm(p1 - p0)
+        down = np.array([0.0, 0.0, -1.0]) + x[2] * x
+        n = np.linalg.norm(down)
+        down = down / n if n > 1e-12 else np.cross(x, [1.0, 0.0, 0.0]) / np.linalg.norm(np.cross(x, [1.0, 0.0, 0.0]))
+        local = arc.point(np.linspace(arc.offset, arc.offset + arc.arc_length, samples))  # bowing toward -z
+        pts = p0 + np.outer(local[:, 0], x) - np.outer(local[:, 2], down)
+        out.append(np.vstack([p0, pts, p1]))
+    return out

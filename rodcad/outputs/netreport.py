@@ -76,7 +76,9 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   f"its pivot {hw.pivot_radius:g} mm from the hub's centre along the rod's target direction. Each rod "
                   f"ends in a {hw.ball:g} mm ball on a {hw.neck:g} mm neck; the sockets are {hw.clearance:g} mm wider "
                   f"and open in a {hw.cone_deg:g} deg cone, so a rod turns {hw.swing_deg:.3g} deg from its socket's "
-                  f"axis in every direction (the designed net uses at most {float(np.max(check.swing_deg)):.3g} deg). "
+                  f"axis in every direction (the designed net uses at most {float(np.max(check.swing_deg)):.3g} deg"
+                  + (f"; a bent rod's tilted end face lets it turn {float(plan.swing_limits.min()):.3g} deg at least"
+                     if plan.bent else "") + "). "
                   "Rods at a node must meet at "
                   f"{hw.min_angle_deg:.3g} deg or more. The hubs are rigid bodies whose pose the solver found; their "
                   f"masses ({float(plan.node_masses.min()):.3g}-{float(plan.node_masses.max()):.3g} g) and centres of "
@@ -86,15 +88,23 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   f"pivots exactly; a rod without load rattles by up to {hw.clearance / 2:g} mm.", ""]
     else:
         lines += [f"Every node is one pivot point ({hw.name}, {hw.mass:g} g): the rods turn about it.", ""]
+    bent = any(r.get("shape") == "bent" for r in net["rods"])
+    what = ("Round rods printed to order, bent where 'bow' is not 0 (bow: the sagitta over the chord of the body's arc; each "
+            "hangs below its chord in the vertical plane through it, its centre of mass 'below' mm off the chord)"
+            if bent else "Straight round rods printed to order")
     lines += ["## Rods", "",
-              "Straight round rods printed to order "
-              f"({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls).", "",
-              "| rod | nodes | length (mm) | mass (g) | range (g) | steel balls | tension (mN) |",
-              "|---:|---|---:|---:|---|---:|---:|"]
+              f"{what} ({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls).", "",
+              "| rod | nodes | length (mm) | mass (g) | range (g) | steel balls | tension (mN) |"
+              + (" bow | below (mm) |" if bent else ""),
+              "|---:|---|---:|---:|---|---:|---:|" + ("---:|---:|" if bent else "")]
     for r in net["rods"]:
+        extra = ""
+        if bent:
+            b = r.get("bend")
+            extra = f" {b['bend']:.3g} | {r['com'][1]:.3f} |" if b else " 0 | 0 |"
         lines.append(f"| {r['index']} | {r['nodes'][0]}-{r['nodes'][1]} | {r['length']:.2f} | {r['mass']:.3f} | "
                      f"{r['mass_range'][0]:.2f}-{r['mass_range'][1]:.2f} | {r['steel_balls']} | "
-                     f"{r['tension']:.3g} |")
+                     f"{r['tension']:.3g} |{extra}")
     lines += ["", "## Nodes", "", "| node | anchored | rods | mass (g) | error (mm) |", "|---:|---|---:|---:|---:|"]
     for nd in net["nodes"]:
         err = nd["error_mm"]

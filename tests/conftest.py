@@ -59,8 +59,9 @@ def build_design(tmp_path_factory):
 
 
 def pytest_collection_modifyitems(config, items):
-    """Tests marked ``slow`` (a few minutes each: MuJoCo releases of the heart with pin
-    friction) run when ``RODCAD_SLOW=1``; the same checks run on smaller chains always."""
+    """Tests marked ``slow`` (MuJoCo releases of the heart with pin friction, a few minutes
+    each; ten more drawn shapes) run when ``RODCAD_SLOW=1``; the same checks run on smaller
+    chains and on a drawn shape of every kind always."""
     if os.environ.get("RODCAD_SLOW", "0").strip() == "1":
         return
     skip = pytest.mark.skip(reason="slow: set RODCAD_SLOW=1 to run it")

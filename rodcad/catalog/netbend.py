@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rodcad.catalog.model import MAX_ARC_HALF_ANGLE_DEG
+from rodcad.catalog.node import largest_clear_turn
 
 __all__ = ["MAX_BEND", "NetRodArc", "ball_row", "bent_rod_com", "bent_swing_deg", "rod_arc"]
 
@@ -208,12 +209,4 @@ def bent_swing_deg(hw, arc: NetRodArc | None) -> float:
                 return False
         return True
 
-    if not clear(0.0):
-        return 0.0
-    lo, hi = 0.0, math.pi / 2
-    if clear(hi):
-        return 90.0
-    while hi - lo > 1e-4:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if clear(mid) else (lo, mid)
-    return math.degrees(lo)
+    return largest_clear_turn(clear)

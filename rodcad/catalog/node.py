@@ -38,7 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "node_hardware", "socket_centres"]
+__all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "largest_clear_turn", "node_hardware",
+           "socket_centres"]
 
 #: Node kinds a catalog's ``node.kind`` may name.
 NODE_KINDS = ("hub", "point")
@@ -50,6 +51,21 @@ DEFAULT_NODE = {"kind": "hub", "diameter": 24.0, "pivot_radius": 7.5, "ball": 6.
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
 
+
+
+def largest_clear_turn(clear) -> float:
+    """The largest turn ``phi`` in [0, 90] deg with ``clear(phi)`` (radians in; clear at
+    every smaller turn, as a face nearing a sphere is), by bisection to 1e-4 rad; 0 when
+    not clear at rest."""
+    if not clear(0.0):
+        return 0.0
+    lo, hi = 0.0, math.pi / 2
+    if clear(hi):
+        return 90.0
+    while hi - lo > 1e-4:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if clear(mid) else (lo, mid)
+    return math.degrees(lo)
 
 @dataclass(frozen=True)
 class NetRodNumbers:
@@ -151,15 +167,7 @@ class NodeHardware:
             p = np.array([self.pivot_radius, 0.0]) + e * d
             return bool(min(np.linalg.norm(p + r * n), np.linalg.norm(p - r * n)) >= self.radius)
 
-        if not clear(0.0):
-            return 0.0
-        lo, hi = 0.0, math.pi / 2
-        if clear(hi):
-            return 90.0
-        while hi - lo > 1e-4:
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if clear(mid) else (lo, mid)
-        return math.degrees(lo)
+        return largest_clear_turn(clear)
 
     @property
     def end_offset(self) -> float:

@@ -334,7 +334,7 @@ def _step_valid(folder: Path, rng, k: int = 3) -> tuple[int, int]:
     for f in pick:
         shape = import_step(str(f))
         solids = shape.solids()
-        bad += not (len(solids) == 1 and solids[0].is_valid() and solids[0].volume > 0)
+        bad += not (len(solids) == 1 and solids[0].is_valid and solids[0].volume > 0)
     return len(pick), bad
 
 

@@ -125,7 +125,9 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                             "note": "the net re-solved with the solids' masses and centres of mass, against the "
                                     "design's simulated nodes and pivots"}
         parts = s.hub_parts if s.hub_splits else [(h, None, True) for h in s.hubs]
-        data["cad"] = {"hubs": len(s.hubs), "rods": len(s.rods), "hub_parts": [p[0].label for p in parts],
+        data["cad"] = {"hubs": sum(h is not None for h in s.hubs), "rods": len(s.rods),
+                       "nodes_without_hub": [k for k, h in enumerate(s.hubs) if h is None],
+                       "hub_parts": [p[0].label for p in parts],
                        "hubs_not_split": {h.parts[0].label: h.reason for h in s.hub_splits if not h.split},
                        "files": files}
     write_json(tmp / "design.json", data)

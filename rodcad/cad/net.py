@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
-from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl
+from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl, import_step
 from rodcad.cad.netbent import bent_rod_solid, bent_socket_centres
-from rodcad.cad.nethub import split_hub, split_plane
+from rodcad.cad.nethub import HubSplit, split_hub, split_plane
 from rodcad.cad.solids import GeometryError, one_solid
 
 #: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
@@ -33,7 +33,8 @@ from rodcad.cad.solids import GeometryError, one_solid
 ROD_DEFLECTION = 0.0015
 HUB_DEFLECTION = 0.004
 
-__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "write_net_files"]
+__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "whole_hub",
+           "write_net_files"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -80,6 +81,27 @@ def hub_solid(hw, sockets: np.ndarray, name: str = "hub", *, pole=None) -> Solid
         solid = one_solid(solid.cut(placed).clean(), "cutting the hub's sockets")
     solid.label = name
     return solid
+
+
+def whole_hub(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
+    """A hub printed whole (:func:`hub_solid`) whose STEP file re-imports as the solid built.
+
+    The sphere's parametrisation (its pole) is free for a hub that is not cut; with some poles
+    a socket's faces come back from STEP wrongly trimmed (a valid solid one socket fuller: 485
+    mm^3 on a hung grid's hub), so the poles z, x, y and the sockets' plane normal are tried in
+    turn until the solid's STEP round trip keeps its volume (to 1e-6)."""
+    import tempfile
+
+    socks = np.asarray(sockets, float).reshape(-1, 3)
+    poles = [None, (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), split_plane(socks)[0]]
+    with tempfile.TemporaryDirectory() as tmp:
+        for pole in poles:
+            s = hub_solid(hw, socks, name=name, pole=pole)
+            path = Path(tmp) / "hub.step"
+            export_step(s, path, name=name)
+            if abs(import_step(path).volume - s.volume) <= 1e-6 * s.volume:
+                return s
+    raise GeometryError(f"{name}: no parametrisation of its sphere writes to STEP as built")
 
 
 def ball_positions(hw, length: float, balls: int) -> np.ndarray:
@@ -134,7 +156,8 @@ class NetSolids:
     """The solids of a designed net and the net as built from them.
 
     Attributes:
-        hubs: one solid per node (hub frame), or [] for point nodes.
+        hubs: one solid per node (hub frame; None for a node no rod reaches), or [] for point
+            nodes.
         rods: one solid per rod (rod frame).
         rod_masses: (m,) as built: plastic from the solid plus its steel balls (g).
         node_masses: (n,) hubs as built (g); node_com: (n, 3) their centres of mass (mm).
@@ -205,9 +228,17 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
         for k in range(t.n):
             at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
             socks = np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3)
+            if not at:  # an anchor no rod reaches (a boundary-held grid's corner): no hub to print
+                hubs.append(None)
+                splits.append(HubSplit([], [], np.array([0.0, 0.0, 1.0]), 0.0, 0.0))
+                continue
             s = hub_solid(hw, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
+            split = split_hub(s, socks, hw, s.label)
+            if not split.split:  # printed whole: a sphere's parametrisation that writes to STEP as built
+                s = whole_hub(hw, socks, name=s.label)
+                split.parts = [s]
             hubs.append(s)
-            splits.append(split_hub(s, socks, hw, s.label))
+            splits.append(split)
             node_masses[k] = rho * s.volume
             node_com[k] = np.array(tuple(s.center(CenterOf.MASS)))
             if progress is not None:

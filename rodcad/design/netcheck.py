@@ -22,7 +22,7 @@ from optimize import NetDesign, design_net, net_statics
 from rodcad.catalog.node import socket_centres
 from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.nethubs import buildable_bounds, orient_sockets
-from rodcad.design.netplan import NetPlan
+from rodcad.design.netplan import NetPlan, replan
 
 __all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts", "settle_com"]
 
@@ -241,7 +241,7 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     notes = [design.statics.message]
     why = ""
     if not design.statics.exact and np.all(~np.isfinite(design.statics.beyond)) and design.statics.residual > 1e-4:
-        why = _imbalance(plan, design, g)
+        why = _imbalance(plan, design, g, lines)
         notes.append(why)
     if snapped:
         notes.append(f"{snapped} rod(s) would have weighed what neither their steel balls nor a cavity make (a short "
@@ -296,18 +296,25 @@ def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> t
     return dataclasses.replace(plan, com=com), used
 
 
-def _imbalance(plan: NetPlan, design: NetDesign, g: float) -> str:
+def _imbalance(plan: NetPlan, design: NetDesign, g: float, lines: np.ndarray) -> str:
     """Where the statics' best fit leaves the largest imbalance, when no masses at all (any
-    positive mass, rods pushing or not) balance the target."""
+    positive mass, rods pushing or not) balance the target; with hubs whose rods' pulls, their
+    sockets on the lines between the node points (``lines``), can hold every node, what fails
+    is the hubs' balance about their centres, and the text says so."""
     t = plan.target
     st = net_statics(t.positions, t.edges, plan.lengths, t.anchored, node_masses=plan.node_masses,
                      node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com, g=g)
     res = np.abs(st.residual(design.statics.tensions, design.statics.masses))
     force = st.rows[:, 1] < 3
-    per_node = np.zeros(t.n)
-    np.maximum.at(per_node, st.rows[force, 0], res[force])
-    worst = np.argsort(-per_node, kind="stable")[:8]
-    worst = [int(k) for k in worst if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
+    if plan.hardware.is_hub and _forces_balance(replan(plan, lines), g):
+        # the rods' pulls can hold every node: what fails is every hub balancing about its centre
+        worst = _worst(st.rows[~force, 0], res[~force], t.n)
+        return (f"No masses balance this target with the hubs' sockets as turned: the rods' pulls can hold every "
+                f"node, but no turn of the sockets was found that lets every hub balance about its centre as well "
+                f"within the rods' mass ranges (the largest moment imbalance is at node(s) {worst}). A target "
+                "nearer the shape such hubs hang in, or point nodes (the catalog's node kind: point), would "
+                "reach it.")
+    worst = _worst(st.rows[force, 0], res[force], t.n)
     text = (f"No masses at all balance this target: some nodes' rods cannot pull them in every direction the "
             f"load needs (the largest imbalance is at node(s) {worst}).")
     if t.kind == "surface" and t.anchored_as in ("corners", "ends"):
@@ -317,3 +324,23 @@ def _imbalance(plan: NetPlan, design: NetDesign, g: float) -> str:
     else:
         text += " Move those nodes toward where their rods and the weights can hold them, or anchor them."
     return text
+
+
+def _worst(nodes: np.ndarray, res: np.ndarray, n: int) -> list[int]:
+    """Up to 8 nodes with the largest residual, largest first."""
+    per_node = np.zeros(n)
+    np.maximum.at(per_node, nodes, res)
+    order = np.argsort(-per_node, kind="stable")[:8]
+    return [int(k) for k in order if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
+
+
+def _forces_balance(plan: NetPlan, g: float) -> bool:
+    """Whether some positive masses (within the bounds or beyond them), every rod in tension
+    unless the target allows compression, balance the nodes' forces at the target, leaving the hubs' moments aside."""
+    from optimize import design_net_masses
+
+    t = plan.target
+    fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
+                           node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
+                           allow_compression=t.compression, g=g, forces_only=True)
+    return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

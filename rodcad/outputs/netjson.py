@@ -44,8 +44,9 @@ def net_bill(check, catalog) -> dict[str, Any]:
     if balls.sum():
         out["steel_ball"] = {"diameter": hw.insert_diameter, "density": hw.insert_density}
     if hw.is_hub:
-        out["hubs"] = plan.target.n
-        out["hub_plastic_g"] = float(plan.node_masses.sum())
+        held = plan.degree > 0  # a node no rod reaches (an anchor between anchors) needs no hub
+        out["hubs"] = int(np.count_nonzero(held))
+        out["hub_plastic_g"] = float(plan.node_masses[held].sum())
         out["filament_g"] = rod_plastic + float(plan.node_masses.sum())
     else:
         out["point_parts"] = plan.target.n

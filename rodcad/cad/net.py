@@ -25,6 +25,7 @@ from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export
 from rodcad.cad.netbent import bent_rod_solid, bent_socket_centres
 from rodcad.cad.nethub import HubSplit, split_hub, split_plane
 from rodcad.cad.solids import GeometryError, one_solid
+from rodcad.parallel import default_jobs, worker_pool
 
 #: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
 #: rods for its STL to hold the solid's volume well within 0.1 % (meshed to 0.004 mm it is
@@ -33,7 +34,7 @@ from rodcad.cad.solids import GeometryError, one_solid
 ROD_DEFLECTION = 0.0015
 HUB_DEFLECTION = 0.004
 
-__all__ = ["HUB_DEFLECTION", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "whole_hub",
+__all__ = ["HUB_DEFLECTION", "PARTS_PER_WORKER", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "whole_hub",
            "write_net_files"]
 
 
@@ -274,6 +275,18 @@ def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
     return np.column_stack([x, y, np.cross(x, y)])
 
 
+#: Parts written per worker process at least (fewer: written in this process).
+PARTS_PER_WORKER = 8
+
+
+def _write_part(item) -> None:
+    """Write one part's STEP and STL and check them (a worker process's task)."""
+    solid, label, step, stl, defl = item
+    export_step(solid, step, name=label)
+    export_stl(solid, stl, tolerance=defl)
+    check_files(step, stl, solid.volume, deflection=defl)
+
+
 def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progress=None) -> list[str]:
     """rods/rod-NNN.step/.stl, hubs/hub-NNN-a.step/.stl and -b (each hub's halves; hub-NNN
     for a hub left whole) (each checked: the STEP re-imports as one valid solid of the same
@@ -281,20 +294,25 @@ def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progre
     designed net hangs, rods coloured light (blue) to heavy (red)."""
     import matplotlib
 
-    written = []
+    written, items = [], []
     hub_parts = [p for p, _, _ in solids.hub_parts] if solids.hub_splits else solids.hubs
     for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", hub_parts, HUB_DEFLECTION)):
-        if not parts:
-            continue
-        (folder / sub).mkdir(exist_ok=True)
-        for k, s in enumerate(parts):
+        if parts:
+            (folder / sub).mkdir(exist_ok=True)
+        for s in parts:
             step, stl = folder / sub / f"{s.label}.step", folder / sub / f"{s.label}.stl"
-            export_step(s, step, name=s.label)
-            export_stl(s, stl, tolerance=defl)
-            check_files(step, stl, s.volume, deflection=defl)
+            items.append((Solid(s.wrapped), s.label, step, stl, defl))  # the bare shape: it pickles
             written += [str(step.relative_to(folder)), str(stl.relative_to(folder))]
+    jobs = max(1, min(default_jobs(), len(items) // PARTS_PER_WORKER))
+    pool = worker_pool(jobs) if jobs > 1 else None
+    try:
+        done = pool.map(_write_part, items, chunksize=2) if pool is not None else map(_write_part, items)
+        for k, _ in enumerate(done):
             if progress is not None:
-                progress.count(k + 1, len(parts))
+                progress.count(k + 1, len(items))
+    finally:
+        if pool is not None:
+            pool.shutdown()
     eq = check.equilibrium
     m = solids.rod_masses
     norm = matplotlib.colors.Normalize(float(m.min()), float(m.max()) if m.max() > m.min() else float(m.min()) + 1e-9)

@@ -331,3 +331,12 @@ def test_bad_fuse_and_closed_heart_input(tmp_path, capsys, extra, key, words):
     err = capsys.readouterr().err
     assert f"{path}:{key}:" in err and words in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+def test_anchors_further_apart_than_the_printer_takes_hang_from_bare_pins():
+    """One fixture holds both anchors, so anchors further apart than the printer's bed take
+    none: the planner keeps the end rods free (no anchor stops) and says why (the garland's
+    anchors are 240 mm apart; its fixture would be 255 mm long on a 250 mm printer)."""
+    r = pipeline.build(load_design(ROOT / "examples" / "garland.yaml"), cad=False)
+    assert r.end_limits is None or not np.isfinite(np.asarray(r.end_limits, float)).any()
+    assert any("would not fit the printer" in n and "bare pins" in n for n in r.plan.notes), r.plan.notes

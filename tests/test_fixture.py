@@ -204,3 +204,15 @@ def test_stops_hold_graduated_end_rods(scale):
         assert 0 < near(rest[k]) < 0.05
         further = _turned(np.array([a, b]), [first, last], k, th + past * math.radians(1.0))
         assert _overlap(fixture, further) > 0.5
+
+
+def test_slots_that_would_cut_the_rods_layer_through_stop_past_the_rods(heart):
+    """End rods resting toward each other under a wide mount: slots cut out past the whole
+    fixture would leave its top and bottom apart; each slot then goes only as far as its own
+    rod reaches, and the fixture stays one valid solid that clears the rods it was made for."""
+    _, _, rods, _ = heart
+    anchors = np.array([[0.0, 0.0], [150.0, 0.0]])
+    solid = fixture_solid(anchors, rods[0], rods[-1], None, rest_angles=(0.0, 0.0))
+    assert is_valid_solid(solid) and len(solid.solids()) == 1
+    for k, theta in ((0, 0.0), (1, 0.0)):
+        assert _overlap(solid, _turned(anchors, rods, k, theta)) < 1e-3  # mm^3: the rod's slot is clear

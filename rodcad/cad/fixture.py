@@ -170,6 +170,10 @@ def fixture_width(first_rod: RodType, last_rod: RodType) -> float:
     return 2 * max(_half_width(r) for r in (first_rod, last_rod))
 
 
+#: How far past an end rod's own reach its slot is cut where a slot out past the whole
+#: fixture would cut the rods' layer through (mm).
+SLOT_MARGIN = 3.0
+
 def _half_width(rod: RodType) -> float:
     g = rod.geometry
     h = g.hinge
@@ -333,7 +337,7 @@ def fixture_solid(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
             raise GeometryError(f"the {'first' if k == 0 else 'last'} rod, turning between "
                                 f"{math.degrees(t0):.1f} and {math.degrees(t1):.1f} deg, would sweep over "
                                 f"anchor {'BA'[k]}'s knuckle")
-        slots.append((w0, w1))
+        slots.append((w0, w1, far))
 
     # the outline: rounded hull of the anchors, the stops and the mounts
     centres = np.array([a[0], a[1], *[s.center for s in stops], *mounts])
@@ -352,19 +356,28 @@ def fixture_solid(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
 
     # room for the rods: knuckle zones and slots in the rods' layer
     reach = float(np.max(np.hypot(*(centres - a[0]).T))) + dist + 2 * radius + 10.0
-    cuts = []
-    for k, rod in enumerate(rods):
-        g = rod.geometry
-        h = g.hinge
-        layer = g.max_thickness / 2 + h.layer_gap  # the rod's layer: its ends and its (graduated) body
-        at = h.tongue_thickness / 2
-        if h.knuckle(k) == "tongue":  # the fixture's fork: room for the rod's tongue
-            cuts.append(cylinder_solid(a[k], h.zone_radius, -at - h.layer_gap, at + h.layer_gap))
-        else:  # the fixture's tongue: room for the rod's prongs
-            cuts.append(cylinder_solid(a[k], h.zone_radius, at, layer))
-            cuts.append(cylinder_solid(a[k], h.zone_radius, -layer, -at))
-        cuts.append(_wedge(a[k], *slots[k], reach, h.knuckle_radius, -layer, layer))
-    body = one_part(body.cut(*cuts).clean(), "clearing room for the end rods", "fixture")
+
+    def room(own: bool) -> list[Solid]:
+        """The cuts: each slot out past the whole fixture, or (``own``) out past its rod."""
+        cuts = []
+        for k, rod in enumerate(rods):
+            g = rod.geometry
+            h = g.hinge
+            layer = g.max_thickness / 2 + h.layer_gap  # the rod's layer: its ends and its (graduated) body
+            at = h.tongue_thickness / 2
+            if h.knuckle(k) == "tongue":  # the fixture's fork: room for the rod's tongue
+                cuts.append(cylinder_solid(a[k], h.zone_radius, -at - h.layer_gap, at + h.layer_gap))
+            else:  # the fixture's tongue: room for the rod's prongs
+                cuts.append(cylinder_solid(a[k], h.zone_radius, at, layer))
+                cuts.append(cylinder_solid(a[k], h.zone_radius, -layer, -at))
+            w0, w1, far = slots[k]
+            cuts.append(_wedge(a[k], w0, w1, far + SLOT_MARGIN if own else reach, h.knuckle_radius, -layer, layer))
+        return cuts
+
+    cleared = body.cut(*room(False)).clean()
+    if len(cleared.solids()) > 1:  # the slots cut the rods' layer through: top and bottom apart
+        cleared = body.cut(*room(True)).clean()  # each slot only as far as its own rod reaches
+    body = one_part(cleared, "clearing room for the end rods", "fixture")
 
     if stops:
         pegs = [cylinder_solid(s.center, s.radius, z0, z1) for s in stops]

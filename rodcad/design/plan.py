@@ -458,7 +458,8 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
     if problems:
         raise InputError(problems)
     free, same = c.joints == "free", c.same_shell
-    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None and _fixture_fits(curve, pf),
+    misfit = _fixture_misfit(curve, pf, arrays.catalog.printer)
+    ends = {"anchor_stops": c.anchor_stops_allowed and c.end_limits is None and misfit is None,
             "end_limits": c.end_limits, "fuse": c.fuse_mode, "report": report,
             "robust": robust_option(curve, pf, arrays.catalog) if c.robust else None}
     try:
@@ -474,15 +475,35 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
         raise InputError([problem("constraints.same_shell", f"{who}{err}")]) from None
     except ValueError as err:  # the rods cannot be laid on this target: a limit, not the file's mistake
         raise DesignLimit(f"{who}cannot lay rods of {span} on this target: {err}") from None
-    return _from_printed(curve, lp)
+    plan = _from_printed(curve, lp)
+    if misfit is not None and c.anchor_stops_allowed and c.end_limits is None:
+        plan.notes.append(misfit)
+    return plan
 
 
-def _fixture_fits(curve: np.ndarray, pf: PrintedFamily) -> bool:
-    """Whether the anchors are far enough apart for the anchor fixture's two knuckles (one
-    piece, a wall between them): else the planner uses bare pins."""
+#: How far the anchor fixture's outline reaches past each anchor pin (mm): the larger of its
+#: knuckle and its stop peg (3 mm) plus its rim (2.5 mm), as rodcad.cad.fixture builds it.
+FIXTURE_PEG_RADIUS, FIXTURE_RIM = 3.0, 2.5
+
+
+def _fixture_misfit(curve: np.ndarray, pf: PrintedFamily, printer=None) -> str | None:
+    """Why one anchor fixture cannot hold both anchors (None: it can): they must be far enough
+    apart for its two knuckles (one piece, a wall between them) and near enough for it to fit
+    the printer (it spans them); else the planner uses bare pins."""
     t = pf.family.template
     hg = t.geometry.hinge
-    return float(np.hypot(*(curve[-1] - curve[0]))) >= hg.zone_radius + hg.knuckle_radius + t.material.min_wall
+    dist = float(np.hypot(*(curve[-1] - curve[0])))
+    if dist < hg.zone_radius + hg.knuckle_radius + t.material.min_wall:
+        return (f"the anchors are {dist:.1f} mm apart: too close for an anchor fixture's two knuckles, so the "
+                "end rods hang from bare pins")
+    if printer is None:
+        return None
+    length = dist + 2 * (max(hg.knuckle_radius, FIXTURE_PEG_RADIUS) + FIXTURE_RIM)
+    if length > max(printer.build_volume):
+        vol = " x ".join(f"{v:g}" for v in printer.build_volume)
+        return (f"the anchors are {dist:.0f} mm apart: a fixture holding both ({length:.0f} mm long) would not fit "
+                f"the printer ({vol} mm), so the end rods hang from bare pins")
+    return None
 
 
 def _from_printed(curve: np.ndarray, lp: PrintedPlan) -> ChainPlan:

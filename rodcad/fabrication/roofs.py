@@ -1,7 +1,8 @@
 """Socket roofs on shared print layers: a chain's rods pause on as few layers as they allow.
 
-Each rod's ball sockets stand in one row on one print layer (:mod:`rodcad.fabrication.layout`),
-but rods of one section put that row at different heights on the bed: a socket's site is
+Each rod's ball sockets stand in rows, each row on one print layer (:mod:`rodcad.fabrication.layout`;
+a thick graduated rod holds its balls in two rows, one above the other, symmetric about its
+centre of mass), and rods of different sections put their rows at different heights on the bed: a socket's site is
 the rod's centre of mass (its sockets are laid out symmetrically about it), and the bed is
 under the rod's lowest point. A curved rod rests on its arc: the more it bulges downward
 the deeper its arc reaches below its centre of mass (the heart's 16 mm rods, curvatures
@@ -15,12 +16,15 @@ their site, and the plastic the taller socket takes is the cavities' to give bac
 (:func:`rodcad.fabrication.plan.plan_rod`). How far is bounded by the wall over the socket
 and by the cavity volume the rod has to give (a rod without cavities keeps its roof).
 
-:func:`shared_roofs` picks the layers: each rod can pause before any layer from its own
-(the layer bridging its plain roof) up to the highest its bounds allow (a raised roof lies
+:func:`shared_roofs` picks the layers: each row of each rod is one span, and can pause before
+any layer from its own (the layer bridging its plain roof) up to the highest its bounds allow (a raised roof lies
 exactly on a layer top, midway between two slicing planes); the fewest layers that serve
 every rod are found greedily (interval stabbing: take the highest lowest-layer still
-unserved, serve every rod that can reach it, repeat), and each rod takes the lowest chosen
-layer it can reach, so roofs rise as little as they can. Rods with a filled shot chamber
+unserved, serve every row that can reach it, repeat), and each row takes the lowest chosen
+layer it can reach, so roofs rise as little as they can. A lower row rises until its roof is
+a minimum wall below the row above it: the socket lattice's pitch is two radii and a wall,
+so a row directly under another cannot rise at all (its pause is fixed), while the top row
+and single rows rise until the wall over them or the cavity volume ends them. Rods with a filled shot chamber
 pause at its roof: their layers are fixed points the others may join.
 
 Units: mm, g.
@@ -38,7 +42,7 @@ import numpy as np
 from rodcad.catalog.cache import DiskCache
 from rodcad.catalog.chamber import plan_chamber
 from rodcad.catalog.fastgeom import RodClearance
-from rodcad.fabrication.cavities import raised_sockets
+from rodcad.fabrication.cavities import raised_rows, socket_rows
 from rodcad.fabrication.intervals import chain_intervals, interval_table
 from rodcad.fabrication.layers import LayerGrid
 from rodcad.fabrication.layout import UP
@@ -47,7 +51,7 @@ from rodcad.fabrication.plan import MIN_REMOVE, choose_balls
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
 
-__all__ = ["RoofSpan", "roof_span", "share_layers", "shared_roofs"]
+__all__ = ["RoofSpan", "roof_spans", "share_layers", "shared_roofs"]
 
 
 @dataclass(frozen=True)
@@ -66,8 +70,14 @@ class RoofSpan:
     floor: float
 
 
-def roof_span(rod: RodType, mass: float, layers: LayerGrid, table: dict | None) -> RoofSpan | None:
-    """The layers a rod of ``mass`` g can pause before (None: it has no pause).
+def roof_spans(rod: RodType, mass: float, layers: LayerGrid, table: dict | None) -> list[RoofSpan]:
+    """The layers each row of a rod of ``mass`` g can pause before, lowest row first (empty:
+    it has no pause).
+
+    A row's span ends where raising its roof further would leave less than the minimum wall
+    to the rod's faces or to the sockets of another row (kept as laid out: the row above a
+    raised one only rises with its own roof), or would take more plastic than the cavities
+    have to give: that volume is split among the rows that can rise, by their socket counts.
 
     Args:
         rod: the rod type.
@@ -79,29 +89,36 @@ def roof_span(rod: RodType, mass: float, layers: LayerGrid, table: dict | None) 
     if rod.fill is not None:
         chamber, _, _ = plan_chamber(rod, mass)
         if chamber is None or not chamber.filled:
-            return None
+            return []
         k = layers.bridging_layer(chamber.roof_y - floor)
-        return RoofSpan(k, k, floor)
+        return [RoofSpan(k, k, floor)]
     if table is None:
-        return None
+        return []
     choice = choose_balls(rod, mass, table)
     socks, rs = choice.sockets, choice.socket_radius
     if not len(socks):
-        return None
-    roof = float((socks @ UP).max()) + rs
-    first = layers.bridging_layer(roof - floor)
-    if np.ptp(socks @ UP) > 1e-9:  # several rows: each keeps its layer
-        return RoofSpan(first, first, floor)
-    give = choice.remove - MIN_REMOVE  # cavity volume the taller sockets may take over
-    tallest = rs + max(give, 0.0) / (len(socks) * math.pi * rs * rs)
-    last = first
-    while last < first + 1000:  # the wall over the sockets ends it long before
-        top = layers.top(last) + floor  # a roof on this layer's top is bridged by the next
-        raised = raised_sockets(rod, socks, rs, choice.kind, top) if top > roof else None
-        if raised is None or raised[1] > tallest:
-            break
-        last += 1
-    return RoofSpan(first, last, floor)
+        return []
+    rows = socket_rows(socks)
+    plain = [float(socks[idx[0]] @ UP) + rs for idx in rows]
+
+    def reach(j: int, tallest: float) -> RoofSpan:
+        first = layers.bridging_layer(plain[j] - floor)
+        last = first
+        while last < first + 1000:  # the walls over the sockets end it long before
+            top = layers.top(last) + floor  # a roof on this layer's top is bridged by the next
+            roofs = [top if i == j else plain[i] for i in range(len(rows))]
+            raised = raised_rows(rod, socks, rs, choice.kind, roofs) if top > plain[j] else None
+            if raised is None or float(raised[1][rows[j]].max()) > tallest:
+                break
+            last += 1
+        return RoofSpan(first, last, floor)
+
+    walls = [reach(j, math.inf) for j in range(len(rows))]
+    movable = [j for j, s in enumerate(walls) if s.last > s.first]
+    give = max(choice.remove - MIN_REMOVE, 0.0)  # cavity volume the taller sockets may take over
+    count = sum(len(rows[j]) for j in movable)
+    return [reach(j, rs + give / (count * math.pi * rs * rs)) if j in movable else walls[j]
+            for j in range(len(rows))]
 
 
 def share_layers(spans: Sequence[RoofSpan | None]) -> list[int | None]:
@@ -121,10 +138,12 @@ def share_layers(spans: Sequence[RoofSpan | None]) -> list[int | None]:
 
 def shared_roofs(types: Sequence[RodType], masses: Sequence[float], layers: LayerGrid, *, seed: int = 0,
                  jobs: int | None = None, cache: DiskCache | None = None,
-                 keep: Collection[int] = ()) -> list[float | None]:
+                 keep: Collection[int] = ()) -> list[tuple[float, ...] | None]:
     """Per chain position, where to put its sockets' roofs (mm along the print's up, rod
-    frame: the top of the layer below the one that bridges them), or None to keep them as
-    laid out, so that the chain pauses on the fewest layers (:func:`share_layers`).
+    frame), one per row of sockets, lowest first (a raised row's roof: the top of the layer
+    below the one that bridges it; a row kept as laid out: -inf), or None to keep
+    every row as laid out, so that the chain pauses on the fewest layers
+    (:func:`share_layers`, every row of every rod one span).
 
     Args:
         types: rod type per chain position.
@@ -141,17 +160,23 @@ def shared_roofs(types: Sequence[RodType], masses: Sequence[float], layers: Laye
     if balls:
         chain_intervals(balls, seed=seed, jobs=jobs, cache=cache)
     tables = {rod.name: interval_table(rod, seed, cache) for rod in balls}
-    spans: list[RoofSpan | None] = []
-    memo: dict[tuple[str, float], RoofSpan | None] = {}
+    rows: list[list[RoofSpan]] = []
+    memo: dict[tuple[str, float], list[RoofSpan]] = {}
     for i, (rod, m) in enumerate(zip(types, masses)):
         key = (rod.name, round(float(m), 6))
         if i in keep:
-            spans.append(None)
+            rows.append([])
             continue
         if key not in memo:
-            memo[key] = roof_span(rod, float(m), layers, tables.get(rod.name))
-        spans.append(memo[key])
-    out: list[float | None] = []
-    for span, k in zip(spans, share_layers(spans)):
-        out.append(None if span is None or k is None or k == span.first else layers.top(k - 1) + span.floor)
+            memo[key] = roof_spans(rod, float(m), layers, tables.get(rod.name))
+        rows.append(memo[key])
+    flat = [s for spans in rows for s in spans]
+    chosen = iter(share_layers(flat))
+    out: list[tuple[float, ...] | None] = []
+    for spans in rows:
+        ks = [next(chosen) for _ in spans]
+        if all(k == s.first for s, k in zip(spans, ks)):
+            out.append(None)
+            continue
+        out.append(tuple(layers.top(k - 1) + s.floor if k != s.first else -math.inf for s, k in zip(spans, ks)))
     return out

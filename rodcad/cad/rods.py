@@ -74,7 +74,7 @@ from rodcad.fabrication.cavities import (
     FabricationError,
 )
 from rodcad.fabrication.intervals import compute_table, interval_table, intervals_key
-from rodcad.fabrication.plan import Measurement, RodPlan, plan_rod
+from rodcad.fabrication.plan import Measurement, RodPlan, RoofPlan, plan_rod
 from rodcad.fabrication.roofs import shared_roofs
 
 __all__ = [
@@ -252,16 +252,16 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
                                  booleans)
 
 
-def _key(rod: RodType, target: float, seed: int, roof: tuple[float, ...] | None = None) -> str:
+def _key(rod: RodType, target: float, seed: int, roof: RoofPlan | None = None) -> str:
     from rodcad.catalog.model import GEOMETRY_VERSION
 
-    raised = () if roof is None else tuple(round(float(r), 9) for r in roof)  # one row: as before
+    raised = () if roof is None else roof.key()  # one row as designed: as before
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
                     rod.geometry.key_data(), asdict(rod.material),
                     rod.balls_json(), round(float(target), 9), int(seed), *raised)
 
 
-def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, tuple[float, ...] | None]
+def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, RoofPlan | None]
                     ) -> dict[str, Any]:
     """Worker: plan, build, root-solve and measure one rod (its sockets' roofs raised to
     ``roof`` where given, kept plain where the B-rep then measures a wall under the
@@ -275,7 +275,7 @@ def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, tupl
     return plan.to_json()
 
 
-def _type_star(args: tuple[RodType, list[tuple[float, tuple[float, ...] | None]], int, dict[str, Any] | None]
+def _type_star(args: tuple[RodType, list[tuple[float, RoofPlan | None]], int, dict[str, Any] | None]
                ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """Worker: the type's table of reachable masses (unless given), then every
     rod of that type (the type's candidate pools are built once per worker)."""
@@ -424,14 +424,14 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     if len(types) != len(masses):
         raise ValueError(f"{len(types)} rod types but {len(masses)} masses")
     cache = cache if cache is not None else DiskCache()
-    roofs: list[tuple[float, ...] | None] = [None] * len(types) if layers is None else shared_roofs(
+    roofs: list[RoofPlan | None] = [None] * len(types) if layers is None else shared_roofs(
         types, masses, layers, seed=seed, jobs=jobs, cache=cache, keep=keep_roofs)
     keys: dict[tuple[Any, ...], int] = {}
-    distinct: list[tuple[RodType, float, tuple[float, ...] | None]] = []
+    distinct: list[tuple[RodType, float, RoofPlan | None]] = []
     moved: list[Holes] = []  # per distinct rod, its holes (not part of the plan: same volume)
     where: list[int] = []
     for rod, m, roof, hl in zip(types, masses, roofs, holes or [NO_SHIFT] * len(types)):
-        k = (rod.name, round(float(m), 6), None if roof is None else tuple(round(r, 9) for r in roof), hl)
+        k = (rod.name, round(float(m), 6), None if roof is None else roof.key(), hl)
         if k not in keys:
             keys[k] = len(distinct)
             distinct.append((rod, float(m), roof))

@@ -52,6 +52,7 @@ __all__ = [
     "place_cavities",
     "raised_rows",
     "raised_sockets",
+    "row_layout",
     "silo_distance",
     "socket_layout",
     "socket_rows",
@@ -290,6 +291,25 @@ def socket_layout(rod: RodType) -> Any:
                            rod.material.min_wall, void="silo", raise_by=lift)
 
 
+@lru_cache(maxsize=64)
+def row_layout(rod: RodType) -> Any:
+    """The type's largest symmetric socket layout in one row, at the height of the centre of
+    mass (a graduated rod's :func:`socket_layout` may stand in two rows, one pause each;
+    this is its alternative for the same ball counts: one pause, which
+    :mod:`rodcad.fabrication.roofs` may line up with the chain's others)."""
+    if rod.balls is None:
+        return SphereLayout.empty()
+    solid = type_solid(rod)
+    clearance = RodClearance(rod.geometry)
+    rs, wall = rod.balls.socket_diameter / 2, rod.material.min_wall
+    lift = ball_offset(rs, rod.balls.mass, rod.material.density)
+    com = mass_properties(solid).center
+    (x0, _, z0), (x1, _, z1) = clearance.bounds
+    need = rs + wall + 1e-6  # the lattice keeps rs + wall inside its bounds: the row at the com is left
+    row = ((x0, com[1] - need, z0), (x1, com[1] + need, z1))
+    return max_ball_layout(clearance, row, com, rod.balls.socket_diameter, wall, void="silo", raise_by=lift)
+
+
 def socket_rows(sockets: np.ndarray) -> list[np.ndarray]:
     """The sockets' rows (index arrays, lowest first): sockets whose centres stand at one
     height along :data:`UP` share a roof and a pause."""
@@ -309,8 +329,9 @@ def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
     ``roofs[j]`` (mm along :data:`UP`, rod frame; rows lowest first, :func:`socket_rows`; a
     roof at or below the row's plain roof keeps it): each raised socket's cylinder reaches
     up to its roof and its centre rises with it so that socket and ball still act at their
-    site (:func:`rodcad.fabrication.layout.tall_silo`): the rod's centre of mass stays put,
-    row by row.
+    site, corrected for the plastic the cavities give back at the centre of mass
+    (:func:`rodcad.fabrication.layout.tall_silo`): the rod's centre of mass stays put, row
+    by row.
 
     Returns:
         (centres (K, 3), per socket the roof's height above its centre (K,)) in mm, or
@@ -323,6 +344,7 @@ def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
         return None
     balls = rod.ball_kinds[kind]
     rho = rod.material.density
+    give_at = float(mass_info(rod).com[1])  # the cavities' centroid
     out, heights = socks.copy(), np.full(len(socks), float(socket_r))
     raised: list[np.ndarray] = []
     for idx, roof in zip(rows, roofs):
@@ -330,7 +352,7 @@ def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
         if roof <= y + socket_r + 1e-9:
             continue
         site = y - ball_offset(socket_r, balls.mass, rho)
-        centre, height = tall_silo(site, socket_r, balls.mass, rho, float(roof))
+        centre, height = tall_silo(site, socket_r, balls.mass, rho, float(roof), give_at=give_at)
         out[idx] = socks[idx] + UP * (centre - y)
         heights[idx] = height
         raised.append(idx)

@@ -25,7 +25,7 @@ from rodcad.fabrication.cavities import (
 )
 from rodcad.fabrication.intervals import compute_table, fmt_mass
 
-__all__ = ["BallChoice", "MIN_REMOVE", "Measurement", "RodPlan", "choose_balls", "plan_rod", "socket_tops"]
+__all__ = ["BallChoice", "MIN_REMOVE", "Measurement", "RodPlan", "RoofPlan", "choose_balls", "plan_rod", "socket_tops"]
 
 #: Least cavity volume (mm^3) a rod must keep removing for its sockets' roofs to be raised
 #: (the taller sockets take that plastic instead): room for eight of the smallest cavities.
@@ -144,6 +144,31 @@ def socket_tops(height: float | Sequence[float], radius: float, count: int) -> n
 
 
 @dataclass(frozen=True)
+class RoofPlan:
+    """Where a rod's socket roofs go so that the chain pauses seldom
+    (:func:`rodcad.fabrication.roofs.shared_roofs`).
+
+    Attributes:
+        roofs: per row of sockets, lowest first (:func:`rodcad.fabrication.cavities.socket_rows`),
+            its roof (mm along the print's up, rod frame); -inf keeps the row's plain roof.
+        sockets: the plain socket centres to use instead of the designed layout's ((K, 3) as
+            nested tuples, mm: as many balls of the same kind in one row,
+            :func:`rodcad.fabrication.intervals.row_alternates`), or None.
+    """
+
+    roofs: tuple[float, ...]
+    sockets: tuple[tuple[float, float, float], ...] | None = None
+
+    def key(self) -> tuple[Any, ...]:
+        """Hashable, rounded: what the fabrication cache keys on (a plain layout's key is
+        its roofs alone)."""
+        roofs = tuple(round(float(r), 9) for r in self.roofs)
+        if self.sockets is None:
+            return roofs
+        return (*roofs, tuple(tuple(round(float(v), 9) for v in s) for s in self.sockets))
+
+
+@dataclass(frozen=True)
 class BallChoice:
     """The balls a rod gets for its target mass, and what the cavities must remove beside them.
 
@@ -236,7 +261,7 @@ def choose_balls(rod: RodType, target: float, table: dict[str, Any]) -> BallChoi
 
 
 def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None, *,
-             roof: float | Sequence[float] | None = None) -> RodPlan:
+             roof: RoofPlan | None = None) -> RodPlan:
     """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
 
     The ball subset and the cavity volume come from the type's table of
@@ -248,22 +273,26 @@ def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | Non
         target: its mass (g).
         seed: seed of the cavity layouts.
         table: the type's table of reachable masses (computed when None).
-        roof: where the sockets' flat roofs should be (mm along the print's up, rod frame):
-            one height for a single row, or one per row, lowest first
-            (:func:`rodcad.fabrication.cavities.socket_rows`; a row's plain roof or lower
-            keeps it); None for the plain sockets. The raised sockets
+        roof: where the sockets' flat roofs should be (:class:`RoofPlan`: one per row, and
+            the sockets in one row instead of the designed rows where it names them); None
+            for the designed sockets as laid out. The raised sockets
             (:func:`rodcad.fabrication.cavities.raised_rows`) take the plastic above the
             balls that the cavities would otherwise remove, so the mass and the centre of
             mass stay; where the rod's walls or its cavity volume do not allow it, or no
-            cavity layout removes what is left, the plain sockets are kept.
+            cavity layout removes what is left, the plain sockets are kept (the designed
+            ones where the row's cavities fail too).
     """
     table = table if table is not None else compute_table(rod, seed)
     choice = choose_balls(rod, target, table)
     socks, rs, remove = choice.sockets, choice.socket_radius, choice.remove
     height: float | tuple[float, ...] = 0.0
     cav = None
-    roofs = None if roof is None else ([float(roof)] if np.ndim(roof) == 0 else [float(r) for r in roof])
-    raised = None if roofs is None else raised_rows(rod, socks, rs, choice.kind, roofs)
+    if roof is not None and roof.sockets is not None:  # the same balls in one row
+        row = np.asarray(roof.sockets, dtype=float).reshape(-1, 3)
+        cav = place_cavities(rod, remove, row, rs, seed) if remove > 0 else None
+        socks = row if cav is not None or remove <= 0 else socks
+        cav = None
+    raised = None if roof is None else raised_rows(rod, socks, rs, choice.kind, list(roof.roofs))
     if raised is not None and float(raised[1].max()) > rs + 1e-9:
         left = remove - math.pi * rs * rs * float(np.sum(raised[1] - rs))
         tops = tuple(float(h) for h in raised[1])

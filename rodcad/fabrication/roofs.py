@@ -32,6 +32,7 @@ Units: mm, g.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
@@ -42,16 +43,16 @@ import numpy as np
 from rodcad.catalog.cache import DiskCache
 from rodcad.catalog.chamber import plan_chamber
 from rodcad.catalog.fastgeom import RodClearance
-from rodcad.fabrication.cavities import raised_rows, socket_rows
-from rodcad.fabrication.intervals import chain_intervals, interval_table
+from rodcad.fabrication.cavities import EDGE_TOL, SOLID_TOL, raised_rows, socket_rows
+from rodcad.fabrication.intervals import chain_intervals, interval_table, row_alternates
 from rodcad.fabrication.layers import LayerGrid
 from rodcad.fabrication.layout import UP
-from rodcad.fabrication.plan import MIN_REMOVE, choose_balls
+from rodcad.fabrication.plan import MIN_REMOVE, RoofPlan, choose_balls
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
 
-__all__ = ["RoofSpan", "roof_spans", "share_layers", "shared_roofs"]
+__all__ = ["MAX_CHOICES", "RoofSpan", "roof_options", "roof_spans", "row_spans", "share_layers", "shared_roofs"]
 
 
 @dataclass(frozen=True)
@@ -71,13 +72,8 @@ class RoofSpan:
 
 
 def roof_spans(rod: RodType, mass: float, layers: LayerGrid, table: dict | None) -> list[RoofSpan]:
-    """The layers each row of a rod of ``mass`` g can pause before, lowest row first (empty:
-    it has no pause).
-
-    A row's span ends where raising its roof further would leave less than the minimum wall
-    to the rod's faces or to the sockets of another row (kept as laid out: the row above a
-    raised one only rises with its own roof), or would take more plastic than the cavities
-    have to give: that volume is split among the rows that can rise, by their socket counts.
+    """The layers each row of a rod of ``mass`` g (its designed sockets) can pause before,
+    lowest row first (empty: it has no pause; see :func:`row_spans`).
 
     Args:
         rod: the rod type.
@@ -85,17 +81,52 @@ def roof_spans(rod: RodType, mass: float, layers: LayerGrid, table: dict | None)
         layers: the print's layers.
         table: the type's table of reachable masses (None for a rod with a fill).
     """
+    return roof_options(rod, mass, layers, table)[0][1]
+
+
+def roof_options(rod: RodType, mass: float, layers: LayerGrid, table: dict | None,
+                 alternates: Sequence[dict] = ()) -> list[tuple[np.ndarray | None, list[RoofSpan]]]:
+    """The ways a rod of ``mass`` g can hold its balls, each with its rows' spans: first the
+    designed sockets (None), then each of ``alternates``
+    (:func:`rodcad.fabrication.intervals.row_alternates`: as many balls of the same kind in
+    one row, for the same mass without cavities) whose cavities reach the mass (its socket
+    centres, mm)."""
     floor = RodClearance(rod.geometry).bounds[0][1]
     if rod.fill is not None:
         chamber, _, _ = plan_chamber(rod, mass)
         if chamber is None or not chamber.filled:
-            return []
+            return [(None, [])]
         k = layers.bridging_layer(chamber.roof_y - floor)
-        return [RoofSpan(k, k, floor)]
+        return [(None, [RoofSpan(k, k, floor)])]
     if table is None:
-        return []
+        return [(None, [])]
     choice = choose_balls(rod, mass, table)
-    socks, rs = choice.sockets, choice.socket_radius
+    socks, rs, kind, remove = choice.sockets, choice.socket_radius, choice.kind, choice.remove
+    out: list[tuple[np.ndarray | None, list[RoofSpan]]] = [(None, row_spans(rod, socks, rs, kind, remove, layers))]
+    if len(socket_rows(socks)) < 2:
+        return out
+    for alt in alternates:
+        row = np.asarray(alt["sockets"], dtype=float).reshape(-1, 3)
+        if len(row) != len(socks) or int(alt["kind"]) != kind or abs(float(alt["socket_radius"]) - rs) > 1e-9:
+            continue
+        solid = abs(alt["mass"] - choice.build_mass) <= SOLID_TOL * choice.build_mass and remove <= 0
+        if solid or any(a * (1 - EDGE_TOL) <= choice.build_mass <= b * (1 + EDGE_TOL) for a, b in alt["pieces"]):
+            out.append((row, row_spans(rod, row, rs, kind, remove, layers)))
+    return out
+
+
+def row_spans(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int, remove: float,
+              layers: LayerGrid) -> list[RoofSpan]:
+    """The layers each row of these sockets can pause before, lowest row first.
+
+    A row's span ends where raising its roof further would leave less than the minimum wall
+    to the rod's faces or to the sockets of another row (kept as laid out: the row above a
+    raised one only rises with its own roof), or would take more plastic than the cavities
+    (``remove`` mm^3 beside the plain sockets) have to give: that volume is split among the
+    rows that can rise, by their socket counts.
+    """
+    floor = RodClearance(rod.geometry).bounds[0][1]
+    socks, rs = np.asarray(sockets, dtype=float).reshape(-1, 3), socket_r
     if not len(socks):
         return []
     rows = socket_rows(socks)
@@ -107,7 +138,7 @@ def roof_spans(rod: RodType, mass: float, layers: LayerGrid, table: dict | None)
         while last < first + 1000:  # the walls over the sockets end it long before
             top = layers.top(last) + floor  # a roof on this layer's top is bridged by the next
             roofs = [top if i == j else plain[i] for i in range(len(rows))]
-            raised = raised_rows(rod, socks, rs, choice.kind, roofs) if top > plain[j] else None
+            raised = raised_rows(rod, socks, rs, kind, roofs) if top > plain[j] else None
             if raised is None or float(raised[1][rows[j]].max()) > tallest:
                 break
             last += 1
@@ -115,7 +146,7 @@ def roof_spans(rod: RodType, mass: float, layers: LayerGrid, table: dict | None)
 
     walls = [reach(j, math.inf) for j in range(len(rows))]
     movable = [j for j, s in enumerate(walls) if s.last > s.first]
-    give = max(choice.remove - MIN_REMOVE, 0.0)  # cavity volume the taller sockets may take over
+    give = max(remove - MIN_REMOVE, 0.0)  # cavity volume the taller sockets may take over
     count = sum(len(rows[j]) for j in movable)
     return [reach(j, rs + give / (count * math.pi * rs * rs)) if j in movable else walls[j]
             for j in range(len(rows))]
@@ -138,12 +169,17 @@ def share_layers(spans: Sequence[RoofSpan | None]) -> list[int | None]:
 
 def shared_roofs(types: Sequence[RodType], masses: Sequence[float], layers: LayerGrid, *, seed: int = 0,
                  jobs: int | None = None, cache: DiskCache | None = None,
-                 keep: Collection[int] = ()) -> list[tuple[float, ...] | None]:
-    """Per chain position, where to put its sockets' roofs (mm along the print's up, rod
-    frame), one per row of sockets, lowest first (a raised row's roof: the top of the layer
-    below the one that bridges it; a row kept as laid out: -inf), or None to keep
-    every row as laid out, so that the chain pauses on the fewest layers
-    (:func:`share_layers`, every row of every rod one span).
+                 keep: Collection[int] = ()) -> list[RoofPlan | None]:
+    """Per chain position, where to put its sockets' roofs (:class:`RoofPlan`: per row of
+    sockets, lowest first, the top of the layer below the one that bridges it, or -inf to keep
+    the row as laid out; and the sockets in one row instead of the designed rows where that
+    pauses less), or None to keep the designed sockets as laid out, so that the chain pauses
+    on the fewest layers (:func:`share_layers`, every row of every rod one span).
+
+    Where a rod's balls stand in two rows, the same balls in one row
+    (:func:`rodcad.fabrication.intervals.row_alternates`) are tried too: every combination
+    for up to :data:`MAX_CHOICES` distinct rods with a choice, else one rod at a time while
+    it helps; the fewest layers win, then the fewest rods off their designed layout.
 
     Args:
         types: rod type per chain position.
@@ -160,23 +196,51 @@ def shared_roofs(types: Sequence[RodType], masses: Sequence[float], layers: Laye
     if balls:
         chain_intervals(balls, seed=seed, jobs=jobs, cache=cache)
     tables = {rod.name: interval_table(rod, seed, cache) for rod in balls}
-    rows: list[list[RoofSpan]] = []
-    memo: dict[tuple[str, float], list[RoofSpan]] = {}
+    memo: dict[tuple[str, float], list[tuple[np.ndarray | None, list[RoofSpan]]]] = {}
+    where: list[tuple[str, float] | None] = []
     for i, (rod, m) in enumerate(zip(types, masses)):
         key = (rod.name, round(float(m), 6))
         if i in keep:
-            rows.append([])
+            where.append(None)
             continue
         if key not in memo:
-            memo[key] = roof_spans(rod, float(m), layers, tables.get(rod.name))
-        rows.append(memo[key])
-    flat = [s for spans in rows for s in spans]
-    chosen = iter(share_layers(flat))
-    out: list[tuple[float, ...] | None] = []
-    for spans in rows:
-        ks = [next(chosen) for _ in spans]
-        if all(k == s.first for s, k in zip(spans, ks)):
+            table = tables.get(rod.name)
+            multi = table is not None and any(np.ptp(np.reshape(o["sockets"], (-1, 3)) @ UP) > 1e-6
+                                              for o in table["options"] if len(o["sockets"]))
+            alts = row_alternates(rod, seed, cache) if multi else []
+            memo[key] = roof_options(rod, float(m), layers, table, alts)
+        where.append(key)
+    free = [k for k, opts in memo.items() if len(opts) > 1]
+
+    def layout(pick: dict[tuple[str, float], int]) -> tuple[tuple[int, int], list[int | None]]:
+        spans = [s for k in where if k is not None for s in memo[k][pick.get(k, 0)][1]]
+        got = share_layers(spans)
+        return (len({k for k in got if k is not None}), sum(1 for v in pick.values() if v)), got
+
+    if len(free) <= MAX_CHOICES:
+        picks = [dict(zip(free, c)) for c in itertools.product(*(range(len(memo[k])) for k in free))]
+        pick = min(picks, key=lambda p: layout(p)[0])
+    else:
+        pick = {}
+        for k in free:
+            trial = min(({**pick, k: v} for v in range(len(memo[k]))), key=lambda p: layout(p)[0])
+            pick = trial
+    chosen = iter(layout(pick)[1])
+    out: list[RoofPlan | None] = []
+    for k in where:
+        if k is None:
             out.append(None)
             continue
-        out.append(tuple(layers.top(k - 1) + s.floor if k != s.first else -math.inf for s, k in zip(spans, ks)))
+        row, spans = memo[k][pick.get(k, 0)]
+        ks = [next(chosen) for _ in spans]
+        if row is None and all(j == s.first for s, j in zip(spans, ks)):
+            out.append(None)
+            continue
+        out.append(RoofPlan(tuple(layers.top(j - 1) + s.floor if j != s.first else -math.inf
+                                  for s, j in zip(spans, ks)),
+                            None if row is None else tuple(tuple(float(v) for v in p) for p in row)))
     return out
+
+
+#: Distinct rods with a choice of socket layouts up to which every combination is tried.
+MAX_CHOICES = 10

@@ -71,7 +71,8 @@ def main() -> None:
         dt = time.perf_counter() - t0
         target = out if run.returncode == 0 else Path(f"{out}.best-fit")
         if not (target / "design.json").exists():
-            print(f"| {name} | - | - | - | exit {run.returncode} | - | {dt:.0f} |", flush=True)
+            why = (run.stderr.strip().splitlines() or [""])[-1][:120].replace("|", "/")
+            print(f"| {name} | - | - | - | exit {run.returncode}: {why} | - | {dt:.0f} |", flush=True)
             continue
         d = json.loads((target / "design.json").read_text())
         n, rows, zs = pauses(d)

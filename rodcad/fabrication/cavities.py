@@ -360,12 +360,25 @@ def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
     clr = RodClearance(rod.geometry)
     for idx in raised:
         top = silo_top_points(out[idx], socket_r, float(heights[idx[0]]))
-        if clr(top).min() < need:
+        bottom = (out[idx][:, None, :] + _LOWER_HALF[None] * socket_r).reshape(-1, 3)  # a socket below the
+        if min(clr(top).min(), clr(bottom).min()) < need:  # com sinks a little as its roof rises
             return None
         others = np.setdiff1d(np.arange(len(out)), idx)
         if len(others) and silo_distance(top, out[others], socket_r, heights[others]).min() < need:
             return None
     return out, heights
+
+
+def _lower_half(n: int = 12) -> np.ndarray:
+    """Unit vectors over the lower half sphere (about -:data:`UP`): its pole and n rings of 4 n,
+    down to the equator."""
+    th = np.linspace(0, 2 * math.pi, 4 * n, endpoint=False)
+    rings = [np.stack([np.sin(a) * np.cos(th), -np.full_like(th, math.cos(a)), np.sin(a) * np.sin(th)], axis=1)
+             for a in np.linspace(math.pi / 2, 0, n, endpoint=False)]
+    return np.concatenate([-UP[None], *rings])
+
+
+_LOWER_HALF = _lower_half()
 
 
 def raised_sockets(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,

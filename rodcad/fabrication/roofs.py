@@ -10,7 +10,7 @@ from -0.002 to 0.017 /mm, put their roofs between 11.26 and 12.21 mm above the b
 0.2 mm layers, five pauses).
 
 A roof can be raised without moving the rod's mass or centre of mass
-(:func:`rodcad.fabrication.cavities.raised_sockets`): the cylinder above the ball grows up
+(:func:`rodcad.fabrication.cavities.raised_rows`): the cylinder above the ball grows up
 to the new roof, the socket rises with it just enough that ball and socket still act at
 their site, and the plastic the taller socket takes is the cavities' to give back
 (:func:`rodcad.fabrication.plan.plan_rod`). How far is bounded by the wall over the socket
@@ -24,7 +24,11 @@ unserved, serve every row that can reach it, repeat), and each row takes the low
 layer it can reach, so roofs rise as little as they can. A lower row rises until its roof is
 a minimum wall below the row above it: the socket lattice's pitch is two radii and a wall,
 so a row directly under another cannot rise at all (its pause is fixed), while the top row
-and single rows rise until the wall over them or the cavity volume ends them. Rods with a filled shot chamber
+and single rows rise until the wall over them or the cavity volume ends them. A rod whose balls stand in
+two rows may hold as many in one row at its centre of mass instead (same mass, its own cavity
+reach: :func:`rodcad.fabrication.intervals.row_alternates`), one span where it had two, and
+where that pauses less it does (the semicircle's six graduated rods: five layers, with every
+row a span four, with one row where offered one). Rods with a filled shot chamber
 pause at its roof: their layers are fixed points the others may join.
 
 Units: mm, g.

@@ -255,7 +255,7 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
 def _key(rod: RodType, target: float, seed: int, roof: RoofPlan | None = None) -> str:
     from rodcad.catalog.model import GEOMETRY_VERSION
 
-    raised = () if roof is None else roof.key()  # one row as designed: as before
+    raised = () if roof is None else roof.key()
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
                     rod.geometry.key_data(), asdict(rod.material),
                     rod.balls_json(), round(float(target), 9), int(seed), *raised)

@@ -160,12 +160,13 @@ class RoofPlan:
     sockets: tuple[tuple[float, float, float], ...] | None = None
 
     def key(self) -> tuple[Any, ...]:
-        """Hashable, rounded: what the fabrication cache keys on (a plain layout's key is
-        its roofs alone)."""
+        """Hashable, rounded: what the fabrication cache keys on ("rows": raised roofs keep
+        the centre of mass off the com's height too, :func:`rodcad.fabrication.layout.tall_silo`'s
+        ``give_at``; plans cached before it are not reused)."""
         roofs = tuple(round(float(r), 9) for r in self.roofs)
         if self.sockets is None:
-            return roofs
-        return (*roofs, tuple(tuple(round(float(v), 9) for v in s) for s in self.sockets))
+            return ("rows", *roofs)
+        return ("rows", *roofs, tuple(tuple(round(float(v), 9) for v in s) for s in self.sockets))
 
 
 @dataclass(frozen=True)

@@ -35,6 +35,7 @@ from rodcad.cad.export import placed, print_matrix, rod_matrices
 from rodcad.cad.rods import ChainFabrication, FabricatedRod
 from rodcad.cad.solids import cylinder_solid, is_valid_solid, mass_properties, one_solid
 from rodcad.fabrication.cavities import FabricationError
+from rodcad.fabrication.plan import socket_tops
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
@@ -120,9 +121,9 @@ def _roofs(piece_to_bed: np.ndarray, rods: Sequence[FabricatedRod], mats: Sequen
         to_bed = piece_to_bed @ m
         up = to_bed[:3, :3] @ np.array([0.0, 1.0, 0.0])  # the rod's +y: the silo's axis
         cos_a = float(up[2])
-        top = r.socket_height or r.socket_radius  # the roof above the centre, along the silo's axis
-        lift = max(0.0, top * cos_a - r.socket_radius * math.sqrt(max(0.0, 1 - cos_a * cos_a)))
-        out += [float(z) + lift for z in socks @ to_bed[2, :3] + to_bed[2, 3]]
+        top = socket_tops(r.socket_height, r.socket_radius, len(socks))  # roofs above the centres, along the axis
+        lift = np.maximum(0.0, top * cos_a - r.socket_radius * math.sqrt(max(0.0, 1 - cos_a * cos_a)))
+        out += [float(z) for z in socks @ to_bed[2, :3] + to_bed[2, 3] + lift]
     return out
 
 

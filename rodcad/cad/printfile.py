@@ -53,6 +53,7 @@ from rodcad.cad.slicer import (
     write_3mf,
 )
 from rodcad.fabrication.layers import Z_TOL
+from rodcad.fabrication.plan import socket_tops
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.cad.rods import FabricatedRod
@@ -137,8 +138,8 @@ def _roofs(rod: FabricatedRod) -> list[float]:
     if not len(socks):
         return [float(z) for z in rod.pause_zs][:rod.ball_count] if rod.ball_count else []
     m = np.asarray(rod.print_matrix, dtype=float)
-    top = float(getattr(rod, "socket_height", 0.0) or rod.socket_radius)  # the roof above the centre
-    return [float(z) + top for z in socks @ m[2, :3] + m[2, 3]]
+    tops = socket_tops(getattr(rod, "socket_height", 0.0), rod.socket_radius, len(socks))  # above the centres
+    return [float(z) for z in socks @ m[2, :3] + m[2, 3] + tops]
 
 
 def _fill(rod: FabricatedRod) -> tuple[float, str]:

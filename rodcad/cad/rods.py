@@ -27,10 +27,9 @@ The data flow for one rod (type + target mass), one step per function (the numbe
 
 Void shapes (all printable without support in the print orientation, see
 :data:`rodcad.fabrication.layout.VOIDS`): cavities are spheres cut flat at 45 degrees ('capped'),
-sockets are 'silos' (half sphere + cylinder, flat bridged roof) all standing on one print layer, so
-one pause serves all balls; given the print's layers, :func:`fabricate_chain` raises roofs onto
-layers the chain's other rods share (:mod:`rodcad.fabrication.roofs`), so a plate of them pauses
-seldom. Every layout is symmetric about the rod's centre of mass (mirrors across x, y and z, or the
+sockets are 'silos' (half sphere + cylinder, flat bridged roof) standing in rows, one pause per
+row; given the print's layers, :func:`fabricate_chain` raises rows' roofs onto layers the chain's
+other rods share (:mod:`rodcad.fabrication.roofs`), so a plate of them pauses seldom. Every layout is symmetric about the rod's centre of mass (mirrors across x, y and z, or the
 half turn about the com axis with the z mirror; sockets are raised by
 :func:`rodcad.fabrication.layout.ball_offset` so socket and ball together act at their site), so
 the centre of mass stays where the design assumes.
@@ -75,7 +74,7 @@ from rodcad.fabrication.cavities import (
     FabricationError,
 )
 from rodcad.fabrication.intervals import compute_table, interval_table, intervals_key
-from rodcad.fabrication.plan import Measurement, RodPlan, plan_rod
+from rodcad.fabrication.plan import Measurement, RodPlan, RoofPlan, plan_rod
 from rodcad.fabrication.roofs import shared_roofs
 
 __all__ = [
@@ -129,8 +128,8 @@ class FabricatedRod:
         thickness: rod thickness along the hinge axes (mm), the pin length.
         pin_diameter: hinge pin diameter (mm).
         socket_height: the sockets' flat roofs above their centres (mm); 0: the socket
-            radius (plain silos). Raised roofs share a print layer with the chain's others
-            (:mod:`rodcad.fabrication.roofs`).
+            radius (plain silos); a tuple: one per socket (rows raised unequally). Raised
+            roofs share a print layer with the chain's others (:mod:`rodcad.fabrication.roofs`).
         fill_mass: grams of shot poured into the chamber at ``pause_z`` (rods with a fill).
         fill_name: what the shot is ('' without).
         chamber_volume: the chamber's volume (mm^3; 0 without).
@@ -173,7 +172,7 @@ class FabricatedRod:
     chamber_volume: float = 0.0
     ball_name: str = ""
     ball_mass_each: float = 0.0
-    socket_height: float = 0.0
+    socket_height: float | tuple[float, ...] = 0.0
     holes: Holes = NO_SHIFT
 
 
@@ -214,17 +213,14 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
 
     rho = rod.material.density / 1000.0
     plain = type_solid(rod)
-    socks, cavs, rs, top = plan.sockets, plan.cavities, plan.socket_radius, plan.socket_top
+    socks, cavs = plan.sockets, plan.cavities
     n_balls = len(socks)
     kind = rod.ball_kinds[plan.ball_kind] if n_balls else None
     metal = n_balls * kind.mass if kind is not None else 0.0
     target = plan.build_mass
 
     def make(r: float) -> Any:
-        groups = [("silo", socks, rs, top)] if n_balls else []
-        if len(cavs):
-            groups.append(("capped", cavs, r))
-        return with_voids(plain, groups, rod.name)
+        return with_voids(plain, plan.silo_groups(r), rod.name)
 
     r = plan.cavity_radius
     solid = make(r)
@@ -242,8 +238,7 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
             volume = mass_properties(solid).volume
             booleans += 1
     props = mass_properties(solid)
-    voids = (void_solids("silo", socks, rs, top) if n_balls else []) + \
-        (void_solids("capped", cavs, r) if len(cavs) else [])
+    voids = [v for group in plan.silo_groups(r) for v in void_solids(*group)]
     wall = math.inf
     if voids:
         to_faces, between = void_walls(plain, voids, rod.material.min_wall + 1.0)
@@ -257,16 +252,17 @@ def _build(rod: RodType, plan: RodPlan) -> tuple[Any, float, Measurement]:
                                  booleans)
 
 
-def _key(rod: RodType, target: float, seed: int, roof: float | None = None) -> str:
+def _key(rod: RodType, target: float, seed: int, roof: RoofPlan | None = None) -> str:
     from rodcad.catalog.model import GEOMETRY_VERSION
 
-    raised = () if roof is None else (round(float(roof), 9),)
+    raised = () if roof is None else roof.key()
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
                     rod.geometry.key_data(), asdict(rod.material),
                     rod.balls_json(), round(float(target), 9), int(seed), *raised)
 
 
-def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, float | None]) -> dict[str, Any]:
+def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, RoofPlan | None]
+                    ) -> dict[str, Any]:
     """Worker: plan, build, root-solve and measure one rod (its sockets' roofs raised to
     ``roof`` where given, kept plain where the B-rep then measures a wall under the
     minimum); returns numbers only."""
@@ -279,7 +275,7 @@ def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, floa
     return plan.to_json()
 
 
-def _type_star(args: tuple[RodType, list[tuple[float, float | None]], int, dict[str, Any] | None]
+def _type_star(args: tuple[RodType, list[tuple[float, RoofPlan | None]], int, dict[str, Any] | None]
                ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """Worker: the type's table of reachable masses (unless given), then every
     rod of that type (the type's candidate pools are built once per worker)."""
@@ -313,8 +309,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
     plan = RodPlan.from_json(data)
     rho = rod.material.density / 1000.0
     socks, cavs, rs, r = plan.sockets, plan.cavities, plan.socket_radius, plan.cavity_radius
-    groups = ([("silo", socks, rs, plan.socket_top)] if len(socks) else []) + ([("capped", cavs, r)] if len(cavs) else [])
-    solid = with_voids(type_solid(rod, holes), groups, rod.name)
+    solid = with_voids(type_solid(rod, holes), plan.silo_groups(), rod.name)
     meas = plan.measured
     if meas is None:
         raise FabricationError(f"rod {index} ({rod.name}): its plan was never built")
@@ -335,7 +330,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         com = (float(c[0] / (volume * rho + metal)), float(c[1] / (volume * rho + metal)))
     pm = print_matrix(solid)
     roofs: list[float] = []
-    for z in sorted(socks @ UP + plan.socket_top + pm[2, 3]):  # rod +y is bed +Z
+    for z in sorted(socks @ UP + plan.socket_tops + pm[2, 3]):  # rod +y is bed +Z
         if not roofs or z - roofs[-1] > 1e-6:
             roofs.append(float(z))
     pause = roofs[0] if roofs else None
@@ -429,14 +424,14 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     if len(types) != len(masses):
         raise ValueError(f"{len(types)} rod types but {len(masses)} masses")
     cache = cache if cache is not None else DiskCache()
-    roofs: list[float | None] = [None] * len(types) if layers is None else shared_roofs(
+    roofs: list[RoofPlan | None] = [None] * len(types) if layers is None else shared_roofs(
         types, masses, layers, seed=seed, jobs=jobs, cache=cache, keep=keep_roofs)
     keys: dict[tuple[Any, ...], int] = {}
-    distinct: list[tuple[RodType, float, float | None]] = []
+    distinct: list[tuple[RodType, float, RoofPlan | None]] = []
     moved: list[Holes] = []  # per distinct rod, its holes (not part of the plan: same volume)
     where: list[int] = []
     for rod, m, roof, hl in zip(types, masses, roofs, holes or [NO_SHIFT] * len(types)):
-        k = (rod.name, round(float(m), 6), None if roof is None else round(roof, 9), hl)
+        k = (rod.name, round(float(m), 6), None if roof is None else roof.key(), hl)
         if k not in keys:
             keys[k] = len(distinct)
             distinct.append((rod, float(m), roof))

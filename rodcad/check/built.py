@@ -51,7 +51,7 @@ class BuiltRod:
         piece: (first, last) of the fused piece the rod is printed in (its ``file`` holds the
             whole piece; ``print_matrix`` places this rod's frame in it), or None.
         socket_height: its sockets' flat roofs above the ball centres (mm; 0 where
-            design.json does not say: the socket radius).
+            design.json does not say: the socket radius; a tuple: one per ball).
     """
 
     index: int
@@ -74,7 +74,7 @@ class BuiltRod:
     ball_diameter: float | None = None
     ball_kind: str = ""
     piece: tuple[int, int] | None = None
-    socket_height: float = 0.0
+    socket_height: float | tuple[float, ...] = 0.0
 
     @property
     def stem(self) -> str:
@@ -174,6 +174,13 @@ class _Reader:
             self.bad(where, f"expected finite numbers of shape {want}, got shape {a.shape}")
             return None
         return a
+
+
+def _socket_height(value: Any) -> float | tuple[float, ...]:
+    """design.json's ``socket_height_mm``: one number, one per ball, or 0 where absent."""
+    if isinstance(value, list) and value and all(isinstance(v, (int, float)) for v in value):
+        return tuple(float(v) for v in value)
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else 0.0
 
 
 def _deg_pair(rd: _Reader, lim: Any, key: str, what: str) -> tuple[float, float] | None:
@@ -277,7 +284,7 @@ def _rod(rd: _Reader, outdir: Path, i: int, r: Any) -> BuiltRod | None:
                     (float(lo_hi[0]), float(lo_hi[1])), pin, thick, fill_mass, fill_center,
                     float(fab["ball_diameter_mm"]) if isinstance(fab.get("ball_diameter_mm"), (int, float)) else None,
                     str(fab.get("ball_kind") or ""), None if piece is None else (piece[0], piece[1]),
-                    float(fab["socket_height_mm"]) if isinstance(fab.get("socket_height_mm"), (int, float)) else 0.0)
+                    _socket_height(fab.get("socket_height_mm")))
 
 
 def _folder_problems(outdir: Path) -> list[Problem]:

@@ -50,9 +50,12 @@ __all__ = [
     "lattice_layouts",
     "orbits",
     "place_cavities",
+    "raised_rows",
     "raised_sockets",
+    "row_layout",
     "silo_distance",
     "socket_layout",
+    "socket_rows",
 ]
 
 
@@ -145,13 +148,14 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
     return CavityPool(images, cmin, intra, rng.permutation(len(images)))
 
 
-def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float, height: float | None = None) -> np.ndarray:
+def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float,
+                  height: float | Sequence[float] | None = None) -> np.ndarray:
     """Distance (mm) from points to the nearest silo socket (0 inside one) whose roof is
-    ``height`` above its centre (default: the radius)."""
+    ``height`` above its centre (default: the radius; a sequence: one per socket)."""
     pts = np.atleast_2d(points)
     if len(centers) == 0:
         return np.full(len(pts), math.inf)
-    top = radius if height is None else height
+    top = radius if height is None else np.asarray(height, dtype=float)
     d = pts[:, None, :] - np.asarray(centers)[None, :, :]  # (n, k, 3)
     h = d @ UP
     radial = np.linalg.norm(d - h[..., None] * UP, axis=-1)
@@ -169,7 +173,7 @@ class _CavityLayout:
 
 
 def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float,
-               socket_h: float | None = None) -> list[np.ndarray]:
+               socket_h: float | tuple[float, ...] | None = None) -> list[np.ndarray]:
     """Poisson-disk dart throwing of symmetric orbits: returns the accepted
     orbits (their distinct points) in acceptance order (memoised). The sockets' roofs are
     ``socket_h`` above their centres (default: their radius)."""
@@ -182,7 +186,7 @@ def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray
 
 
 def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float,
-           socket_h: float | None) -> list[np.ndarray]:
+           socket_h: float | tuple[float, ...] | None) -> list[np.ndarray]:
     need = radius + wall
     spacing = 2 * radius + wall
     ok = (pool.clearance >= need) & (pool.intra >= spacing - 1e-9)
@@ -213,10 +217,11 @@ def cavity_radii(rod: RodType) -> list[float]:
 
 
 def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: float, seed: int,
-                   socket_h: float | None = None) -> _CavityLayout | None:
+                   socket_h: float | tuple[float, ...] | None = None) -> _CavityLayout | None:
     """Symmetric cavities removing ``volume`` (mm^3), as few and as large as
     possible: Poisson-disk layouts first, the symmetric lattice as fallback; clear of the
-    sockets (roofs ``socket_h`` above their centres; default their radius).
+    sockets (roofs ``socket_h`` above their centres, one for all or one per socket; default
+    their radius).
 
     For each design radius r_d, the layout's sites fit cavities up to r_d; a
     prefix of its orbits (in dart order) with n sites removes ``volume`` with
@@ -253,7 +258,7 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
 
 def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
                     skip: Callable[[float], bool] = lambda radius: False, *,
-                    socket_h: float | None = None) -> Iterator[tuple[float, SphereLayout]]:
+                    socket_h: float | tuple[float, ...] | None = None) -> Iterator[tuple[float, SphereLayout]]:
     """The symmetric lattice cavity layouts beside these ball sockets (roofs ``socket_h``
     above their centres; default their radius), largest radius first (the fallback of
     :func:`place_cavities`: it reaches the catalog's m_min); radii for which
@@ -286,34 +291,108 @@ def socket_layout(rod: RodType) -> Any:
                            rod.material.min_wall, void="silo", raise_by=lift)
 
 
-def raised_sockets(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
-                   roof: float) -> tuple[np.ndarray, float] | None:
-    """The sockets of one row (laid out by :func:`socket_layout`) with their flat roofs
-    raised to ``roof`` (mm along :data:`UP`, rod frame): each socket's cylinder reaches up
-    to the roof and its centre rises with it so that socket and ball still act at their
-    site (:func:`rodcad.fabrication.layout.tall_silo`): the rod's centre of mass stays put.
+@lru_cache(maxsize=64)
+def row_layout(rod: RodType) -> Any:
+    """The type's largest symmetric socket layout in one row, at the height of the centre of
+    mass (a graduated rod's :func:`socket_layout` may stand in two rows, one pause each;
+    this is its alternative for the same ball counts: one pause, which
+    :mod:`rodcad.fabrication.roofs` may line up with the chain's others)."""
+    if rod.balls is None:
+        return SphereLayout.empty()
+    solid = type_solid(rod)
+    clearance = RodClearance(rod.geometry)
+    rs, wall = rod.balls.socket_diameter / 2, rod.material.min_wall
+    lift = ball_offset(rs, rod.balls.mass, rod.material.density)
+    com = mass_properties(solid).center
+    (x0, _, z0), (x1, _, z1) = clearance.bounds
+    need = rs + wall + 1e-6  # the lattice keeps rs + wall inside its bounds: the row at the com is left
+    row = ((x0, com[1] - need, z0), (x1, com[1] + need, z1))
+    return max_ball_layout(clearance, row, com, rod.balls.socket_diameter, wall, void="silo", raise_by=lift)
+
+
+def socket_rows(sockets: np.ndarray) -> list[np.ndarray]:
+    """The sockets' rows (index arrays, lowest first): sockets whose centres stand at one
+    height along :data:`UP` share a roof and a pause."""
+    ys = np.asarray(sockets, dtype=float).reshape(-1, 3) @ UP
+    rows: list[list[int]] = []
+    for i in np.argsort(ys, kind="stable"):
+        if rows and abs(ys[i] - ys[rows[-1][0]]) <= 1e-6:
+            rows[-1].append(int(i))
+        else:
+            rows.append([int(i)])
+    return [np.array(sorted(r)) for r in rows]
+
+
+def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
+                roofs: Sequence[float]) -> tuple[np.ndarray, np.ndarray] | None:
+    """The sockets (laid out by :func:`socket_layout`) with each row's flat roof raised to
+    ``roofs[j]`` (mm along :data:`UP`, rod frame; rows lowest first, :func:`socket_rows`; a
+    roof at or below the row's plain roof keeps it): each raised socket's cylinder reaches
+    up to its roof and its centre rises with it so that socket and ball still act at their
+    site, corrected for the plastic the cavities give back at the centre of mass
+    (:func:`rodcad.fabrication.layout.tall_silo`): the rod's centre of mass stays put, row
+    by row.
 
     Returns:
-        (centres (K, 3), the roofs' height above the centres) in mm, or None where the
-        sockets are not one row, the roof is below theirs, or the raised sockets would
-        leave less than the minimum wall to the rod's faces.
+        (centres (K, 3), per socket the roof's height above its centre (K,)) in mm, or
+        None where ``roofs`` does not name every row or a raised socket would leave less
+        than the minimum wall to the rod's faces or to another socket.
     """
     socks = np.asarray(sockets, dtype=float).reshape(-1, 3)
-    if not len(socks):
-        return None
-    ys = socks @ UP
-    if np.ptp(ys) > 1e-9:
+    rows = socket_rows(socks)
+    if not len(socks) or len(roofs) != len(rows):
         return None
     balls = rod.ball_kinds[kind]
     rho = rod.material.density
-    site = float(ys[0]) - ball_offset(socket_r, balls.mass, rho)
-    if roof < float(ys[0]) + socket_r - 1e-9:
+    give_at = float(mass_info(rod).com[1])  # the cavities' centroid
+    out, heights = socks.copy(), np.full(len(socks), float(socket_r))
+    raised: list[np.ndarray] = []
+    for idx, roof in zip(rows, roofs):
+        y = float(socks[idx[0]] @ UP)
+        if roof <= y + socket_r + 1e-9:
+            continue
+        site = y - ball_offset(socket_r, balls.mass, rho)
+        centre, height = tall_silo(site, socket_r, balls.mass, rho, float(roof), give_at=give_at)
+        out[idx] = socks[idx] + UP * (centre - y)
+        heights[idx] = height
+        raised.append(idx)
+    need = rod.material.min_wall + WALL_MARGIN
+    clr = RodClearance(rod.geometry)
+    for idx in raised:
+        top = silo_top_points(out[idx], socket_r, float(heights[idx[0]]))
+        bottom = (out[idx][:, None, :] + _LOWER_HALF[None] * socket_r).reshape(-1, 3)  # a socket below the
+        if min(clr(top).min(), clr(bottom).min()) < need:  # com sinks a little as its roof rises
+            return None
+        others = np.setdiff1d(np.arange(len(out)), idx)
+        if len(others) and silo_distance(top, out[others], socket_r, heights[others]).min() < need:
+            return None
+    return out, heights
+
+
+def _lower_half(n: int = 12) -> np.ndarray:
+    """Unit vectors over the lower half sphere (about -:data:`UP`): its pole and n rings of 4 n,
+    down to the equator."""
+    th = np.linspace(0, 2 * math.pi, 4 * n, endpoint=False)
+    rings = [np.stack([np.sin(a) * np.cos(th), -np.full_like(th, math.cos(a)), np.sin(a) * np.sin(th)], axis=1)
+             for a in np.linspace(math.pi / 2, 0, n, endpoint=False)]
+    return np.concatenate([-UP[None], *rings])
+
+
+_LOWER_HALF = _lower_half()
+
+
+def raised_sockets(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
+                   roof: float) -> tuple[np.ndarray, float] | None:
+    """The sockets of one row with their flat roofs raised to ``roof`` (:func:`raised_rows`
+    for a single row): (centres (K, 3), the roofs' height above the centres) in mm, or None
+    where the sockets are not one row, the roof is below theirs, or the raised sockets would
+    leave less than the minimum wall to the rod's faces.
+    """
+    socks = np.asarray(sockets, dtype=float).reshape(-1, 3)
+    if len(socket_rows(socks)) != 1 or roof < float(socks[0] @ UP) + socket_r - 1e-9:
         return None
-    centre, height = tall_silo(site, socket_r, balls.mass, rho, roof)
-    out = socks + UP * (centre - ys[0])
-    if RodClearance(rod.geometry)(silo_top_points(out, socket_r, height)).min() < rod.material.min_wall + WALL_MARGIN:
-        return None
-    return out, height
+    got = raised_rows(rod, socks, socket_r, kind, [roof])
+    return None if got is None else (got[0], float(got[1][0]))
 
 
 #: Wall kept (mm) beyond the material's minimum where a socket's roof is raised: the sampled

@@ -32,6 +32,7 @@ from rodcad.fabrication.cavities import (
     dart_throw,
     lattice_layouts,
     orbits,
+    row_layout,
     socket_layout,
 )
 
@@ -44,6 +45,8 @@ __all__ = [
     "fmt_mass",
     "interval_table",
     "intervals_key",
+    "removable_volumes",
+    "row_alternates",
 ]
 
 
@@ -123,7 +126,7 @@ def _ball_masks(orbs: list[np.ndarray], sites: np.ndarray, com) -> list[int]:
     return masks
 
 
-def _removable(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int,
+def removable_volumes(rod: RodType, sockets: np.ndarray, socket_r: float, seed: int,
                lattice_counts: dict[float, int] | None = None) -> list[tuple[float, float]]:
     """The cavity volumes (mm^3) :func:`place_cavities` can remove beside these
     sockets, as sorted disjoint intervals (exactly its acceptance rule: a
@@ -181,7 +184,7 @@ def compute_table(rod: RodType, seed: int) -> dict[str, Any]:
     pieces: list[tuple[float, float]] = []
     counts: dict[float, int] = {}
     for mass_k, socks, rs, kind in _ball_options(rod):  # the ball-free rod first
-        reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in _removable(rod, socks, rs, seed, counts)]
+        reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in removable_volumes(rod, socks, rs, seed, counts)]
         options.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs, "kind": kind,
                          "pieces": [list(p) for p in sorted(reach)]})
         pieces += reach + [(mass_k * (1 - SOLID_TOL), mass_k * (1 + SOLID_TOL))]
@@ -205,6 +208,63 @@ def interval_table(rod: RodType, seed: int, cache: DiskCache | None = None) -> d
     table = compute_table(rod, seed)
     cache.put("fabint", key, table)
     return table
+
+
+def row_alternates(rod: RodType, seed: int, cache: DiskCache | None = None, *,
+                   table: dict[str, Any] | None = None) -> list[dict[str, Any]]:
+    """For the type's ball options in several rows, the options of as many balls of the same
+    kind in one row (:func:`rodcad.fabrication.cavities.row_layout`): the same mass without
+    cavities, one pause instead of two. Entries as the table's ``options`` (mass, sockets,
+    socket_radius, kind, pieces: the masses their cavities reach); disk-cached. Empty for a
+    type whose options all stand in one row.
+
+    Args:
+        rod: the rod type.
+        seed: seed of the cavity layouts (as for :func:`compute_table`).
+        cache: disk cache.
+        table: the type's table of reachable masses (default :func:`interval_table`); one
+            given is not cached.
+    """
+    if rod.fill is not None or rod.balls is None:
+        return []
+    cache = cache if cache is not None else DiskCache()
+    key = make_key("fabrow", intervals_key(rod, seed))
+    hit = cache.get("fabrow", key) if table is None else None
+    if isinstance(hit, list):
+        return hit
+    given = table is not None
+    table = table if given else interval_table(rod, seed, cache)
+    wanted = {(len(o["sockets"]), int(o["kind"])) for o in table["options"]
+              if len(o["sockets"]) and np.ptp(np.asarray(o["sockets"], float).reshape(-1, 3) @ UP) > 1e-6}
+    info = mass_info(rod)
+    rho = rod.material.density / 1000.0
+    ms = info.volume * rho
+    com = (info.com[0], info.com[1], 0.0)
+    out: list[dict[str, Any]] = []
+    for kind, balls_k in enumerate(rod.ball_kinds):
+        if not any(k == kind for _, k in wanted):
+            continue
+        row = row_layout(rod.with_kind(kind))
+        if not row.count:
+            continue
+        rs = row.radius
+        net = balls_k.mass - void_volume("silo", rs) * rho
+        sites = row.centers - UP * (row.centers[0] @ UP - info.com[1])
+        orbs = orbits(sites, com, row.symmetry)
+        seen: set[int] = set()
+        for mask in _ball_masks(orbs, sites, com):
+            idx = np.sort(np.concatenate([orbs[b] for b in range(len(orbs)) if mask >> b & 1]))
+            if (len(idx), kind) not in wanted or len(idx) in seen:
+                continue
+            seen.add(len(idx))
+            socks = row.centers[idx]
+            mass_k = ms + len(idx) * net
+            reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in removable_volumes(rod, socks, rs, seed)]
+            out.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs, "kind": kind,
+                        "pieces": [list(p) for p in sorted(reach)]})
+    if not given:
+        cache.put("fabrow", key, out)
+    return out
 
 
 def achievable_intervals(rod: RodType, *, seed: int = 0, cache: DiskCache | None = None) -> list[tuple[float, float]]:

@@ -128,7 +128,8 @@ def ball_offset(socket_radius: float, ball_mass: float, density: float, height: 
     return rho * _silo_moment(socket_radius, h) / (ball_mass - rho * silo_volume(socket_radius, h))
 
 
-def tall_silo(site: float, radius: float, ball_mass: float, density: float, roof: float) -> tuple[float, float]:
+def tall_silo(site: float, radius: float, ball_mass: float, density: float, roof: float, *,
+              give_at: float | None = None) -> tuple[float, float]:
     """A silo socket whose flat roof is at ``roof`` (mm along :data:`UP`) and which, with its
     ball at its centre, still acts as a point mass at ``site`` (:func:`ball_offset` for a
     taller cylinder): (centre, height of the roof above the centre), both mm.
@@ -136,13 +137,28 @@ def tall_silo(site: float, radius: float, ball_mass: float, density: float, roof
     The roof must be at least the plain silo's (site + its offset + the radius); a higher
     roof lengthens the cylinder above the ball, and the socket's centre rises a little with
     it, so the rod's centre of mass does not move.
-    """
-    def gap(h: float) -> float:
-        return site + ball_offset(radius, ball_mass, density, h) + h - roof
 
-    lo, hi = radius, roof - site
+    Args:
+        give_at: where (mm along :data:`UP`) the plastic the taller socket takes is given
+            back (the cavities' centroid, the rod's centre of mass), or None for the site
+            itself. A socket of a row off that height (a rod with two rows) moves that
+            plastic from ``give_at`` to its roof: its socket then stands for a point a
+            little further from ``give_at`` than its site, so that the rod's first moment,
+            and its centre of mass, stay.
+    """
+    rho = density / 1000.0
+    plain = silo_volume(radius)
+
+    def gap(h: float) -> float:
+        moved = rho * (silo_volume(radius, h) - plain)  # g taken above the ball, given back at give_at
+        acts = site if give_at is None else site + moved * (site - give_at) / (ball_mass - rho * silo_volume(radius, h))
+        return acts + ball_offset(radius, ball_mass, density, h) + h - roof
+
+    lo, hi = radius, max(roof - site, radius)
     if gap(lo) > 1e-9:
         raise ValueError(f"a roof at {roof:.4f} mm is below the plain socket's ({roof - gap(lo):.4f} mm)")
+    while gap(hi) < 0:  # a row below give_at stands for a point that sinks as its roof rises
+        hi *= 2
     for _ in range(80):  # gap rises with h: bisection to round-off
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if gap(mid) < 0 else (lo, mid)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -20,11 +21,11 @@ from rodcad.fabrication.cavities import (
     SOLID_TOL,
     FabricationError,
     place_cavities,
-    raised_sockets,
+    raised_rows,
 )
 from rodcad.fabrication.intervals import compute_table, fmt_mass
 
-__all__ = ["BallChoice", "MIN_REMOVE", "Measurement", "RodPlan", "choose_balls", "plan_rod"]
+__all__ = ["BallChoice", "MIN_REMOVE", "Measurement", "RodPlan", "RoofPlan", "choose_balls", "plan_rod", "socket_tops"]
 
 #: Least cavity volume (mm^3) a rod must keep removing for its sockets' roofs to be raised
 #: (the taller sockets take that plastic instead): room for eight of the smallest cavities.
@@ -69,7 +70,8 @@ class RodPlan:
         measured: the B-rep's measurements, once built.
         ball_kind: which of the rod's ball kinds the sockets hold (:attr:`RodType.ball_kinds`).
         socket_height: the sockets' flat roofs above their centres (mm); 0: the socket
-            radius (the plain silo, see :data:`rodcad.fabrication.layout.VOIDS`).
+            radius (the plain silo, see :data:`rodcad.fabrication.layout.VOIDS`); a tuple:
+            one per socket, where the rows of a rod with several were raised unequally.
     """
 
     mass: float
@@ -83,12 +85,21 @@ class RodPlan:
     message: str
     measured: Measurement | None = None
     ball_kind: int = 0
-    socket_height: float = 0.0
+    socket_height: float | tuple[float, ...] = 0.0
 
     @property
-    def socket_top(self) -> float:
-        """The sockets' roofs above their centres (mm; 0 without sockets)."""
-        return self.socket_height or self.socket_radius
+    def socket_tops(self) -> np.ndarray:
+        """Per socket, its roof above its centre (mm)."""
+        return socket_tops(self.socket_height, self.socket_radius, len(self.sockets))
+
+    def silo_groups(self, cavity_radius: float | None = None) -> list[tuple[Any, ...]]:
+        """The voids to cut (:func:`rodcad.cad.solids.with_voids`): the sockets, one group
+        per roof height, then the cavities (of ``cavity_radius``, default the plan's)."""
+        tops = self.socket_tops
+        groups: list[tuple[Any, ...]] = [("silo", self.sockets[tops == h], self.socket_radius, float(h))
+                                         for h in sorted(set(tops.tolist()))]
+        r = self.cavity_radius if cavity_radius is None else cavity_radius
+        return groups + ([("capped", self.cavities, r)] if len(self.cavities) else [])
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -98,7 +109,8 @@ class RodPlan:
             "message": self.message, "ball_kind": self.ball_kind,
         }
         if self.socket_height:
-            out["socket_height"] = self.socket_height
+            h = self.socket_height
+            out["socket_height"] = list(h) if isinstance(h, tuple) else h
         if self.measured is not None:
             out["measured"] = {**asdict(self.measured), "com": list(self.measured.com)}
         return out
@@ -116,7 +128,45 @@ class RodPlan:
             measured=None if meas is None else Measurement(
                 float(meas["volume"]), float(meas["mass"]), (float(meas["com"][0]), float(meas["com"][1])),
                 float(meas["min_wall"]), int(meas["booleans"])),
-            ball_kind=int(data.get("ball_kind", 0)), socket_height=float(data.get("socket_height", 0.0)))
+            ball_kind=int(data.get("ball_kind", 0)), socket_height=_height(data.get("socket_height", 0.0)))
+
+
+def _height(value: Any) -> float | tuple[float, ...]:
+    return tuple(float(v) for v in value) if isinstance(value, (list, tuple)) else float(value)
+
+
+def socket_tops(height: float | Sequence[float], radius: float, count: int) -> np.ndarray:
+    """Per socket, its roof above its centre (mm): ``height`` (one for all, or one per
+    socket; 0: the plain silo's, the ``radius``)."""
+    if isinstance(height, (list, tuple, np.ndarray)) and len(height):
+        return np.asarray(height, dtype=float).reshape(count)
+    return np.full(count, float(height or radius))
+
+
+@dataclass(frozen=True)
+class RoofPlan:
+    """Where a rod's socket roofs go so that the chain pauses seldom
+    (:func:`rodcad.fabrication.roofs.shared_roofs`).
+
+    Attributes:
+        roofs: per row of sockets, lowest first (:func:`rodcad.fabrication.cavities.socket_rows`),
+            its roof (mm along the print's up, rod frame); -inf keeps the row's plain roof.
+        sockets: the plain socket centres to use instead of the designed layout's ((K, 3) as
+            nested tuples, mm: as many balls of the same kind in one row,
+            :func:`rodcad.fabrication.intervals.row_alternates`), or None.
+    """
+
+    roofs: tuple[float, ...]
+    sockets: tuple[tuple[float, float, float], ...] | None = None
+
+    def key(self) -> tuple[Any, ...]:
+        """Hashable, rounded: what the fabrication cache keys on ("rows": raised roofs keep
+        the centre of mass off the com's height too, :func:`rodcad.fabrication.layout.tall_silo`'s
+        ``give_at``; plans cached before it are not reused)."""
+        roofs = tuple(round(float(r), 9) for r in self.roofs)
+        if self.sockets is None:
+            return ("rows", *roofs)
+        return ("rows", *roofs, tuple(tuple(round(float(v), 9) for v in s) for s in self.sockets))
 
 
 @dataclass(frozen=True)
@@ -212,7 +262,7 @@ def choose_balls(rod: RodType, target: float, table: dict[str, Any]) -> BallChoi
 
 
 def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | None = None, *,
-             roof: float | None = None) -> RodPlan:
+             roof: RoofPlan | None = None) -> RodPlan:
     """Sockets, cavities and messages for one rod (numbers only, no B-rep booleans).
 
     The ball subset and the cavity volume come from the type's table of
@@ -224,23 +274,34 @@ def plan_rod(rod: RodType, target: float, seed: int, table: dict[str, Any] | Non
         target: its mass (g).
         seed: seed of the cavity layouts.
         table: the type's table of reachable masses (computed when None).
-        roof: where the sockets' flat roofs should be (mm along the print's up, rod frame),
-            or None for the plain sockets. The raised sockets (:func:`raised_sockets`) take
-            the plastic above the balls that the cavities would otherwise remove, so the
-            mass and the centre of mass stay; where the rod's walls or its cavity volume do
-            not allow it, or no cavity layout removes what is left, the plain sockets are
-            kept.
+        roof: where the sockets' flat roofs should be (:class:`RoofPlan`: one per row, and
+            the sockets in one row instead of the designed rows where it names them); None
+            for the designed sockets as laid out. The raised sockets
+            (:func:`rodcad.fabrication.cavities.raised_rows`) take the plastic above the
+            balls that the cavities would otherwise remove, so the mass and the centre of
+            mass stay; where the rod's walls or its cavity volume do not allow it, or no
+            cavity layout removes what is left, the plain sockets are kept (the designed
+            ones where the row's cavities fail too).
     """
     table = table if table is not None else compute_table(rod, seed)
     choice = choose_balls(rod, target, table)
-    socks, rs, remove, height = choice.sockets, choice.socket_radius, choice.remove, 0.0
+    socks, rs, remove = choice.sockets, choice.socket_radius, choice.remove
+    height: float | tuple[float, ...] = 0.0
     cav = None
-    raised = None if roof is None else raised_sockets(rod, socks, rs, choice.kind, roof)
-    if raised is not None and raised[1] > rs + 1e-9:
-        left = remove - len(socks) * math.pi * rs * rs * (raised[1] - rs)
-        cav = place_cavities(rod, left, raised[0], rs, seed, socket_h=raised[1]) if left >= MIN_REMOVE else None
+    if roof is not None and roof.sockets is not None:  # the same balls in one row
+        row = np.asarray(roof.sockets, dtype=float).reshape(-1, 3)
+        cav = place_cavities(rod, remove, row, rs, seed) if remove > 0 else None
+        socks = row if cav is not None or remove <= 0 else socks
+        cav = None
+    raised = None if roof is None else raised_rows(rod, socks, rs, choice.kind, list(roof.roofs))
+    if raised is not None and float(raised[1].max()) > rs + 1e-9:
+        left = remove - math.pi * rs * rs * float(np.sum(raised[1] - rs))
+        tops = tuple(float(h) for h in raised[1])
+        cav = place_cavities(rod, left, raised[0], rs, seed,
+                             socket_h=tops[0] if np.ptp(raised[1]) <= 1e-12 else tops) if left >= MIN_REMOVE else None
         if cav is not None:
-            socks, height, remove = raised[0], raised[1], left
+            socks, remove = raised[0], left
+            height = tops[0] if np.ptp(raised[1]) <= 1e-12 else tops
     if cav is None:
         cav = place_cavities(rod, remove, socks, rs, seed) if remove > 0 else None
     if remove > 0 and cav is None:  # pragma: no cover - the table says it fits

@@ -22,6 +22,13 @@ from rodcad.outputs.printed import as_printed_json, printed_rod_fields
 __all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
 
 
+def _socket_height(f: Any) -> float | list[float]:
+    """A rod's socket roofs above the ball centres (mm): one for all, or one per ball where
+    its rows were raised unequally (:mod:`rodcad.fabrication.roofs`)."""
+    h = getattr(f, "socket_height", 0.0)
+    return [float(v) for v in h] if isinstance(h, (tuple, list)) else float(h or f.socket_radius)
+
+
 def _f(x: float) -> float | None:
     x = float(x)
     return x if math.isfinite(x) else None
@@ -162,7 +169,7 @@ def fabrication_json(f, piece=None) -> dict[str, Any]:
         "pause_z_mm": None if f.pause_z is None else float(f.pause_z),
         "pause_zs_mm": [float(z) for z in f.pause_zs],
         "ball_centers": [[float(v) for v in c] for c in np.asarray(f.socket_centers).reshape(-1, 3)],
-        "socket_height_mm": float(getattr(f, "socket_height", 0.0) or f.socket_radius) if f.ball_count else None,
+        "socket_height_mm": _socket_height(f) if f.ball_count else None,
         "ball_mass_g": float(f.mass - f.filament_mass - f.fill_mass),
         "ball_kind": (getattr(f, "ball_name", "") or None) if f.ball_count else None,
         "fill": {"name": f.fill_name, "grams": float(f.fill_mass),

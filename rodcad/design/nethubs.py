@@ -8,7 +8,7 @@ import numpy as np
 
 from rodcad.design.netplan import NetPlan, mass_segments, replan, rod_bounds
 
-__all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
+__all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "JOINT_FINE", "JOINT_NFEV", "JOINT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
 
 
 #: Rounds of :func:`orient_sockets` at most, and the pivot change (over the pivot radius) it stops at.
@@ -21,6 +21,16 @@ ORIENT_FINE = 1e-7
 ANDERSON = 5
 #: Rounds of :func:`balance_jointly` at most (the rods' lengths and bounds follow each).
 JOINT_ROUNDS = 3
+#: Evaluations of one joint solve at most: JOINT_NFEV / rods, within 20-200 (a reachable balance
+#: takes 5-20; a big net no turns within the cap balance would spend tens of seconds on
+#: hundreds), and the joint solve's own residual (over the force scale) above which another
+#: round is not tried.
+JOINT_NFEV = 4000
+JOINT_FINE = 1e-9
+#: Nets above JOINT_NODES nodes whose least turns leave a residual above JOINT_FAR (over the
+#: force scale; hung hub grids start at 3e-3 to 1.2e-2) get no joint solve.
+JOINT_NODES = 100
+JOINT_FAR = 0.05
 
 
 def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, float]:
@@ -119,6 +129,8 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             nxt[on] *= r / np.linalg.norm(nxt[on], axis=1, keepdims=True)
             nxt[~on] = new[~on]
         plan = replan(plan, nxt)
+    if t.n > JOINT_NODES and best_res > JOINT_FAR:
+        return best, rounds, best_res  # (a big net this far from balancing: seconds for nothing)
     joint, joint_res = balance_jointly(best, g=g)
     if joint_res < best_res:
         return joint, rounds + 1, joint_res
@@ -162,12 +174,12 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
         slopes = (rod_bounds(cur, cur.lengths + h) - rod_bounds(cur, cur.lengths - h)) / (2 * h)
         sb = balance_sockets(t.positions, t.edges, lines, cur.bounds, t.anchored, node_masses=cur.node_masses,
                              start=cur.pivots, max_turn_deg=cap, bound_slopes=slopes, socket_com=socket_com, masses0=st.masses, tensions0=st.tensions, com=cur.statics_com,
-                             allow_compression=t.compression, g=g)
+                             allow_compression=t.compression, g=g, max_nfev=int(np.clip(JOINT_NFEV / t.m, 20, 200)))
         cur = replan(cur, sb.pivots)
         st = statics(cur)
         if st.residual < best_res:
             best, best_res = cur, st.residual
-        if st.exact:
+        if st.exact or sb.residual > JOINT_FINE:  # balanced, or no turns within the cap balance it
             break
     return best, best_res
 

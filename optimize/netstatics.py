@@ -41,6 +41,9 @@ __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "s
 
 #: The central masses keep this share of the linear program's margin from the bounds.
 CENTRAL_SLACK = 1e-3
+#: Where the linear program fails and the balance fixes the tensions and masses, its least
+#: squares solution is exact when its residual (over the force scale) is at most this.
+LSQ_EXACT = 1e-11
 
 
 @dataclass
@@ -228,6 +231,24 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
     return _design(net, st, bounds, allow_compression)
 
 
+def _fixed_solution(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray | None:
+    """The least squares solution of ``A x = b`` where ``A`` has full column rank (the normal
+    equations, sparse LU, two rounds of iterative refinement), None where it has not."""
+    from scipy.sparse.linalg import splu
+
+    if A.shape[0] < A.shape[1]:
+        return None
+    N = (A.T @ A).tocsc()
+    try:
+        lu = splu(N)
+    except RuntimeError:  # singular: the balance leaves a family of solutions
+        return None
+    x = lu.solve(A.T @ b)
+    for _ in range(2):
+        x = x + lu.solve(A.T @ (b - A @ x))
+    return x if np.all(np.isfinite(x)) else None
+
+
 def _scales(net: Net, st: NetStatics, bounds: np.ndarray):
     m_ref = float(np.exp(np.mean(np.log(bounds.mean(axis=1)))))
     F = net.g * m_ref                       # one mid-bound rod's weight
@@ -257,10 +278,28 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     if not allow_compression:
         rows_ub.append(sp.hstack([-I, Z, sp.csr_matrix(np.ones((m, 1)))]))
         b_ub.append(np.zeros(m))
-    lp = linprog(c, A_ub=sp.vstack(rows_ub).tocsr(), b_ub=np.concatenate(b_ub),
-                 A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
-                 bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], method="highs")
+    lp_args = dict(A_ub=sp.vstack(rows_ub).tocsr(), b_ub=np.concatenate(b_ub),
+                   A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
+                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], method="highs")
+    lp = linprog(c, **lp_args)
     info = {"lp_status": int(lp.status)}
+    x = _fixed_solution(A, b) if lp.status != 0 else None
+    if x is not None:
+        # HiGHS has called feasible balances infeasible (more rows than unknowns, which fix the
+        # tensions and masses, and buildable masses a few micrograms wide): where the balance
+        # fixes the unknowns, its least squares solution has the last word
+        tol_m = 1e-9 * width
+        if float(np.max(np.abs(A @ x - b), initial=0.0)) <= LSQ_EXACT and np.all(x[m:] >= lo_m - tol_m) \
+                and np.all(x[m:] <= hi_m + tol_m) and (allow_compression or np.all(x[:m] >= -LSQ_EXACT)):
+            info["lstsq"] = True
+            x[m:] = np.clip(x[m:], lo_m, hi_m)
+            if not allow_compression:
+                x[:m] = np.maximum(x[:m], 0.0)
+            t = float(min(np.min((x[m:] - lo_m) / width), np.min((hi_m - x[m:]) / width),
+                          np.inf if allow_compression else np.min(x[:m])))
+            return _finish(net, st, bounds, x[m:] * m_ref, x[:m] * F, True, t,
+                           "least squares on the balance (the linear program failed numerically)", np.zeros(m),
+                           np.zeros(0, int), info)
     if lp.status == 0:
         t = float(lp.x[-1])
         s = t * (1 - CENTRAL_SLACK)

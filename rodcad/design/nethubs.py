@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodcad.design.netplan import NetPlan, mass_segments, replan
+from rodcad.design.netplan import NetPlan, mass_segments, replan, rod_bounds
 
-__all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "ORIENT_TOL", "buildable_bounds", "orient_sockets"]
+__all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "JOINT_NFEV", "JOINT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
 
 
 #: Rounds of :func:`orient_sockets` at most, and the pivot change (over the pivot radius) it stops at.
@@ -19,6 +19,16 @@ ORIENT_TOL = 1e-13
 ORIENT_FINE = 1e-7
 #: Depth of the Anderson acceleration of :func:`orient_sockets`' fixed point.
 ANDERSON = 5
+#: Rounds of :func:`balance_jointly` at most (the rods' lengths and bounds follow each).
+JOINT_ROUNDS = 3
+#: Evaluations of one joint solve at most: JOINT_NFEV / rods, within 20-200 (a reachable balance
+#: takes 5-20 a round; a big net no turns within the cap balance would spend tens of seconds on
+#: hundreds).
+JOINT_NFEV = 12000
+#: Nets above JOINT_NODES nodes whose least turns leave a residual above JOINT_FAR (over the
+#: force scale; hung hub grids start at 3e-3 to 1.2e-2) get no joint solve.
+JOINT_NODES = 100
+JOINT_FAR = 0.05
 
 
 def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, float]:
@@ -32,7 +42,10 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     are iterated to a fixed point: the nodes' forces balanced (exactly where the mass
     bounds allow, else their best fit), the sockets turned to cancel those forces' moments,
     the rods' directions updated; a few rounds, the turns being a few degrees. A point node
-    has nothing to turn.
+    has nothing to turn. The balancing turns are not unique, and the least turns may need
+    masses the rods cannot be built at: where the rounds end short of an exact balance (and
+    the nodes' forces alone do balance), the turns and the masses are solved together
+    (:func:`balance_jointly`) from where they ended, and kept where that balances better.
 
     Returns:
         (the plan with its pivots, lengths, bounds and hub centres of mass; rounds used; the
@@ -54,8 +67,11 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
         full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
                                  com=plan.statics_com, allow_compression=t.compression, g=g)
-        if full.exact or full.residual <= ORIENT_FINE:
-            return plan, rounds, full.residual  # (this close, the refinement through the solver finishes it)
+        if full.exact:
+            return plan, rounds, full.residual
+        if full.residual <= ORIENT_FINE:  # (this close, the joint solve below or the refinement finishes it)
+            best, best_res = plan, full.residual
+            break
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
                                com=plan.statics_com, allow_compression=t.compression, g=g, forces_only=True)
@@ -65,7 +81,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             if full.residual < best_res:
                 best, best_res = plan, full.residual
             stall += 0 if st.exact else 1
-            if stall >= 2:  # the forces themselves do not balance: turning sockets will not reach it
+            if stall >= 2:  # the forces themselves do not balance: the least turns will not reach it
                 break
         ends = t.positions[t.edges] + plan.pivots
         u = ends[:, 1] - ends[:, 0]
@@ -111,7 +127,59 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             nxt[on] *= r / np.linalg.norm(nxt[on], axis=1, keepdims=True)
             nxt[~on] = new[~on]
         plan = replan(plan, nxt)
+    if t.n > JOINT_NODES and best_res > JOINT_FAR:
+        return best, rounds, best_res  # (a big net this far from balancing: seconds for nothing)
+    joint, joint_res = balance_jointly(best, g=g)
+    if joint_res < best_res:
+        return joint, rounds + 1, joint_res
     return best, rounds, best_res
+
+
+def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
+    """The plan with its free hubs' sockets turned and its rods' masses found together
+    (:func:`optimize.netsockets.balance_sockets`), from its sockets and the statics' best fit
+    there: where turning each hub by its least turn needs masses the rods cannot be built at,
+    other turns may balance within them. Returns (the plan, the statics' residual there over
+    the force scale); the plan as it was when the joint solve does not improve it."""
+    from optimize import design_net_masses
+    from optimize.netsockets import balance_sockets
+
+    t, hw = plan.target, plan.hardware
+
+    def statics(p):
+        return design_net_masses(t.positions, t.edges, p.lengths, p.bounds, t.anchored, node_masses=p.node_masses,
+                                 node_com=p.node_com, pivots=p.pivots, com=p.statics_com,
+                                 allow_compression=t.compression, g=g)
+
+    st = statics(plan)
+    if st.exact:
+        return plan, st.residual
+    socket_com = np.zeros(t.n)
+    for k in np.flatnonzero(plan.degree > 0):
+        deg = int(plan.degree[k])
+        socket_com[k] = hw.hub_mass(np.tile([1.0, 0.0, 0.0], (deg, 1)))[1][0] / deg
+    # the turns are measured from the lines between the node points, and kept within half the
+    # swing the sockets allow (the net still swings its rods as it hangs)
+    x = t.positions
+    line = x[t.edges[:, 1]] - x[t.edges[:, 0]]
+    line *= hw.pivot_radius / np.linalg.norm(line, axis=1, keepdims=True)
+    lines = np.stack([line, -line], axis=1)
+    cap = 0.5 * float(plan.swing_limits.min())
+    best, best_res = plan, st.residual
+    cur = plan
+    for _ in range(JOINT_ROUNDS):  # the rods' lengths, and with them their mass bounds, follow the sockets
+        h = 1e-4 * float(cur.lengths.mean())
+        slopes = (rod_bounds(cur, cur.lengths + h) - rod_bounds(cur, cur.lengths - h)) / (2 * h)
+        sb = balance_sockets(t.positions, t.edges, lines, cur.bounds, t.anchored, node_masses=cur.node_masses,
+                             start=cur.pivots, max_turn_deg=cap, bound_slopes=slopes, socket_com=socket_com, masses0=st.masses, tensions0=st.tensions, com=cur.statics_com,
+                             allow_compression=t.compression, g=g, max_nfev=int(np.clip(JOINT_NFEV / t.m, 20, 200)))
+        cur = replan(cur, sb.pivots)
+        st = statics(cur)
+        if st.residual < best_res:
+            best, best_res = cur, st.residual
+        if st.exact:
+            break
+    return best, best_res
 
 
 def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:

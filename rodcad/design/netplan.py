@@ -21,7 +21,7 @@ from rodcad.catalog.node import NetRodNumbers, NodeHardware
 from rodcad.design.net import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["NetPlan", "POINT_WIDTH", "fill_lengths", "length_range", "mass_segments", "plan_net", "replan"]
+__all__ = ["NetPlan", "POINT_WIDTH", "fill_lengths", "length_range", "mass_segments", "plan_net", "replan", "rod_bounds"]
 
 
 @dataclass
@@ -234,10 +234,21 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
         dirs[j].append(pivots[e, 1] / np.linalg.norm(pivots[e, 1]))
     for k in range(t.n):
         node_masses[k], node_com[k] = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
+    bounds = rod_bounds(plan, lengths, rods)
+    return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,
+                   plan.segment)
+
+
+def rod_bounds(plan: NetPlan, lengths: np.ndarray, rods: list[NetRodNumbers] | None = None) -> np.ndarray:
+    """(m, 2) the plan's rods' mass bounds (g) at pivot-to-pivot ``lengths`` (mm): their whole
+    mass range, or the segment of buildable masses the plan holds them to (``segment``)."""
+    hw = plan.hardware
+    flen = fill_lengths(hw, lengths, plan.target.bends)
+    if rods is None:
+        rods = [hw.rod_numbers(float(L)) for L in flen]
     bounds = np.array([r.mass_range for r in rods], float)
     if plan.segment is not None:
         for e, L in enumerate(flen):
             segs = mass_segments(hw, float(L))
             bounds[e] = segs[min(int(plan.segment[e]), len(segs) - 1)]
-    return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,
-                   plan.segment)
+    return bounds

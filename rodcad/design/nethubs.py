@@ -8,7 +8,7 @@ import numpy as np
 
 from rodcad.design.netplan import NetPlan, mass_segments, replan, rod_bounds
 
-__all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "JOINT_NFEV", "JOINT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
+__all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "JOINT_NFEV", "JOINT_PROGRESS", "JOINT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
 
 
 #: Rounds of :func:`orient_sockets` at most, and the pivot change (over the pivot radius) it stops at.
@@ -29,6 +29,9 @@ JOINT_NFEV = 12000
 #: force scale; hung hub grids start at 3e-3 to 1.2e-2) get no joint solve.
 JOINT_NODES = 100
 JOINT_FAR = 0.05
+#: Such a net's joint solve goes on to another round only where the last one cut the residual
+#: at least this many times (one that no turns balance stops after its first round).
+JOINT_PROGRESS = 10.0
 
 
 def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, float]:
@@ -175,9 +178,10 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
                              allow_compression=t.compression, g=g, max_nfev=int(np.clip(JOINT_NFEV / t.m, 20, 200)))
         cur = replan(cur, sb.pivots)
         st = statics(cur)
+        before = best_res
         if st.residual < best_res:
             best, best_res = cur, st.residual
-        if st.exact:
+        if st.exact or (t.n > JOINT_NODES and best_res * JOINT_PROGRESS > before):
             break
     return best, best_res
 

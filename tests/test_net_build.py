@@ -276,16 +276,15 @@ def test_a_net_with_its_solids_hangs_as_designed(tmp_path, monkeypatch):
     assert "## As built" in (out / "report.md").read_text()
 
 
-def test_a_hung_hub_net_that_misses_says_the_hubs_balance_is_what_fails():
-    """A 2 x 3 grid of the default catalog's hubs hung with masses each rod can be built at
-    (the hubs turning as they balance): its shape is a target those hubs and masses reach. Where
-    the design does not reach it exactly (its sockets are turned from the lines between the node
-    points by the least turn, not as the hanging hubs turned), the reason must not say that no
-    masses balance the nodes' forces: they do (those masses), and the hubs' balance is named."""
+def _hung_hub_grid(nx: int, ny: int):
+    """A grid of the default catalog's hubs (55 mm cells on a bowl, held at its corners, the
+    rods between anchored corners left out) hung by the solver with each rod's mid-range
+    buildable mass: (catalog, the flat target, its plan, the hung result)."""
     from rodcad.design.netplan import mass_segments
 
     cat = load_catalog(ROOT / "catalogs" / "pla-parametric.yaml")
-    spec = grid_net(2, 3, x=(0, 110), y=(0, 165), z=lambda x, y: 0.003 * ((x - 55) ** 2 + (y - 82.5) ** 2) - 30,
+    w, h = 55.0 * nx, 55.0 * ny
+    spec = grid_net(nx, ny, x=(0, w), y=(0, h), z=lambda x, y: 0.003 * ((x - w / 2) ** 2 + (y - h / 2) ** 2) - 30,
                     anchored="corners")
     keep = ~np.isin(spec.edges, spec.anchored).all(axis=1)
     flat = NetTarget("nodes", spec.positions, spec.edges[keep], spec.anchored)
@@ -294,6 +293,16 @@ def test_a_hung_hub_net_that_misses_says_the_hubs_balance_is_what_fails():
     hung = solve_net(flat.positions, flat.edges, plan.lengths, masses, flat.anchored, node_masses=plan.node_masses,
                      node_com=plan.node_com, pivots=plan.pivots)
     assert hung.success and hung.stable and hung.compressed.size == 0
+    return cat, flat, plan, hung
+
+
+def test_a_hung_hub_net_that_misses_says_the_hubs_balance_is_what_fails():
+    """A 2 x 3 grid of the default catalog's hubs hung with masses each rod can be built at
+    (the hubs turning as they balance): its shape is a target those hubs and masses reach. Where
+    the design does not reach it exactly (its sockets are turned from the lines between the node
+    points by the least turn, not as the hanging hubs turned), the reason must not say that no
+    masses balance the nodes' forces: they do (those masses), and the hubs' balance is named."""
+    cat, flat, _, hung = _hung_hub_grid(2, 3)
     check = design_net_plan(plan_net(NetTarget("nodes", hung.positions, flat.edges, flat.anchored), cat), seed=0)
     if check.design.statics.exact and check.rel_size <= 1e-6:
         return  # reached: nothing to explain
@@ -311,19 +320,7 @@ def test_a_hung_hub_grid_is_designed_exactly(nx, ny):
     in the bounds it designed them in, and the solver, started from the target with the
     designed sockets, hubs and masses, must stay there. (The sockets turned hub by hub by the
     least turn once needed masses the rods cannot be built at: 2e-3 to 5e-3 of the size off.)"""
-    from rodcad.design.netplan import mass_segments
-
-    cat = load_catalog(ROOT / "catalogs" / "pla-parametric.yaml")
-    w, h = 55.0 * nx, 55.0 * ny
-    spec = grid_net(nx, ny, x=(0, w), y=(0, h), z=lambda x, y: 0.003 * ((x - w / 2) ** 2 + (y - h / 2) ** 2) - 30,
-                    anchored="corners")
-    keep = ~np.isin(spec.edges, spec.anchored).all(axis=1)
-    flat = NetTarget("nodes", spec.positions, spec.edges[keep], spec.anchored)
-    plan = plan_net(flat, cat)
-    masses = np.array([np.mean(mass_segments(cat.node, float(L))[0]) for L in plan.lengths])
-    hung = solve_net(flat.positions, flat.edges, plan.lengths, masses, flat.anchored, node_masses=plan.node_masses,
-                     node_com=plan.node_com, pivots=plan.pivots)
-    assert hung.success and hung.stable and hung.compressed.size == 0
+    cat, flat, plan, hung = _hung_hub_grid(nx, ny)
     target = NetTarget("nodes", hung.positions, flat.edges, flat.anchored)
     check = design_net_plan(plan_net(target, cat), seed=0)
     assert check.design.statics.exact

@@ -8,9 +8,11 @@ directions, the weight shares' arms and the hub's centre of mass. The turns that
 hub are not unique, and a turn chosen hub by hub (the least turn for given forces) may need
 masses outside what the rods can be built at. :func:`balance_sockets` solves the turns, the
 masses (within their bounds) and the tensions (>= 0 unless compression is allowed) together:
-``scipy.optimize.least_squares`` (trust region reflective, a sparse Jacobian by finite
-differences over the rods' node pattern) on every free hub's force and moment balance, from
-the sockets given (the turns being a few degrees, it stays near them).
+``scipy.optimize.least_squares`` (trust region reflective, the exact sparse Jacobian: a rod's
+unknowns reach its two nodes' rows; unknowns scaled by the Jacobian's columns) on every free
+hub's force and moment balance, from the sockets given (the turns being a few degrees, it
+stays near them). Finite differences over the rods' node pattern took 30-60 evaluations a
+Jacobian and, with fixed scales, crawled where masses sit at their bounds.
 
 Each socket turns from ``p0`` (``pivots``, unit direction ``d0``) to ``r (d0 + a b1 + c b2) /
 |d0 + a b1 + c b2|`` with ``b1, b2`` a tangent basis at ``d0`` and ``|a|, |c| <= tan(max_turn_deg)``:
@@ -30,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import least_squares
 
-__all__ = ["SocketBalance", "balance_sockets"]
+__all__ = ["SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
 
 
 @dataclass
@@ -56,6 +58,28 @@ class SocketBalance:
     turn_deg: float
     nfev: int
 
+
+@dataclass
+class SocketProblem:
+    """:func:`balance_sockets`' least squares (see :func:`socket_problem`).
+
+    Attributes:
+        fun: x -> every free hub's force (over the force scale) and moment (over that times
+            the mean rod length) imbalance, (6 x free hubs,).
+        jac: x -> the exact Jacobian of ``fun`` (scipy sparse).
+        x0, lo, hi: the start and the bounds: each turning socket's two turns, the tensions
+            over the force scale, each mass's place in its bounds (0..1).
+        unpack: x -> (pivots (m, 2, 3), tensions, masses).
+        hub_com: pivots -> (n, 3) the hubs' centres of mass.
+    """
+
+    fun: object
+    jac: object
+    x0: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    unpack: object
+    hub_com: object
 
 def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, node_masses, socket_com,
                     masses0, tensions0, start=None, max_turn_deg: float = 15.0, bound_slopes=None, com=None,
@@ -91,6 +115,26 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
     Returns:
         SocketBalance.
     """
+    pr = socket_problem(target_positions, edges, pivots, mass_bounds, anchored, node_masses=node_masses,
+                        socket_com=socket_com, masses0=masses0, tensions0=tensions0, start=start,
+                        max_turn_deg=max_turn_deg, bound_slopes=bound_slopes, com=com,
+                        allow_compression=allow_compression, g=g)
+    ls = least_squares(pr.fun, pr.x0, jac=pr.jac, bounds=(pr.lo, pr.hi), method="trf", x_scale="jac",
+                       max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
+    P, T, mass = pr.unpack(ls.x)
+    P0 = np.asarray(pivots, float)
+    r = np.linalg.norm(P0, axis=2)
+    res = float(np.max(np.abs(pr.fun(ls.x)), initial=0.0))
+    cos = np.sum(P * P0, axis=2) / (r * np.linalg.norm(P, axis=2))
+    turn_deg = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
+    return SocketBalance(P, mass, T, pr.hub_com(P), res, turn_deg, int(ls.nfev))
+
+
+def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, node_masses, socket_com,
+                   masses0, tensions0, start=None, max_turn_deg: float = 15.0, bound_slopes=None, com=None,
+                   allow_compression: bool = False, g: float = 9.81) -> SocketProblem:
+    """The least squares :func:`balance_sockets` solves: its residuals, their exact sparse
+    Jacobian, the start and the bounds (arguments as :func:`balance_sockets`)."""
     X = np.asarray(target_positions, float)
     E = np.asarray(edges, int)
     P0 = np.asarray(pivots, float)
@@ -169,24 +213,89 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
         moment += np.cross(hub_com(P), w)
         return np.concatenate([force[rfree] / F, moment[rfree] / (F * lmean)], axis=1).ravel()
 
-    # sparsity: a rod's unknowns reach the rows of its two nodes (a hub's centre of mass only its own)
-    cols_of_rod = [[] for _ in range(m)]
-    k = 0
-    for e, c in np.argwhere(turn):
-        cols_of_rod[e] += [2 * k, 2 * k + 1]
-        k += 1
-    rr, cc = [], []
-    for e in range(m):
-        cols = cols_of_rod[e] + [2 * ns + e, 2 * ns + m + e]
-        for node in E[e]:
-            if row[node] < 0:
+    sidx = np.full((m, 2), -1)
+    sidx[turn] = np.arange(ns)
+    eye = np.eye(3)
+
+    def jac(x):
+        """The exact Jacobian (sparse): a rod's turns, tension and mass reach its two nodes' rows, a
+        socket's turn its own hub's centre of mass too."""
+        P, T, mass = unpack(x)
+        ang = x[:2 * ns].reshape(ns, 2)
+        ends = X[E] + P
+        d = ends[:, 1] - ends[:, 0]
+        L = np.linalg.norm(d, axis=1)
+        u = d / L[:, None]
+        du = (eye - u[:, :, None] * u[:, None, :]) / L[:, None, None]      # du/dd (m, 3, 3)
+        width = (bounds[:, 1] - bounds[:, 0]) + (slopes[:, 1] - slopes[:, 0]) * (L - L0)
+        theta = x[2 * ns + m:]
+        dmass_dd = (slopes[:, 0] + theta * (slopes[:, 1] - slopes[:, 0]))[:, None] * u  # via L
+        if com_arr is None:
+            f = np.full((m, 2), 0.5)
+            df1 = np.zeros((m, 3))
+        else:
+            t_ = com_arr[:, 0] / L
+            off = np.linalg.norm(com_arr[:, 1:], axis=1)
+            s = u[:, 2]
+            root = np.sqrt(np.maximum(1 - s * s, 1e-300))
+            q = off * s / (L * root)
+            f = np.column_stack([1 - t_ - q, t_ + q])
+            df1 = (-(t_ + q) / L)[:, None] * u + (off / (L * root ** 3))[:, None] * du[:, 2, :]
+        rows, cols, vals = [], [], []
+
+        def put(node_rows, col, block):  # block (m, 6) at the rods' node rows, column col (m,)
+            ok = (node_rows >= 0) & (col >= 0)
+            rr = 6 * node_rows[ok, None] + np.arange(6)
+            rows.append(rr.ravel())
+            cols.append(np.repeat(col[ok], 6))
+            vals.append(block[ok].ravel())
+
+        # tangent of each turning socket's pivot: dP/d(a, c) (ns, 3, 2)
+        if ns:
+            v = d0[turn] + ang[:, :1] * b1[turn] + ang[:, 1:] * b2[turn]
+            nv = np.linalg.norm(v, axis=1)
+            nrm = v / nv[:, None]
+            proj = (eye - nrm[:, :, None] * nrm[:, None, :]) * (r[turn] / nv)[:, None, None]
+            dP = np.stack([proj @ b1[turn][..., None], proj @ b2[turn][..., None]], axis=2)[..., 0]
+            dPf = np.zeros((m, 2, 3, 2))
+            dPf[turn] = dP
+        scale = np.array([1.0 / F] * 3 + [1.0 / (F * lmean)] * 3)
+        for k, sign in ((0, 1.0), (1, -1.0)):
+            nrow = row[E[:, k]]
+            fk = f[:, k]
+            dfk = df1 if k == 1 else -df1
+            Fk = sign * T[:, None] * u - (g * mass * fk)[:, None] * z
+            # dFk/dd (m, 3, 3): the tension along the rod's turning direction, the weight share's
+            # change with the rod's length (its mass bounds) and tilt (its centre of mass's share)
+            A = sign * T[:, None, None] * du
+            A[:, 2, :] -= g * (fk[:, None] * dmass_dd + mass[:, None] * dfk)
+            Sk = _skews(P[:, k])
+            dFT = sign * F * u
+            put(nrow, 2 * ns + np.arange(m), np.concatenate([dFT, np.einsum("mij,mj->mi", Sk, dFT)], axis=1) * scale)
+            dFth = np.zeros((m, 3))
+            dFth[:, 2] = -g * fk * width
+            put(nrow, 2 * ns + m + np.arange(m), np.concatenate([dFth, np.einsum("mij,mj->mi", Sk, dFth)], axis=1) * scale)
+            if not ns:
                 continue
-            for c_ in cols:
-                rr.extend(range(6 * row[node], 6 * row[node] + 6))
-                cc.extend([c_] * 6)
+            for c in (0, 1):
+                dF = (A if c == 1 else -A) @ dPf[:, c]                      # (m, 3, 2)
+                dM = Sk @ dF
+                if c == k:
+                    dM = dM - _skews(Fk) @ dPf[:, c]
+                for j in (0, 1):
+                    col = np.where(sidx[:, c] >= 0, 2 * sidx[:, c] + j, -1)
+                    put(nrow, col, np.concatenate([dF[:, :, j], dM[:, :, j]], axis=1) * scale)
+        if ns:  # a hub's centre of mass follows its sockets: d(cross(kappa P / r, w))
+            for c in (0, 1):
+                node = E[:, c]
+                w = -g * M[node, None] * z
+                blk = -(kappa[node] / r[:, c])[:, None, None] * _skews(w) @ dPf[:, c]
+                for j in (0, 1):
+                    col = np.where(sidx[:, c] >= 0, 2 * sidx[:, c] + j, -1)
+                    put(row[node], col, np.concatenate([np.zeros((m, 3)), blk[:, :, j]], axis=1) * scale)
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(nr, nx))
+
     nx = 2 * ns + 2 * m
-    sparsity = sp.csr_matrix((np.ones(len(rr)), (rr, cc)), shape=(nr, nx))
-    sparsity.data[:] = 1.0
     # unknowns: turns (2 per socket), tensions / F, each mass's place in its bounds (0..1)
     width = bounds[:, 1] - bounds[:, 0]
     theta0 = np.where(width > 0, (np.asarray(masses0, float) - bounds[:, 0]) / np.where(width > 0, width, 1.0), 0.5)
@@ -206,11 +315,13 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
     ang0 = np.clip(ang0, -cap * (1 - 1e-9), cap * (1 - 1e-9))
     lo[:2 * ns], hi[:2 * ns] = -cap, cap
     x0 = np.concatenate([ang0.ravel(), T0, np.clip(theta0, 2 * inner, 1 - 2 * inner)])
-    x_scale = np.concatenate([np.full(2 * ns, 0.05), np.ones(m), np.ones(m)])
-    ls = least_squares(fun, x0, jac_sparsity=sparsity, bounds=(lo, hi), method="trf", x_scale=x_scale,
-                       max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
-    P, T, mass = unpack(ls.x)
-    res = float(np.max(np.abs(fun(ls.x)), initial=0.0))
-    cos = np.sum(P * P0, axis=2) / (r * np.linalg.norm(P, axis=2))
-    turn_deg = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
-    return SocketBalance(P, mass, T, hub_com(P), res, turn_deg, int(ls.nfev))
+    return SocketProblem(fun, jac, x0, lo, hi, unpack, hub_com)
+
+
+def _skews(a: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) the cross-product matrices of (k, 3) vectors: ``_skews(a)[i] @ b == cross(a[i], b)``."""
+    S = np.zeros(a.shape[:-1] + (3, 3))
+    S[..., 0, 1], S[..., 0, 2] = -a[..., 2], a[..., 1]
+    S[..., 1, 0], S[..., 1, 2] = a[..., 2], -a[..., 0]
+    S[..., 2, 0], S[..., 2, 1] = -a[..., 1], a[..., 0]
+    return S

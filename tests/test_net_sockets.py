@@ -11,7 +11,7 @@ import pytest
 from netgen import grid_net
 
 from optimize import design_net_masses, net_statics, solve_net
-from optimize.netsockets import balance_sockets
+from optimize.netsockets import balance_sockets, socket_problem
 from rodcad.catalog.loader import load_catalog
 from rodcad.design.net import NetTarget
 from rodcad.design.netplan import mass_segments, plan_net
@@ -85,3 +85,37 @@ def test_sockets_that_already_balance_stay(hung):
     assert sb.turn_deg <= 1e-5
     assert np.allclose(sb.masses, masses, rtol=1e-6)
     _check(tp, sb, bounds)
+
+
+def test_the_joint_solves_jacobian_is_the_derivative_of_its_residuals(hung):
+    """The least squares' exact Jacobian (turns, tensions and masses; bent rods' centres of mass
+    off their chords, mass bounds that follow the rods' lengths, sockets started off their
+    lines) against central differences at points inside the bounds: equal to the differences'
+    own error (step 1e-6 of each unknown's scale: truncation ~1e-12, round-off ~1e-10 of the
+    residuals' scale)."""
+    _, _, res, tp, masses, kappa = hung
+    t = tp.target
+    rng = np.random.default_rng(7)
+    m = t.m
+    com = np.column_stack([tp.lengths * rng.uniform(0.4, 0.6, m), rng.uniform(-3, 3, m), np.zeros(m)])
+    slopes = rng.uniform(-0.02, 0.05, (m, 2))
+    start = tp.pivots + rng.normal(0, 0.3, tp.pivots.shape)
+    start *= (np.linalg.norm(tp.pivots, axis=2) / np.linalg.norm(start, axis=2))[..., None]
+    pr = socket_problem(t.positions, t.edges, tp.pivots, np.column_stack([0.8 * masses, 1.2 * masses]), t.anchored,
+                        node_masses=tp.node_masses, socket_com=kappa, masses0=masses, tensions0=res.tensions,
+                        start=start, bound_slopes=slopes, com=com, max_turn_deg=10.0)
+    lo, hi = np.maximum(pr.lo, -1e3), np.minimum(pr.hi, 1e3)
+    for trial in range(3):
+        x = pr.x0 if trial == 0 else lo + (hi - lo) * rng.uniform(0.1, 0.9, pr.x0.size)
+        if trial:
+            x[np.isinf(pr.hi)] = pr.x0[np.isinf(pr.hi)] * rng.uniform(0.5, 2.0)
+        J = pr.jac(x).toarray()
+        fd = np.empty_like(J)
+        for j in range(x.size):
+            h = 1e-6 * max(1.0, abs(x[j]))
+            e = np.zeros_like(x)
+            e[j] = h
+            fd[:, j] = (pr.fun(x + e) - pr.fun(x - e)) / (2 * h)
+        scale = float(np.abs(fd).max())
+        assert np.abs(J - fd).max() <= 1e-6 * scale
+        assert np.count_nonzero(np.abs(fd) > 1e-6 * scale) > 0.5 * np.count_nonzero(J)  # (not an empty test)

@@ -98,6 +98,11 @@ def kkt_residual(net: Net, ev: NetEval, lam: np.ndarray) -> tuple[float, np.ndar
     return res, r
 
 
+#: The line search restores a step by Levenberg-Marquardt only where no rod's length is off
+#: by more than this (over its length) after the step.
+RESTORE_FROM = 1.0
+
+
 @dataclass
 class Factor:
     """A factorization of K = H + mu D + rho (J'J + gauge), positive definite."""
@@ -291,6 +296,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     status = 1
     it = 0
     stall = 0
+    first = 1.0  # the line search's first step: up from the last one accepted (see below)
     while it < max_iter:
         if kkt <= TARGET or (kkt <= CONVERGED and stall >= 2):
             if escapes < max_escapes and not is_stable(net, state, ev, lam):
@@ -316,14 +322,16 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
             dy = _capped(net, dy)
         slope = float(r @ dy)
         tol = _feasible_tol(net, state)
-        alpha = 1.0
+        alpha = first
         accepted = False
         for _ in range(40):
             moved = state.moved(net, alpha * dy)
             trial, tev, ok = _project(net, moved, fac, tol)
-            if not ok and alpha >= 0.1:
+            if not ok and alpha >= 0.1 and _violation(net, evaluate(net, moved, full=False)) <= RESTORE_FROM:
                 # the chord iteration fails where J turns fast (a flat net whose rods swing
-                # out of its plane): Levenberg-Marquardt with fresh Jacobians
+                # out of its plane): Levenberg-Marquardt with fresh Jacobians (not from a step
+                # that stretched a rod past twice its length: rarely back within its
+                # iterations, while a shorter step costs one projection)
                 trial, tev, ok, _ = restore(net, moved, max_iter=30, nu=1e-8)
             if ok:
                 drop = energy_change(net, state, ev, trial, tev)
@@ -347,6 +355,10 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
                 continue
             status = 3
             break
+        # far from the equilibrium the full Newton step can move nodes by rod lengths: the next
+        # search starts at four times the step just taken (a failed try of a long step costs a
+        # restoration of tens of factorizations), back to the full step within a few iterations
+        first = min(1.0, 4.0 * alpha)
         old = kkt
         state, ev = trial, (tev if tev.J is not None else evaluate(net, trial))
         lam = multipliers(net, ev)

@@ -29,8 +29,8 @@ JOINT_NFEV = 12000
 #: force scale; hung hub grids start at 3e-3 to 1.2e-2) get no joint solve.
 JOINT_NODES = 100
 JOINT_FAR = 0.05
-#: Such a net's joint solve goes on to another round only where the last one cut the residual
-#: at least this many times (one that no turns balance stops after its first round).
+#: A joint solve goes on to another round only where the last one cut the residual at least
+#: this many times (one that no turns balance stops after its first round).
 JOINT_PROGRESS = 10.0
 
 
@@ -181,7 +181,7 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
         before = best_res
         if st.residual < best_res:
             best, best_res = cur, st.residual
-        if st.exact or (t.n > JOINT_NODES and best_res * JOINT_PROGRESS > before):
+        if st.exact or best_res * JOINT_PROGRESS > before:
             break
     return best, best_res
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import least_squares
+from threadpoolctl import threadpool_limits
 
 from optimize.net import NetResult, solve_net
 from optimize.netderiv import evaluate, gauge_rows, hessian
@@ -223,8 +224,12 @@ def _refine(target, edges, lengths, anchored, statics, check, mass_bounds, rotat
             return np.zeros((target.size, m))
 
     x0 = np.clip(statics.masses, lo, hi)
-    ls = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale=np.maximum(hi - lo, 1e-12),
-                       max_nfev=max_refine, xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    # one BLAS thread: the dense trust-region steps (SVDs of hundreds of masses' columns) gain
+    # little from threads, and on a busy 2-core machine OpenBLAS's spinning threads made the
+    # refinement of a 200-node net ten times slower (33 s against 2.6 s, benchmarks/bench_net.py)
+    with threadpool_limits(limits=1, user_api="blas"):
+        ls = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale=np.maximum(hi - lo, 1e-12),
+                           max_nfev=max_refine, xtol=1e-14, ftol=1e-14, gtol=1e-14)
     best = solve(ls.x)
     before, after = _error(check, target), _error(best, target)
     info = {"refine_nfev": ls.nfev, "fit_error": before, "refined_error": min(before, after),

@@ -28,6 +28,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 from rodcad.cli import main
 
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    # a worker per CPU already fills the machine: each on one BLAS thread (OpenBLAS's threads
+    # spin while they wait, and two workers' would fight over two cores)
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1, user_api="blas")
+
 
 @pytest.fixture(scope="session", autouse=True)
 def session_cache(tmp_path_factory):

@@ -109,3 +109,43 @@ def read_gcode(gcode: str) -> Sliced:
                 per[kind] = per.get(kind, 0.0) + d
                 extruded = True
     return out
+
+
+def travel_moves(gcode: str) -> list[tuple[float, tuple[float, float], tuple[float, float], int]]:
+    """Every move without extrusion in x/y: (print_z, from (x, y), to (x, y), pauses before it);
+    absolute x/y as PrusaSlicer writes them. The nozzle's height on a travel is the layer's
+    print_z plus any z lift (the projects rodcad writes lift none)."""
+    z, x, y, paused = 0.0, None, None, 0
+    out = []
+    for line in gcode.splitlines():
+        if line.startswith(";Z:"):
+            z = float(line[3:])
+            continue
+        words = line.split(";")[0].split()
+        if not words:
+            continue
+        if words[0] == "M601":
+            paused += 1
+            continue
+        if words[0] not in ("G0", "G1"):
+            continue
+        args = {w[0]: float(w[1:]) for w in words[1:] if w and w[0] in "XYZE"}
+        nx, ny = args.get("X", x), args.get("Y", y)
+        if ("X" in args or "Y" in args) and x is not None and args.get("E", 0.0) <= 0:
+            out.append((z, (x, y), (nx, ny), paused))
+        x, y = nx, ny
+    return out
+
+
+def model_vertices(project: Path) -> dict[str, "list[tuple[float, float, float]]"]:
+    """{object name: its mesh's vertices} of a 3MF project whose build items carry no
+    transform (rodcad's: the vertices already where they print, mm)."""
+    import zipfile
+
+    with zipfile.ZipFile(project) as z:
+        xml = z.read("3D/3dmodel.model").decode()
+    out = {}
+    for m in re.finditer(r'<object id="\d+" name="([^"]+)".*?</object>', xml, re.S):
+        out[m.group(1)] = [tuple(float(v) for v in t) for t in
+                           re.findall(r'<vertex x="([^"]+)" y="([^"]+)" z="([^"]+)"', m.group(0))]
+    return out

@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from gcode_util import NOT_ROD, needs_slicer, read_gcode, slice_file
+from gcode_util import NOT_ROD, model_vertices, needs_slicer, read_gcode, slice_file, travel_moves
 
 from rodcad.catalog.loader import load_catalog
 from rodcad.cli import main
@@ -109,6 +109,30 @@ def test_prusaslicer_slices_one_rod_file_alone_at_its_designed_plastic_with_its_
     print(f"{stem} alone: sliced {got:.3f} g, designed {want:.3f} g ({got / want - 1:+.2%}); skirt and support "
           f"{sliced.grams(1.75, 1.24) - got:.3f} g")
     assert got == pytest.approx(want, rel=0.02)
+    # After the pause the steel balls stand up to d - rs above the layer: no travel (at the
+    # layer's height: no z lift) may pass over one until its top is printed over
+    import numpy as np
+
+    from rodcad.cad.net import ball_positions
+
+    assert "; avoid_crossing_perimeters = 1" in gcode
+    v = np.array(model_vertices(out / "rods" / f"{stem}.3mf")[stem])
+    mid = (v.min(axis=0) + v.max(axis=0)) / 2  # the row of balls is centred on the rod (along x on the bed)
+    xs = mid[0] + ball_positions(hw, r["length"], r["steel_balls"]) - r["length"] / 2
+    radius = hw.insert_diameter / 2
+    seated = hw.rod_diameter / 2 - hw.insert_clearance / 2  # a ball's centre at the bottom of its socket
+    over = []
+    for z, a, b, paused in travel_moves(gcode):
+        if not paused or z >= seated + radius:
+            continue
+        t = np.linspace(0.0, 1.0, 64)[:, None]
+        pts = np.asarray(a) + t * (np.asarray(b) - np.asarray(a))
+        for x in xs:
+            rho = np.hypot(pts[:, 0] - x, pts[:, 1] - mid[1])
+            top = seated + np.sqrt(np.maximum(radius**2 - rho**2, 0.0))
+            if np.any((rho < radius) & (top > z)):
+                over.append((z, a, b))
+    assert over == [], f"{len(over)} travel moves over a steel ball, first {over[:3]}"
 
 
 # --------------------------------------------------------------------------- hub halves

@@ -18,9 +18,11 @@ its widest section, so the print pauses before the layer sliced at the sockets' 
 height (the print then stands within half a layer of it, where the opening is
 ``2 sqrt(rs^2 - (h/2)^2)`` across, wider than the ball for a 0.2 mm layer); the ball lies in
 the lower half and the upper half of the socket prints over it, the ball carrying the
-overhang. At the pause the ball stands up to ``d - rs`` (about 2.9 mm) above the print, and
-in the next layers the nozzle prints each socket's wall within about ``clearance / 2`` of
-the ball's side: a ball seated off-centre can be touched; the rod's socket is round because
+overhang. At the pause the ball stands up to ``d - rs`` (about 2.9 mm) above the print: the
+projects keep travel over the printed layer (``avoid_crossing_perimeters``,
+:func:`rodcad.cad.slicer.slicer_config`), never across a ball, and in the next layers the
+nozzle prints each socket's wall within about ``clearance / 2`` of the ball's side: a ball
+seated off-centre can be touched; the rod's socket is round because
 a flat-roofed silo (the chains' socket) does not fit inside a 9 mm round rod with its walls.
 
 Units: mm, g.

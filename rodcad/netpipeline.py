@@ -15,6 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rodcad.design.model import Design
 from rodcad.design.netcheck import NetCheck, design_net_plan
 from rodcad.design.netplan import plan_net
@@ -51,7 +53,13 @@ class NetBuild:
     @property
     def as_built_ok(self) -> bool:
         """Without CAD, or the net as built within the tolerance of the design."""
-        return self.solids is None or bool(self.solids.rel_size <= self.check.tolerance)
+        return self.solids is None or bool(self.solids.rel_size <= self.check.tolerance)  # (NaN: no equilibrium)
+
+    @property
+    def as_built_stalled(self) -> bool:
+        """The as-built net's solver stopped short of round-off (see
+        :data:`rodcad.cad.net.AS_BUILT_KKT`): its error is read where it stopped."""
+        return self.solids is not None and not self.solids.as_built.success
 
     def limit(self) -> str:
         return self.check.limit()
@@ -103,6 +111,11 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
     return data
 
 
+def _finite(x: float) -> float | None:
+    """A float for design.json, None where it is not finite (JSON has no NaN)."""
+    return float(x) if np.isfinite(x) else None
+
+
 def _ball_name(catalog) -> str:
     """The name of the steel balls that weigh the net's rods down ('' without)."""
     balls = next(iter(catalog)).balls
@@ -121,9 +134,14 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                             "node_com": [[float(v) for v in c] for c in s.node_com],
                             "simulated": [[float(v) for v in p] for p in s.as_built.positions],
                             "stable": bool(s.as_built.stable),
-                            "error": {"max_mm": float(s.error_mm), "max_rel_size": float(s.rel_size)},
+                            "converged": bool(s.as_built.success),
+                            "kkt_residual": _finite(s.as_built.kkt_residual),
+                            "error": {"max_mm": _finite(s.error_mm), "max_rel_size": _finite(s.rel_size)},
                             "note": "the net re-solved with the solids' masses and centres of mass, against the "
-                                    "design's simulated nodes and pivots"}
+                                    "design's simulated nodes and pivots" + (
+                                        "" if s.as_built.success else
+                                        f"; the solver stopped short of round-off ({s.as_built.message}), the "
+                                        "error read where it stopped (null: too far from an equilibrium to say)")}
         parts = s.hub_parts if s.hub_splits else [(h, None, True) for h in s.hubs]
         data["cad"] = {"hubs": sum(h is not None for h in s.hubs), "rods": len(s.rods),
                        "nodes_without_hub": [k for k, h in enumerate(s.hubs) if h is None],

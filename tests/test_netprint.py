@@ -201,3 +201,57 @@ def test_a_hub_whose_sockets_lie_far_off_any_plane_is_left_whole_with_the_reason
     hub, socks, hw = _hub((0.0, math.pi / 2, math.pi, 3 * math.pi / 2), 0.3)  # 2.1 mm up and down
     sp = split_hub(hub, socks, hw, "hub-000")
     assert not sp.split and sp.parts == [hub] and "off any plane" in sp.reason and sp.off_plane > 2.0
+
+
+# --------------------------------------------------------------------------- as built, solver stopped
+
+
+def test_an_as_built_net_the_solver_stops_short_on_is_read_there_or_said_to_be_rodcads_failure(tmp_path, monkeypatch,
+                                                                                                 capsys):
+    """The as-built re-solve may stop at its iteration limit short of round-off (a taut saddle
+    grid stalled at KKT 2.3e-8 and the build died writing NaN to design.json). Stopped close to
+    an equilibrium (KKT <= AS_BUILT_KKT): the error is read where it stopped, design.json says
+    so (converged false, the KKT), exit 0. Stopped far from one: design.json holds null (no NaN),
+    the CLI says it is rodcad's failure, exit 1, the outputs go beside the folder."""
+    import dataclasses
+
+    import numpy as np
+
+    import optimize
+    import rodcad.netpipeline as npl
+    from rodcad.cad.net import AS_BUILT_KKT
+    from rodcad.design.loader import load_design
+
+    real = optimize.solve_net
+
+    def stalled(*args, **kw):  # the as-built call only (the design's solver is optimize.net's)
+        res = real(*args, **kw)
+        return dataclasses.replace(res, success=False, stable=False, status=1, kkt_residual=0.1 * AS_BUILT_KKT,
+                                   message="Iteration limit reached before the KKT conditions held.")
+
+    (tmp_path / "v.yaml").write_text(V_NET)
+    monkeypatch.setattr(optimize, "solve_net", stalled)
+    b = npl.build_net(load_design(tmp_path / "v.yaml"), cad=True)
+    monkeypatch.setattr(optimize, "solve_net", real)
+    assert b.as_built_stalled and np.isfinite(b.solids.rel_size) and b.ok
+    monkeypatch.setattr(npl, "build_net", lambda *a, **k: b)
+    out = tmp_path / "v"
+    assert main(["build", str(tmp_path / "v.yaml"), "-o", str(out), "-q"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    ab = data["as_built"]
+    assert ab["converged"] is False and ab["kkt_residual"] == pytest.approx(0.1 * AS_BUILT_KKT)
+    assert ab["error"]["max_rel_size"] == pytest.approx(b.solids.rel_size)
+    assert "short of round-off" in (out / "report.md").read_text()
+    # far from an equilibrium: no error to read
+    b.solids.as_built = dataclasses.replace(b.solids.as_built, kkt_residual=0.3)
+    b.solids.error_mm = b.solids.rel_size = float("nan")
+    assert not b.ok
+    capsys.readouterr()
+    again = tmp_path / "w"
+    assert main(["build", str(tmp_path / "v.yaml"), "-o", str(again), "-q"]) == 1
+    said = capsys.readouterr().err
+    assert "rodcad's failure, not the design's" in said and "internal error" not in said
+    assert not again.exists()
+    data = json.loads((tmp_path / "w.best-fit" / "design.json").read_text())
+    assert data["as_built"]["error"] == {"max_mm": None, "max_rel_size": None}
+    assert data["as_built"]["converged"] is False

@@ -117,12 +117,20 @@ def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> 
     target = outdir if b.ok else _best_fit(outdir)
     write_net_outputs(b, target, progress=progress)
     print(net_summary(b.check, target))
-    if b.solids is not None:
+    stalled = b.as_built_stalled and f" (the solver stopped at KKT residual {b.solids.as_built.kkt_residual:.2g}, " \
+                                     "short of round-off: read where it stopped)"
+    if b.solids is not None and b.solids.rel_size == b.solids.rel_size:
         print(f"as built (the solids' masses and centres of mass): {b.solids.error_mm:.3g} mm "
-              f"({100 * b.solids.rel_size:.3g} % of its size) from the design")
+              f"({100 * b.solids.rel_size:.3g} % of its size) from the design{stalled or ''}")
     if not b.check.ok:
         print(f"rodcad: {design.name} {b.limit()}; {outdir} left as it was, the best fit is in {target}",
               file=sys.stderr)
+        return 1
+    if not b.ok and b.solids.rel_size != b.solids.rel_size:  # (NaN) rodcad's solver, not the design
+        print(f"rodcad: {design.name}: the net as built (the solids' masses) did not solve: rodcad's solver stopped "
+              f"at KKT residual {b.solids.as_built.kkt_residual:.2g} ({b.solids.as_built.message}); this is rodcad's "
+              f"failure, not the design's: please report it with the design file; {outdir} left as it was, the "
+              f"design and its solids are in {target}", file=sys.stderr)
         return 1
     if not b.ok:
         print(f"rodcad: {design.name}: as built (the solids' masses) it hangs {100 * b.solids.rel_size:.3g} % of its "

@@ -149,9 +149,15 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   "parts (hubs/hub-NNN-a.step, .stl and -b: each hub's two halves), "
                   "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
                   "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
-                  "With the solids' own masses and centres of mass the net hangs "
-                  f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) from "
-                  f"the design ({'stable' if ab['stable'] else 'NOT stable'}).", ""]
+                  + (("With the solids' own masses and centres of mass the net hangs "
+                      f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) "
+                      f"from the design ({'stable' if ab['stable'] else 'NOT stable'})"
+                      + ("." if ab.get("converged", True) else
+                         f"; the solver stopped at KKT residual {ab['kkt_residual']:.2g}, short of round-off, and "
+                         "the error is read where it stopped."))
+                     if ab["error"]["max_mm"] is not None else
+                     "With the solids' own masses and centres of mass rodcad's solver found no equilibrium "
+                     f"(it stopped at KKT residual {ab['kkt_residual']}): rodcad's failure, not the design's."), ""]
         lines += _print_section(data)
     else:
         lines += ["", "## Not built", "",

@@ -212,6 +212,16 @@ def _solve_from(net: Net, start: NetState, max_iter: int):
 
 def _result(net: Net, out) -> NetResult:
     ev, lam, state = out.ev, out.lam, out.state
+    success = out.status == 0 and out.kkt <= CONVERGED
+    stable = bool(success and is_stable(net, state, ev, lam))
+    scale = max(net.weight, float(np.max(np.abs(lam), initial=0.0)))
+    if success and (not stable or np.any(lam < -1e-9 * scale)):
+        # a net with self-stresses (J' s = 0) leaves its tensions open: the least-squares ones
+        # may push where tensions that also hold it pull, and the stability test reads the
+        # Hessian of the Lagrangian at the tensions it is given
+        alt = tensile_multipliers(net, ev, lam)
+        if alt is not None and is_stable(net, state, ev, alt):
+            lam, stable = alt, True
     u = ev.u
     F = np.zeros((net.m, 2, 3))
     F[:, :, 2] = -ev.shares
@@ -234,8 +244,6 @@ def _result(net: Net, out) -> NetResult:
             moments[k] -= np.cross(ev.a[e, end], F[e, end])
     force_scale = max(net.weight, float(np.max(np.abs(lam), initial=0.0)))
     compressed = np.flatnonzero(lam < -1e-9 * force_scale)
-    success = out.status == 0 and out.kkt <= CONVERGED
-    stable = bool(success and is_stable(net, state, ev, lam))
     status = out.status if not (out.status == 0 and not success) else 1
     message = NET_MESSAGES[status]
     if success and not stable:
@@ -249,6 +257,43 @@ def _result(net: Net, out) -> NetResult:
                      reactions=reactions, reaction_moments=moments, compressed=compressed, energy=ev.energy,
                      kkt_residual=out.kkt, stable=stable, success=success, status=status, message=message,
                      nit=out.nit, nrestore=out.nrestore, nfactor=out.nfactor, escapes=out.escapes)
+
+
+#: Nets up to this many unknowns get the dense search of their self-stresses
+#: (:func:`tensile_multipliers`) where the least-squares tensions push or do not hold them.
+SELF_STRESS_NVAR = 3000
+
+
+def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
+    """Tensions of the same equilibrium that pull in every rod, nearest ``lam``, or None.
+
+    At an equilibrium ``grad U + J' lam = 0``; where J lacks full row rank (states of
+    self-stress ``s``, ``J' s = 0``: rods whose tensions load no node) every ``lam + S a``
+    holds the net as well, and rigid rods do not say which. The least-squares ``lam`` (the
+    limit of equally stiff rods) may push in some rods where others of the set pull in all:
+    those are found by a linear program, least ``sum |a|`` subject to ``lam + S a >= 0`` (S the
+    self-stresses from a dense SVD of J; nets up to :data:`SELF_STRESS_NVAR` unknowns).
+
+    Returns:
+        (m,) the tensions, or None: no self-stress, too large a net, or none that pull in every rod.
+    """
+    from scipy.optimize import linprog
+
+    if net.nvar == 0 or net.nvar > SELF_STRESS_NVAR:
+        return None
+    J = ev.J.toarray()
+    U, sv, _ = np.linalg.svd(J, full_matrices=True)
+    rank = int(np.sum(sv > 1e-9 * (sv[0] if sv.size else 0.0)))
+    S = U[:, rank:]
+    k = S.shape[1]
+    if k == 0:
+        return None
+    # a = p - q, p, q >= 0: min sum(p + q) s.t. -S (p - q) <= lam
+    res = linprog(np.ones(2 * k), A_ub=np.hstack([-S, S]), b_ub=lam, bounds=(0, None), method="highs")
+    if res.status != 0:
+        return None
+    alt = lam + S @ (res.x[:k] - res.x[k:])
+    return np.maximum(alt, 0.0)  # (round-off below zero)
 
 
 def _failed(net: Net, start: NetState, nres: int) -> NetResult:

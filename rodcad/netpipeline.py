@@ -147,6 +147,9 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                        "nodes_without_hub": [k for k, h in enumerate(s.hubs) if h is None],
                        "hub_parts": [p[0].label for p in parts],
                        "hubs_not_split": {h.parts[0].label: h.reason for h in s.hub_splits if not h.split},
+                       "hubs_wider_sockets": {f"hub-{k:03d}": round(float(h.clearance), 4)
+                                              for k, h in enumerate(s.hub_splits)
+                                              if h.clearance is not None and h.clearance > d.catalog.node.clearance},
                        "files": files}
     write_json(tmp / "design.json", data)
     plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "

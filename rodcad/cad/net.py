@@ -14,6 +14,7 @@ at mid-length.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,7 +24,7 @@ from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl, import_step
 from rodcad.cad.netbent import bent_rod_solid, bent_socket_centres
-from rodcad.cad.nethub import HubSplit, split_hub, split_plane
+from rodcad.cad.nethub import HubSplit, split_hub, split_plane, splittable_sockets
 from rodcad.cad.solids import GeometryError, one_solid
 from rodcad.parallel import default_jobs, worker_pool
 
@@ -241,10 +242,14 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
                 hubs.append(None)
                 splits.append(HubSplit([], [], np.array([0.0, 0.0, 1.0]), 0.0, 0.0))
                 continue
-            s = hub_solid(hw, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
-            split = split_hub(s, socks, hw, s.label)
+            piv = np.array([plan.pivots[e, c] for e, c in at]).reshape(-1, 3)
+            socks, clear = splittable_sockets(socks, piv, hw.clearance, hw.ball)
+            hwk = hw if clear == hw.clearance else dataclasses.replace(hw, clearance=clear)
+            s = hub_solid(hwk, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
+            split = split_hub(s, socks, hwk, s.label)
+            split.clearance = clear
             if not split.split:  # printed whole: a sphere's parametrisation that writes to STEP as built
-                s = whole_hub(hw, socks, name=s.label)
+                s = whole_hub(hwk, socks, name=s.label)
                 split.parts = [s]
             hubs.append(s)
             splits.append(split)

@@ -25,10 +25,13 @@ from build123d import Keep, Plane, Solid
 
 from rodcad.cad.solids import GeometryError, one_solid
 
-__all__ = ["MARGIN", "HubSplit", "precise_volume", "split_hub", "split_plane"]
+__all__ = ["MARGIN", "MAX_CLEARANCE", "HubSplit", "precise_volume", "split_hub", "split_plane", "splittable_sockets"]
 
 #: How much closer (mm) than the ball's limit a socket's centre must lie to the cut.
 MARGIN = 0.05
+#: The widest socket clearance (mm; socket diameter less ball diameter) a hub's sockets are
+#: widened to so that one cut admits every ball (:func:`splittable_sockets`).
+MAX_CLEARANCE = 1.0
 
 
 @dataclass
@@ -42,6 +45,8 @@ class HubSplit:
         normal, offset: the cut plane ``normal . x = offset`` (hub frame, mm).
         off_plane: the sockets' largest distance from it (mm).
         reason: '' when split, else why not.
+        clearance: its sockets' clearance (mm): the catalog's, or wider where one cut would not
+            admit the balls otherwise (:func:`splittable_sockets`); None when not recorded.
     """
 
     parts: list
@@ -50,6 +55,7 @@ class HubSplit:
     offset: float
     off_plane: float
     reason: str = ""
+    clearance: float | None = None
 
     @property
     def split(self) -> bool:
@@ -125,3 +131,39 @@ def split_hub(hub: Solid, sockets: np.ndarray, hw, name: str) -> HubSplit:
     if abs(total - whole) > 1e-7 * whole:
         raise GeometryError(f"{name}: its halves hold {total:.6f} mm^3, the hub {whole:.6f} mm^3")
     return HubSplit(parts, mats, n, off, far)
+
+
+def splittable_sockets(sockets: np.ndarray, pivots: np.ndarray, clearance: float, ball: float) -> tuple[np.ndarray, float]:
+    """A hub's socket centres and the clearance that lets one cut admit every ball.
+
+    A cut admits a ball through a socket whose centre lies within ``sqrt(rs^2 - (ball/2)^2)``
+    of it (``rs`` the socket's radius, ``(ball + clearance) / 2``): sockets further off any
+    plane (a node whose rods leave it far out of one plane) are widened, just enough (to at
+    most :data:`MAX_CLEARANCE`), and each moved back against its rod's pull by half the new
+    clearance (:func:`rodcad.catalog.node.socket_centres`), so the loaded ball still sits on
+    its pivot: the net hangs as designed, the ball only rattles more when the rod is slack.
+
+    Args:
+        sockets: (k, 3) the socket centres at the catalog's clearance (hub frame, mm).
+        pivots: (k, 3) the rods' pivots (the loaded balls' centres) in the same frame.
+        clearance: the catalog's clearance (mm).
+        ball: the rods' end balls' diameter (mm).
+
+    Returns:
+        (sockets (k, 3), clearance): as given where a cut admits the balls already, or
+        where even :data:`MAX_CLEARANCE` does not.
+    """
+    socks = np.asarray(sockets, float).reshape(-1, 3)
+    piv = np.asarray(pivots, float).reshape(-1, 3)
+    pull = (piv - socks) / (clearance / 2) if clearance > 0 else np.zeros_like(socks)  # unit, or 0
+    c, out = clearance, socks
+    for _ in range(4):  # the off-plane distance moves with the sockets (by under a tenth of a mm)
+        far = split_plane(out)[2]
+        if far <= math.sqrt(max(((ball + c) / 2) ** 2 - (ball / 2) ** 2, 0.0)) - MARGIN:
+            return out, c
+        need = 2 * math.sqrt((ball / 2) ** 2 + (far + 2 * MARGIN) ** 2) - ball
+        if need > MAX_CLEARANCE:
+            return socks, clearance
+        c = max(c, need)
+        out = piv - 0.5 * c * pull
+    return socks, clearance

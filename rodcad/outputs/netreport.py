@@ -129,10 +129,16 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   "ball), the rod's neck in the half cone; when all its rods are in, put the other half on, the "
                   "sockets aligned, and glue the flat faces (or clamp them with a band until the glue sets). Its "
                   "balls then turn freely in closed sockets.", ""]
+        wider = (data.get("cad") or {}).get("hubs_wider_sockets") or {}
+        if wider:
+            lines.append(f"- {len(wider)} hub(s) have wider sockets ({', '.join(f'{h} {c:g} mm' for h, c in wider.items())}"
+                         " socket diameter less ball diameter): their sockets lie too far off one plane for a cut "
+                         "at the catalog's clearance to admit the balls. Loaded, each ball sits on its pivot (the "
+                         "socket is printed back against its rod's pull); slack, it rattles more.")
         whole = (data.get("cad") or {}).get("hubs_not_split") or {}
         for hub, why in whole.items():
             lines.append(f"- {hub} is printed whole ({why}): its balls cannot be put in; move its rods or its node.")
-        if whole:
+        if whole or wider:
             lines.append("")
     lines += ["Hang the anchored hubs first, then work outward layer by layer, closing each hub on its rods "
               "(rod numbers are in design.json and on the rods' files).", ""]

@@ -16,8 +16,13 @@ fast joint-limit function (test_jointlimits.py).
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
+import hashlib
+import io
 import json
 import os
+import pickle
 import sys
 from pathlib import Path
 
@@ -29,15 +34,21 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from rodcad.cli import main
 
 
+def _session_folder(tmp_path_factory, name: str) -> Path:
+    """A folder of this test session that every pytest-xdist worker shares (the workers'
+    base temp folders sit side by side in the session's); without xdist, the process's own."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        folder = tmp_path_factory.getbasetemp().parent / name
+        folder.mkdir(exist_ok=True)
+        return folder
+    return tmp_path_factory.mktemp(name)
+
+
 @pytest.fixture(scope="session", autouse=True)
 def session_cache(tmp_path_factory):
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        # pytest-xdist: the workers share one cache (writes are atomic), so each catalog's
-        # numbers are computed once per run, not once per worker
-        folder = tmp_path_factory.getbasetemp().parent / "rodcad-cache"
-        folder.mkdir(exist_ok=True)
-    else:
-        folder = tmp_path_factory.mktemp("rodcad-cache")
+    # pytest-xdist: the workers share one cache (writes are atomic), so each catalog's
+    # numbers are computed once per run, not once per worker
+    folder = _session_folder(tmp_path_factory, "rodcad-cache")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("RODCAD_CACHE_DIR", str(folder))
         mp.setenv("RODCAD_SEED_CACHE", "1")
@@ -56,6 +67,89 @@ def build_design(tmp_path_factory):
         assert main(["build", str(design), "-o", str(out), "-q", *options]) == 0
         return out, json.loads((out / "design.json").read_text())
     return build
+
+
+_ROOT = Path(__file__).resolve().parents[1]
+
+
+def _code_version() -> str:
+    """A hash of the code and data a build reads (rodcad/, optimize/, catalogs/)."""
+    h = hashlib.sha256()
+    for top in ("rodcad", "optimize", "catalogs"):
+        for path in sorted((_ROOT / top).rglob("*")):
+            if path.is_file() and path.suffix in (".py", ".yaml", ".json"):
+                h.update(str(path.relative_to(_ROOT)).encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+class BuildStore:
+    """Builds that several test modules make of the same design, made once per test session
+    and shared by every pytest-xdist worker (a module's fixtures would each build their own).
+
+    An entry is a folder ``<root>/<key>`` keyed by everything the build reads: the design's
+    path and text, the options and the code version (:func:`_code_version`). The first
+    worker to want it builds it under an exclusive file lock (``<key>.lock``) while the
+    others wait on the lock, then read it; a build that fails leaves no entry (the next one
+    to want it tries again). Callers read the outputs and never change them.
+    """
+
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self._code: str | None = None
+
+    def _entry(self, kind: str, *parts: str) -> Path:
+        if self._code is None:
+            self._code = _code_version()
+        key = hashlib.sha256(json.dumps([kind, self._code, *parts]).encode()).hexdigest()[:24]
+        return self.root / key
+
+    @contextlib.contextmanager
+    def _locked(self, entry: Path):
+        with open(entry.with_suffix(".lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            try:
+                yield
+            finally:
+                fcntl.flock(lock, fcntl.LOCK_UN)
+
+    def cli_build(self, design: Path, *options: str) -> tuple[int, Path, str]:
+        """``rodcad build DESIGN -o OUT *options`` run once per session: (exit code, OUT, what
+        it printed on stdout)."""
+        design = Path(design).resolve()
+        entry = self._entry("cli", str(design), design.read_text(encoding="utf-8"), *options)
+        done = entry / "done.json"
+        with self._locked(entry):
+            if not done.is_file():
+                entry.mkdir(exist_ok=True)
+                printed = io.StringIO()
+                with contextlib.redirect_stdout(printed):
+                    code = main(["build", str(design), "-o", str(entry / "out"), *options])
+                done.write_text(json.dumps({"code": code, "stdout": printed.getvalue()}), encoding="utf-8")
+        record = json.loads(done.read_text(encoding="utf-8"))
+        return record["code"], entry / "out", record["stdout"]
+
+    def result(self, design: Path):
+        """``pipeline.build(load_design(DESIGN), cad=False)`` run once per session (each
+        caller gets its own copy, unpickled)."""
+        from rodcad import pipeline
+        from rodcad.design.loader import load_design
+
+        design = Path(design).resolve()
+        entry = self._entry("result", str(design), design.read_text(encoding="utf-8"))
+        done = entry / "result.pickle"
+        with self._locked(entry):
+            if not done.is_file():
+                entry.mkdir(exist_ok=True)
+                data = pickle.dumps(pipeline.build(load_design(design), cad=False))
+                (entry / "partial.pickle").write_bytes(data)
+                (entry / "partial.pickle").replace(done)
+        return pickle.loads(done.read_bytes())
+
+
+@pytest.fixture(scope="session")
+def build_store(tmp_path_factory) -> BuildStore:
+    """The session's :class:`BuildStore` (shared by the pytest-xdist workers)."""
+    return BuildStore(_session_folder(tmp_path_factory, "rodcad-builds"))
 
 
 def pytest_collection_modifyitems(config, items):

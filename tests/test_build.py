@@ -56,9 +56,10 @@ def check_contract(data: dict, n_rods: int | None = None) -> None:
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
-def test_every_example_builds_without_cad(example, tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main(["build", str(example), "-o", str(out), "--no-cad", "-q"]) == 0
+def test_every_example_builds_without_cad(example, build_store):
+    # the build is shared with tests/test_determinism.py (once per session)
+    code, out, summary = build_store.cli_build(example, "--no-cad", "-q")
+    assert code == 0
     assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg", MARKER}
     data = json.loads((out / "design.json").read_text())
     check_contract(data)
@@ -88,7 +89,6 @@ def test_every_example_builds_without_cad(example, tmp_path, capsys):
         assert heading in report
     assert (out / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "<svg" in (out / "preview.svg").read_text()[:500]
-    summary = capsys.readouterr().out
     assert "shape error" in summary and str(out) in summary
 
 

@@ -78,16 +78,15 @@ CHAINS = [p for p in EXAMPLES if p.stem != "chandelier"]
 
 
 @pytest.mark.parametrize("example", CHAINS, ids=lambda p: p.stem)
-def test_the_longest_preview_title_fits(example, tmp_path, saved_figures):
+def test_the_longest_preview_title_fits(example, tmp_path, saved_figures, build_store):
     """With CAD the title also gives the as-built figure (the longest title): the design's
     own re-simulation stands in for the solids' here."""
     from dataclasses import replace
 
     from rodcad import pipeline
-    from rodcad.design.loader import load_design
     from rodcad.outputs.preview import plot_chain
 
-    r = pipeline.build(load_design(example), cad=False)
+    r = build_store.result(example)  # the session's build (tests/test_determinism.py reads it too)
     r = replace(r, as_built=pipeline.AsBuilt(r.masses, np.zeros((r.n, 2)), r.equilibrium, r.distance))
     plot_chain(r, tmp_path / "preview.png")
     (path, bad), = saved_figures

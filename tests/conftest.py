@@ -152,6 +152,27 @@ def build_store(tmp_path_factory) -> BuildStore:
     return BuildStore(_session_folder(tmp_path_factory, "rodcad-builds"))
 
 
+#: Test modules that read the same :class:`BuildStore` build with CAD run on one
+#: pytest-xdist worker, one after the other (on two workers at once one would wait, idle, for
+#: the other's build): module -> the module whose worker runs it too.
+SAME_WORKER = {"tests/test_build_cad.py": "tests/test_asprinted.py"}  # the semicircle with CAD
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadscope`` with the modules of :data:`SAME_WORKER` in one scope."""
+    if config.getvalue("dist") != "loadscope":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class SharedBuildScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            scope = super()._split_scope(nodeid)
+            return SAME_WORKER.get(scope, scope)
+
+    return SharedBuildScheduling(config, log)
+
+
 def pytest_collection_modifyitems(config, items):
     """Tests marked ``slow`` (MuJoCo releases of the heart with pin friction, a few minutes
     each; ten more drawn shapes) run when ``RODCAD_SLOW=1``; the same checks run on smaller

@@ -128,18 +128,25 @@ class BuildStore:
         record = json.loads(done.read_text(encoding="utf-8"))
         return record["code"], entry / "out", record["stdout"]
 
-    def result(self, design: Path):
+    def result(self, design: Path | str, *, text: str | None = None):
         """``pipeline.build(load_design(DESIGN), cad=False)`` run once per session (each
-        caller gets its own copy, unpickled)."""
+        caller gets its own copy, unpickled); with ``text``, DESIGN is a file name and the
+        design is that text (written into the store)."""
         from rodcad import pipeline
         from rodcad.design.loader import load_design
 
-        design = Path(design).resolve()
-        entry = self._entry("result", str(design), design.read_text(encoding="utf-8"))
+        if text is None:
+            design = Path(design).resolve()
+            entry = self._entry("result", str(design), design.read_text(encoding="utf-8"))
+        else:
+            entry = self._entry("result-text", str(design), text)
         done = entry / "result.pickle"
         with self._locked(entry):
             if not done.is_file():
                 entry.mkdir(exist_ok=True)
+                if text is not None:
+                    design = entry / str(design)
+                    design.write_text(text, encoding="utf-8")
                 data = pickle.dumps(pipeline.build(load_design(design), cad=False))
                 (entry / "partial.pickle").write_bytes(data)
                 (entry / "partial.pickle").replace(done)

@@ -31,6 +31,7 @@ import pytest
 # the benchmarks' generators (random chains, drawn shapes) are shared with the tests
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
+from figure_clip import saved_figures  # noqa: E402 - tests/ is on sys.path
 from rodcad.cli import main
 
 
@@ -122,11 +123,20 @@ class BuildStore:
             if not done.is_file():
                 entry.mkdir(exist_ok=True)
                 printed = io.StringIO()
-                with contextlib.redirect_stdout(printed):
+                with contextlib.redirect_stdout(printed), saved_figures() as figures:
                     code = main(["build", str(design), "-o", str(entry / "out"), *options])
-                done.write_text(json.dumps({"code": code, "stdout": printed.getvalue()}), encoding="utf-8")
+                done.write_text(json.dumps({"code": code, "stdout": printed.getvalue(), "figures": figures}),
+                                encoding="utf-8")
         record = json.loads(done.read_text(encoding="utf-8"))
         return record["code"], entry / "out", record["stdout"]
+
+    def figures(self, design: Path, *options: str) -> list[tuple[str, list[str]]]:
+        """The figures :meth:`cli_build` saved with these arguments: (path, what of it lay
+        outside its canvas, tests/figure_clip.py)."""
+        design = Path(design).resolve()
+        self.cli_build(design, *options)
+        entry = self._entry("cli", str(design), design.read_text(encoding="utf-8"), *options)
+        return [tuple(f) for f in json.loads((entry / "done.json").read_text(encoding="utf-8"))["figures"]]
 
     def result(self, design: Path | str, *, text: str | None = None):
         """``pipeline.build(load_design(DESIGN), cad=False)`` run once per session (each

@@ -113,18 +113,35 @@ class BuildStore:
             finally:
                 fcntl.flock(lock, fcntl.LOCK_UN)
 
-    def cli_build(self, design: Path, *options: str) -> tuple[int, Path, str]:
+    def _cli_entry(self, design: Path | str, options: tuple[str, ...], text: str | None,
+                   patches: tuple[tuple[str, str, object], ...]) -> tuple[Path, Path]:
+        if text is None:
+            design = Path(design).resolve()
+            text = design.read_text(encoding="utf-8")
+        entry = self._entry("cli", str(design), text, repr(patches), *options)
+        return entry, (Path(design) if Path(design).is_absolute() else entry / str(design))
+
+    def cli_build(self, design: Path | str, *options: str, text: str | None = None,
+                  patches: tuple[tuple[str, str, object], ...] = ()) -> tuple[int, Path, str]:
         """``rodcad build DESIGN -o OUT *options`` run once per session: (exit code, OUT, what
-        it printed on stdout)."""
-        design = Path(design).resolve()
-        entry = self._entry("cli", str(design), design.read_text(encoding="utf-8"), *options)
+        it printed on stdout). With ``text``, DESIGN is a file name and the design is that
+        text (written into the store); ``patches`` are (module, attribute, value) set while
+        it builds (and part of the key)."""
+        import importlib
+
+        entry, path = self._cli_entry(design, options, text, patches)
         done = entry / "done.json"
         with self._locked(entry):
             if not done.is_file():
                 entry.mkdir(exist_ok=True)
+                if text is not None:
+                    path.write_text(text, encoding="utf-8")
                 printed = io.StringIO()
-                with contextlib.redirect_stdout(printed), saved_figures() as figures:
-                    code = main(["build", str(design), "-o", str(entry / "out"), *options])
+                with (pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(printed),
+                      saved_figures() as figures):
+                    for module, name, value in patches:
+                        mp.setattr(importlib.import_module(module), name, value)
+                    code = main(["build", str(path), "-o", str(entry / "out"), *options])
                 done.write_text(json.dumps({"code": code, "stdout": printed.getvalue(), "figures": figures}),
                                 encoding="utf-8")
         record = json.loads(done.read_text(encoding="utf-8"))
@@ -133,9 +150,8 @@ class BuildStore:
     def figures(self, design: Path, *options: str) -> list[tuple[str, list[str]]]:
         """The figures :meth:`cli_build` saved with these arguments: (path, what of it lay
         outside its canvas, tests/figure_clip.py)."""
-        design = Path(design).resolve()
         self.cli_build(design, *options)
-        entry = self._entry("cli", str(design), design.read_text(encoding="utf-8"), *options)
+        entry, _ = self._cli_entry(design, options, None, ())
         return [tuple(f) for f in json.loads((entry / "done.json").read_text(encoding="utf-8"))["figures"]]
 
     def result(self, design: Path | str, *, text: str | None = None):
@@ -172,7 +188,8 @@ def build_store(tmp_path_factory) -> BuildStore:
 #: Test modules that read the same :class:`BuildStore` build with CAD run on one
 #: pytest-xdist worker, one after the other (on two workers at once one would wait, idle, for
 #: the other's build): module -> the module whose worker runs it too.
-SAME_WORKER = {"tests/test_build_cad.py": "tests/test_asprinted.py"}  # the semicircle with CAD
+SAME_WORKER = {"tests/test_build_cad.py": "tests/test_asprinted.py",  # the semicircle with CAD
+               "tests/test_netprint.py": "tests/test_net_build.py"}  # the V net with CAD
 
 
 @pytest.hookimpl(optionalhook=True)

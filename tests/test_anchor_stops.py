@@ -84,8 +84,8 @@ def test_the_planner_asks_for_an_anchor_stop_where_the_masses_cannot_hold():
 
 
 @pytest.fixture(scope="module")
-def heart():
-    return pipeline.build(load_design(ROOT / "examples" / "heart.yaml"), cad=False)
+def heart(build_store):
+    return build_store.result(ROOT / "examples" / "heart.yaml")  # the session's build (test_fixture.py's too)
 
 
 def test_the_heart_hangs_from_its_cusp(heart):
@@ -333,10 +333,10 @@ def test_bad_fuse_and_closed_heart_input(tmp_path, capsys, extra, key, words):
     assert not (tmp_path / "out").exists()
 
 
-def test_anchors_further_apart_than_the_printer_takes_hang_from_bare_pins():
+def test_anchors_further_apart_than_the_printer_takes_hang_from_bare_pins(build_store):
     """One fixture holds both anchors, so anchors further apart than the printer's bed take
     none: the planner keeps the end rods free (no anchor stops) and says why (the garland's
     anchors are 240 mm apart; its fixture would be 255 mm long on a 250 mm printer)."""
-    r = pipeline.build(load_design(ROOT / "examples" / "garland.yaml"), cad=False)
+    r = build_store.result(ROOT / "examples" / "garland.yaml")  # the session's build
     assert r.end_limits is None or not np.isfinite(np.asarray(r.end_limits, float)).any()
     assert any("would not fit the printer" in n and "bare pins" in n for n in r.plan.notes), r.plan.notes

@@ -29,9 +29,10 @@ DATA = Path(__file__).parent / "data" / "example_chains.json"
 
 
 @pytest.fixture(scope="module")
-def printed_semicircle(tmp_path_factory):
-    out = tmp_path_factory.mktemp("asprinted") / "semicircle"
-    assert main(["build", str(ROOT / "examples" / "semicircle.yaml"), "-o", str(out), "--jobs", "2", "-q"]) == 0
+def printed_semicircle(build_store):
+    """The semicircle built with CAD (once per session: tests/test_build_cad.py reads the same build)."""
+    code, out, _ = build_store.cli_build(ROOT / "examples" / "semicircle.yaml", "--jobs", "2", "-q")
+    assert code == 0
     return out, json.loads((out / "design.json").read_text())
 
 

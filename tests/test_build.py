@@ -56,9 +56,10 @@ def check_contract(data: dict, n_rods: int | None = None) -> None:
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
-def test_every_example_builds_without_cad(example, tmp_path, capsys):
-    out = tmp_path / "out"
-    assert main(["build", str(example), "-o", str(out), "--no-cad", "-q"]) == 0
+def test_every_example_builds_without_cad(example, build_store):
+    # the build is shared with tests/test_determinism.py (once per session)
+    code, out, summary = build_store.cli_build(example, "--no-cad", "-q")
+    assert code == 0
     assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg", MARKER}
     data = json.loads((out / "design.json").read_text())
     check_contract(data)
@@ -88,7 +89,6 @@ def test_every_example_builds_without_cad(example, tmp_path, capsys):
         assert heading in report
     assert (out / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "<svg" in (out / "preview.svg").read_text()[:500]
-    summary = capsys.readouterr().out
     assert "shape error" in summary and str(out) in summary
 
 
@@ -205,9 +205,10 @@ def test_simulate_table_and_build_needs_a_target(tmp_path, capsys):
     assert "no 'target'" in capsys.readouterr().err
 
 
-def test_chandelier_example_builds_without_cad(tmp_path, capsys):
-    out = tmp_path / "ch"
-    assert main(["build", str(ROOT / "examples" / "chandelier.yaml"), "-o", str(out), "--no-cad", "-q"]) == 0
+def test_chandelier_example_builds_without_cad(build_store):
+    # the session's build (tests/test_preview.py inspects its figures)
+    code, out, summary = build_store.cli_build(ROOT / "examples" / "chandelier.yaml", "--no-cad", "-q")
+    assert code == 0
     data = json.loads((out / "design.json").read_text())
     assert len(data["chains"]) >= 6 and all(len(c["rods"]) >= 12 for c in data["chains"])
     for ch in data["chains"]:
@@ -219,7 +220,7 @@ def test_chandelier_example_builds_without_cad(tmp_path, capsys):
         assert np.max(np.abs((pts3 - a3) @ (n / np.linalg.norm(n)))) < 1e-9
         assert ch["error"]["max_rel_span"] < 1e-3
     assert data["bill_of_materials"]["n_rods"] == sum(len(c["rods"]) for c in data["chains"])
-    assert (out / "preview.png").exists() and "chain_06" in capsys.readouterr().out
+    assert (out / "preview.png").exists() and "chain_06" in summary
 
 
 def test_chandelier_with_a_target_per_chain_and_its_validation(tmp_path):

@@ -8,16 +8,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodcad.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "semicircle.yaml"
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    out = tmp_path_factory.mktemp("build") / "semicircle"
-    assert main(["build", str(EXAMPLE), "-o", str(out), "--jobs", "2", "-q"]) == 0
+def built(build_store):
+    """The semicircle built with CAD (once per session: tests/test_asprinted.py reads the same build)."""
+    code, out, _ = build_store.cli_build(EXAMPLE, "--jobs", "2", "-q")
+    assert code == 0
     return out, json.loads((out / "design.json").read_text())
 
 

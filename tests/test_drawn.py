@@ -15,19 +15,16 @@ import numpy as np
 import pytest
 
 from drawn_shapes import design_text, diamond, family, heart_outline
-from rodcad import pipeline
 from rodcad.cli import main
-from rodcad.design.loader import load_design
 
 #: The seeded sample the suite runs: every kind of shape once (the benchmark runs the family
 #: of 200); ten more with RODCAD_SLOW=1.
 SAMPLE = family(10, seed=7) + [pytest.param(s, marks=pytest.mark.slow) for s in family(20, seed=7)[10:]]
 
 
-def _build(shape, tmp_path):
-    path = tmp_path / f"{shape.name}.yaml"
-    path.write_text(design_text(shape), encoding="utf-8")
-    return pipeline.build(load_design(path), cad=False)
+def _build(shape, build_store):
+    """The shape's design built without CAD, once per session (two tests here build the heart)."""
+    return build_store.result(f"{shape.name}.yaml", text=design_text(shape))
 
 
 @pytest.mark.parametrize("shape", SAMPLE, ids=lambda s: getattr(s, "name", None))
@@ -54,10 +51,10 @@ def test_a_drawn_shape_hangs_within_the_tolerance_or_exits_1_with_its_reason(sha
 
 @pytest.mark.parametrize("shape", [diamond(100.0, 10.0), heart_outline(160.0, 12.0), heart_outline(160.0, 12.0, 1.25)],
                          ids=["square-from-a-corner", "heart", "lopsided-heart"])
-def test_the_issues_drawn_shapes_hang_on_their_outline(shape, tmp_path):
+def test_the_issues_drawn_shapes_hang_on_their_outline(shape, build_store):
     """Issue 24's cases, which hung 44-106 % of their size off, crashed or ran for minutes:
     with no constraints they now hang within 1 % of their size, stable, in one shape."""
-    r = _build(shape, tmp_path)
+    r = _build(shape, build_store)
     assert r.fit <= 0.01 and r.meets_tolerance
     assert r.equilibrium.success and r.equilibrium.stable and r.unique
     assert r.distance.max <= 1e-6 * shape.size
@@ -90,7 +87,7 @@ def _settles_back(r, rng) -> float:
     return float(np.max(np.hypot(*(mj["points"] - r.equilibrium.points).T))) / size
 
 
-def test_accepted_designs_settle_back_in_mujoco(tmp_path):
+def test_accepted_designs_settle_back_in_mujoco(build_store):
     """A sample of accepted designs with stops on both sides, two-sided stops, a fused piece
     and anchor stops, released 0.01 rad off their shape in MuJoCo (with those stops), settle
     back on it within 1e-4 of their size."""
@@ -98,7 +95,7 @@ def test_accepted_designs_settle_back_in_mujoco(tmp_path):
     rng = np.random.default_rng(0)
     kinds = set()
     for shape in (heart_outline(160.0, 12.0), family(49, seed=0)[48]):  # a fused tip; two-sided stops
-        r = _build(shape, tmp_path)
+        r = _build(shape, build_store)
         assert r.meets_tolerance and r.equilibrium.stable
         lim = r.limits
         kinds |= {"fused"} if r.plan.fused else set()

@@ -4,6 +4,7 @@ at rest (the heart of examples/heart.yaml, both end rods held by the fixture's s
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,13 +21,11 @@ from rodcad.cad.fixture import (
 )
 from rodcad.cad.frame import pin_solid
 from rodcad.cad.solids import GeometryError, is_valid_solid, type_solid
-from rodcad.design.loader import load_design
-from rodcad.pipeline import build
 
 
 @pytest.fixture(scope="module")
-def heart():
-    r = build(load_design("examples/heart.yaml"), cad=False)
+def heart(build_store):
+    r = build_store.result(Path(__file__).resolve().parents[1] / "examples" / "heart.yaml")  # the session's build
     pts = np.asarray(r.equilibrium.points, dtype=float)
     anchors = np.array([pts[0], pts[-1]])
     rods = list(r.plan.rods)

@@ -246,21 +246,24 @@ def test_exit_codes_of_net_builds(tmp_path, capsys):
     assert "longer than the 60 mm the catalog prints" in capsys.readouterr().err
 
 
-def test_a_net_with_its_solids_hangs_as_designed(tmp_path, monkeypatch):
+#: A small hub net (3 hubs, 2 rods holding steel balls).
+V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
+         "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
+
+#: V_NET built with its solids by the session's BuildStore, by the worker pool even for its 8
+#: parts (one part per worker): tests/test_netprint.py reads the same build.
+V_BUILD = {"text": V_NET, "patches": (("rodcad.cad.net", "PARTS_PER_WORKER", 1),)}
+
+
+def test_a_net_with_its_solids_hangs_as_designed(build_store):
     """With CAD: every hub and rod a valid solid in its files (STEP re-read, STL watertight:
     checked as written, here by worker processes as a large net's are), the assembly one
     named solid per part, and the net re-solved with the solids' masses and centres of mass
     within 0.2 % of its size of the design."""
-    from rodcad.cad import net as cadnet
     from rodcad.cad.export import read_assembly
 
-    monkeypatch.setattr(cadnet, "PARTS_PER_WORKER", 1)  # the worker pool even for 8 parts
-
-    v = tmp_path / "v.yaml"
-    v.write_text("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
-                 "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
-    out = tmp_path / "v"
-    assert main(["build", str(v), "-o", str(out), "-q"]) == 0
+    code, out, _ = build_store.cli_build("v.yaml", "-q", **V_BUILD)
+    assert code == 0
     data = json.loads((out / "design.json").read_text())
     assert {k: data["cad"][k] for k in ("hubs", "rods")} == {"hubs": 3, "rods": 2}
     halves = [f"hub-{k:03d}-{h}" for k in range(3) for h in "ab"]  # each hub in two halves (they take the balls)

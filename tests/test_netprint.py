@@ -16,21 +16,18 @@ from pathlib import Path
 
 import pytest
 from gcode_util import NOT_ROD, model_vertices, needs_slicer, read_gcode, slice_file, travel_moves
+from test_net_build import V_BUILD, V_NET  # one session build of the same net
 
 from rodcad.catalog.loader import load_catalog
 from rodcad.cli import main
 
-V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
-         "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
-
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    """A small hub net (3 hubs, 2 rods holding steel balls) built with its solids."""
-    tmp = tmp_path_factory.mktemp("netprint")
-    (tmp / "v.yaml").write_text(V_NET)
-    out = tmp / "v"
-    assert main(["build", str(tmp / "v.yaml"), "-o", str(out), "-q"]) == 0
+def built(build_store):
+    """A small hub net (3 hubs, 2 rods holding steel balls) built with its solids (the
+    session's build, tests/test_net_build.py's too)."""
+    code, out, _ = build_store.cli_build("v.yaml", "-q", **V_BUILD)
+    assert code == 0
     return out, json.loads((out / "design.json").read_text())
 
 

@@ -12,47 +12,29 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodcad.cli import main
+from figure_clip import saved_figures as recorded_figures
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem != "chain"
                   and "\nnet:" not in p.read_text())  # nets: tests/test_net_build.py
 
 
-def _outside(fig) -> list[str]:
-    """What of ``fig`` is drawn outside the canvas: each axes' tight box (its title, labels,
-    the tick labels it draws, its legend) and every figure-level text, with 1 px of slack
-    for anti-aliasing."""
-    renderer = fig.canvas.get_renderer()
-    w, h = fig.bbox.width, fig.bbox.height
-    boxes = [(f"axes {k} ({ax.get_title()!r})", ax.get_tightbbox(renderer)) for k, ax in enumerate(fig.axes)]
-    boxes += [(repr(t.get_text()), t.get_window_extent(renderer)) for t in fig.texts
-              if t.get_visible() and t.get_text().strip()]
-    return [f"{what} at x {b.x0:.0f}..{b.x1:.0f}, y {b.y0:.0f}..{b.y1:.0f} of {w:.0f} x {h:.0f}"
-            for what, b in boxes if b is not None and (b.x0 < -1 or b.y0 < -1 or b.x1 > w + 1 or b.y1 > h + 1)]
-
-
 @pytest.fixture
-def saved_figures(monkeypatch):
+def saved_figures():
     """Every figure saved while the test runs: (path, texts outside the canvas)."""
-    from matplotlib.figure import Figure
-
-    seen: list[tuple[str, list[str]]] = []
-    original = Figure.savefig
-
-    def savefig(self, fname, *args, **kwargs):
-        original(self, fname, *args, **kwargs)  # draws the figure: extents are final
-        seen.append((str(fname), _outside(self)))
-
-    monkeypatch.setattr(Figure, "savefig", savefig)
-    return seen
+    with recorded_figures() as seen:
+        yield seen
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
-def test_no_preview_text_is_clipped(example, tmp_path, saved_figures):
-    assert main(["build", str(example), "-o", str(tmp_path / "out"), "--no-cad", "-q"]) == 0
-    assert saved_figures, "no figure was saved"
-    clipped = [(path, bad) for path, bad in saved_figures if bad]
+def test_no_preview_text_is_clipped(example, build_store):
+    """The figures of the session's build of the example (tests/test_build.py reads the same
+    build), inspected as they were saved."""
+    code, _, _ = build_store.cli_build(example, "--no-cad", "-q")
+    assert code == 0
+    figures = build_store.figures(example, "--no-cad", "-q")
+    assert figures, "no figure was saved"
+    clipped = [(path, bad) for path, bad in figures if bad]
     assert not clipped, clipped
 
 
@@ -78,16 +60,15 @@ CHAINS = [p for p in EXAMPLES if p.stem != "chandelier"]
 
 
 @pytest.mark.parametrize("example", CHAINS, ids=lambda p: p.stem)
-def test_the_longest_preview_title_fits(example, tmp_path, saved_figures):
+def test_the_longest_preview_title_fits(example, tmp_path, saved_figures, build_store):
     """With CAD the title also gives the as-built figure (the longest title): the design's
     own re-simulation stands in for the solids' here."""
     from dataclasses import replace
 
     from rodcad import pipeline
-    from rodcad.design.loader import load_design
     from rodcad.outputs.preview import plot_chain
 
-    r = pipeline.build(load_design(example), cad=False)
+    r = build_store.result(example)  # the session's build (tests/test_determinism.py reads it too)
     r = replace(r, as_built=pipeline.AsBuilt(r.masses, np.zeros((r.n, 2)), r.equilibrium, r.distance))
     plot_chain(r, tmp_path / "preview.png")
     (path, bad), = saved_figures

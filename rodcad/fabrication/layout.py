@@ -271,15 +271,22 @@ def lattice_sites(bounds: tuple[Sequence[float], Sequence[float]], center: Seque
     return pts[inside]
 
 
+#: The sign flips about the centre that make each symmetry group (the identity left out).
+_FLIPS = {
+    "mirror-xyz": ((-1, 1, 1), (1, -1, 1), (-1, -1, 1), (1, 1, -1), (-1, 1, -1), (1, -1, -1), (-1, -1, -1)),
+    "point-xy": ((-1, -1, 1), (1, 1, -1), (-1, -1, -1)),
+}
+
+
+def _flips(symmetry: str) -> tuple[tuple[int, int, int], ...]:
+    if symmetry not in _FLIPS:
+        raise ValueError(f"unknown symmetry {symmetry!r} (expected one of {', '.join(SYMMETRIES)})")
+    return _FLIPS[symmetry]
+
+
 def symmetric_images(points: np.ndarray, center: Sequence[float], symmetry: str) -> list[np.ndarray]:
     c = np.asarray(center, dtype=float)
-    flips = {
-        "mirror-xyz": [(-1, 1, 1), (1, -1, 1), (-1, -1, 1), (1, 1, -1), (-1, 1, -1), (1, -1, -1), (-1, -1, -1)],
-        "point-xy": [(-1, -1, 1), (1, 1, -1), (-1, -1, -1)],
-    }
-    if symmetry not in flips:
-        raise ValueError(f"unknown symmetry {symmetry!r} (expected one of {', '.join(SYMMETRIES)})")
-    return [(points - c) * np.asarray(f) + c for f in flips[symmetry]]
+    return [(points - c) * np.asarray(f) + c for f in _flips(symmetry)]
 
 
 def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[float], symmetry: str,
@@ -299,12 +306,16 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
     feasible = np.asarray(feasible, dtype=bool)
     if len(points) == 0:
         return np.zeros(0, dtype=bool)
-    tree = cKDTree(points)
+    flips = np.asarray(_flips(symmetry), dtype=float)
     keep = feasible.copy()
-    for img in symmetric_images(points, center, symmetry):
-        dist, idx = tree.query(img, distance_upper_bound=tol)
-        found = np.isfinite(dist)
-        keep &= found & feasible[np.where(found, idx, 0)]
+    idx = np.flatnonzero(keep)  # an infeasible point is never kept: only the others' images are looked up
+    if not len(idx):
+        return keep
+    c = np.asarray(center, dtype=float)
+    images = ((points[idx] - c)[None, :, :] * flips[:, None, :] + c).reshape(-1, 3)  # all flips, one query
+    dist, near = cKDTree(points).query(images, distance_upper_bound=tol)
+    found = np.isfinite(dist)
+    keep[idx] = (found & feasible[np.where(found, near, 0)]).reshape(len(flips), len(idx)).all(axis=0)
     return keep
 
 

@@ -79,6 +79,10 @@ def _expr_eval(expr: str, **var) -> np.ndarray:
 
 
 def _spacing_ok(pos: np.ndarray, edges: np.ndarray) -> bool:
+    """Every rod's node spacing within SPACING (False for a net with no rod left: every
+    one between anchored nodes)."""
+    if len(edges) == 0:
+        return False
     d = np.linalg.norm(pos[edges[:, 1]] - pos[edges[:, 0]], axis=1)
     return bool(d.min() >= SPACING[0] and d.max() <= SPACING[1])
 

@@ -247,7 +247,6 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
             hwk = hw if clear == hw.clearance else dataclasses.replace(hw, clearance=clear)
             s = hub_solid(hwk, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
             split = split_hub(s, socks, hwk, s.label)
-            split.clearance = clear
             if not split.split:  # printed whole: a sphere's parametrisation that writes to STEP as built
                 s = whole_hub(hwk, socks, name=s.label)
                 split.parts = [s]

@@ -45,8 +45,9 @@ class HubSplit:
         normal, offset: the cut plane ``normal . x = offset`` (hub frame, mm).
         off_plane: the sockets' largest distance from it (mm).
         reason: '' when split, else why not.
-        clearance: its sockets' clearance (mm): the catalog's, or wider where one cut would not
-            admit the balls otherwise (:func:`splittable_sockets`); None when not recorded.
+        clearance: its sockets' clearance (mm, the hardware's it was split with: the catalog's,
+            or wider where one cut would not admit the balls otherwise, :func:`splittable_sockets`);
+            None for a node without a hub.
     """
 
     parts: list
@@ -116,7 +117,7 @@ def split_hub(hub: Solid, sockets: np.ndarray, hw, name: str) -> HubSplit:
     if far > limit:
         return HubSplit([hub], [np.eye(4)], n, off, far,
                         f"its sockets' centres lie up to {far:.2f} mm off any plane; a cut admits a "
-                        f"{hw.ball:g} mm ball within {limit:.2f} mm")
+                        f"{hw.ball:g} mm ball within {limit:.2f} mm", clearance=hw.clearance)
     plane = Plane(tuple(float(v) for v in n * off), z_dir=tuple(float(v) for v in n))
     top, bottom = hub.split(plane, keep=Keep.BOTH)
     parts, mats = [], []
@@ -130,7 +131,7 @@ def split_hub(hub: Solid, sockets: np.ndarray, hw, name: str) -> HubSplit:
     total, whole = sum(precise_volume(p) for p in parts), precise_volume(hub)
     if abs(total - whole) > 1e-7 * whole:
         raise GeometryError(f"{name}: its halves hold {total:.6f} mm^3, the hub {whole:.6f} mm^3")
-    return HubSplit(parts, mats, n, off, far)
+    return HubSplit(parts, mats, n, off, far, clearance=hw.clearance)
 
 
 def splittable_sockets(sockets: np.ndarray, pivots: np.ndarray, clearance: float, ball: float) -> tuple[np.ndarray, float]:

@@ -13,6 +13,7 @@ what would reach it, and the exit code is 1.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -117,16 +118,17 @@ def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> 
     target = outdir if b.ok else _best_fit(outdir)
     write_net_outputs(b, target, progress=progress)
     print(net_summary(b.check, target))
-    stalled = b.as_built_stalled and f" (the solver stopped at KKT residual {b.solids.as_built.kkt_residual:.2g}, " \
-                                     "short of round-off: read where it stopped)"
-    if b.solids is not None and b.solids.rel_size == b.solids.rel_size:
+    unsolved = b.solids is not None and math.isnan(b.solids.rel_size)  # rodcad's solver, not the design
+    if b.solids is not None and not unsolved:
+        stalled = (f" (the solver stopped at KKT residual {b.solids.as_built.kkt_residual:.2g}, short of "
+                   "round-off: read where it stopped)") if b.as_built_stalled else ""
         print(f"as built (the solids' masses and centres of mass): {b.solids.error_mm:.3g} mm "
-              f"({100 * b.solids.rel_size:.3g} % of its size) from the design{stalled or ''}")
+              f"({100 * b.solids.rel_size:.3g} % of its size) from the design{stalled}")
     if not b.check.ok:
         print(f"rodcad: {design.name} {b.limit()}; {outdir} left as it was, the best fit is in {target}",
               file=sys.stderr)
         return 1
-    if not b.ok and b.solids.rel_size != b.solids.rel_size:  # (NaN) rodcad's solver, not the design
+    if unsolved:
         print(f"rodcad: {design.name}: the net as built (the solids' masses) did not solve: rodcad's solver stopped "
               f"at KKT residual {b.solids.as_built.kkt_residual:.2g} ({b.solids.as_built.message}); this is rodcad's "
               f"failure, not the design's: please report it with the design file; {outdir} left as it was, the "

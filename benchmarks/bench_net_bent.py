@@ -29,9 +29,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from rodcad.design.loader import load_design  # noqa: E402
-from rodcad.design.netcheck import design_net_plan  # noqa: E402
-from rodcad.design.netplan import plan_net  # noqa: E402
+from bench_net_design import design_timed  # noqa: E402 - the same timing of a net design
 
 GRID = """design: 1
 name: grid
@@ -66,16 +64,11 @@ def main(argv=None) -> int:
           f"{'kkt':>8} {'com off mm':>10} {'rounds':>6}")
     bowed = None
     for name, text in cases:
-        d = load_design(ROOT / "examples" / "bench.yaml", text=text)
-        times, c = [], None
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            c = design_net_plan(plan_net(d.net, d.catalog), seed=0)
-            times.append(time.perf_counter() - t0)
+        d, c, median = design_timed(text, args.repeat)
         eq = c.equilibrium
         com = c.plan.rod_com(c.masses)
         rounds = next((re.search(r"\((\d+) round", n).group(1) for n in c.notes if "printed bent" in n), "-")
-        print(f"{name:>32} {d.net.n:>5} {d.net.m:>5} {float(np.median(times)):>9.2f} "
+        print(f"{name:>32} {d.net.n:>5} {d.net.m:>5} {median:>9.2f} "
               f"{'exact' if c.design.statics.exact else 'fit':>7} {'y' if c.ok else 'n':>3} {c.rel_size:>9.2e} "
               f"{eq.kkt_residual:>8.1e} {float(np.abs(com[:, 1]).max()):>10.3f} {rounds:>6}")
         if name == "lampshade, bend 0.12":

@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from rodcad.design.loader import load_design  # noqa: E402
-from rodcad.design.netcheck import design_net_plan
+from rodcad.design.netcheck import design_net_plan  # noqa: E402
 from rodcad.design.netplan import plan_net  # noqa: E402
 
 GRID = """design: 1
@@ -45,6 +45,18 @@ net:
 """
 
 
+def design_timed(text: str, repeat: int):
+    """A design file's text through the net design (no CAD) ``repeat`` times: (the design, the
+    last NetCheck, the median seconds)."""
+    d = load_design(ROOT / "examples" / "bench.yaml", text=text)
+    times, c = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        c = design_net_plan(plan_net(d.net, d.catalog), seed=0)
+        times.append(time.perf_counter() - t0)
+    return d, c, float(np.median(times))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=1)
@@ -57,14 +69,9 @@ def main(argv=None) -> int:
     print(f"{'case':>26} {'nodes':>5} {'rods':>5} {'median s':>9} {'statics':>7} {'on tgt':>6} {'ok':>3} "
           f"{'err/size':>9} {'kkt':>8} {'starts':>6} {'others':>6}")
     for name, text in cases:
-        d = load_design(ROOT / "examples" / "bench.yaml", text=text)
-        times, c = [], None
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            c = design_net_plan(plan_net(d.net, d.catalog), seed=0)
-            times.append(time.perf_counter() - t0)
+        d, c, median = design_timed(text, args.repeat)
         eq = c.equilibrium
-        print(f"{name:>26} {d.net.n:>5} {d.net.m:>5} {float(np.median(times)):>9.2f} "
+        print(f"{name:>26} {d.net.n:>5} {d.net.m:>5} {median:>9.2f} "
               f"{'exact' if c.design.statics.exact else 'fit':>7} {'y' if c.rel_size <= 1e-6 else 'n':>6} "
               f"{'y' if c.ok else 'n':>3} {c.rel_size:>9.2e} {eq.kkt_residual:>8.1e} {eq.n_starts:>6} "
               f"{len(eq.alternatives):>6}")

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rodcad.catalog.cache import register_seed
+from rodcad.catalog.pins import PinMenu, family_pin, menu_from_block
 from rodcad.errors import InputError, Problem
 from rodcad.yamlio import (
     Pos,
@@ -242,9 +243,50 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
         from rodcad.catalog.node import node_hardware
 
         node = node_hardware(data.get("node") or {}, types[0], v)
+    pins = None
+    if types and v.ok("pins", schema_failed):
+        pins = pin_menu(data.get("pins"), types[0], data, v)
     v.raise_if_any()
     return Catalog(data["name"], data.get("description", ""), path, tuple(types), tuple(families), printer,
-                   settings, node)
+                   settings, node, pins)
+
+
+def friction_range(value, report, key: str) -> tuple[float, float]:
+    """A friction written as a number or [lo, hi] (schema-checked: a list of numbers) as
+    (lo, hi); problems (more than two numbers, lo > hi) go to ``report(key, message)``."""
+    vals = [float(x) for x in value]
+    if len(vals) > 2 or vals[0] > vals[-1]:
+        report(key, f"expected a friction coefficient or [lo, hi] with lo <= hi, got {vals}")
+        return (max(vals),) * 2
+    return vals[0], vals[-1]
+
+
+def pin_menu(block: dict | None, rod: RodType, data: dict, v: Validator) -> PinMenu | None:
+    """The catalog's joint hardware (its ``pins:`` block, schema-checked, or the default menu)
+    around the families' own pin (``rod``'s hinge and its family's ``joint.friction``);
+    problems at ``pins.options[i].<key>``. None where an option is unsound."""
+    hinge = rod.geometry.hinge
+    fam = next((f for f in data.get("families", []) if isinstance(f, dict) and f.get("name") == rod.family), {})
+    raw = {**(data.get("defaults") or {}).get("joint", {}), **(fam.get("joint") or {})}.get("friction", [0.2, 0.4])
+    own = family_pin(hinge.pin_diameter, hinge.pin_clearance, raw if isinstance(raw, list) else [raw])
+    ok = True
+    for i, o in enumerate((block or {}).get("options", [])):
+        at = f"pins.options[{i}]"
+        friction_range(o["friction"], v.report_at, f"{at}.friction")
+        friction_range(o.get("torque", [0.0]), v.report_at, f"{at}.torque")
+        if o["kind"] != "pin" and "outer_diameter" not in o:
+            v.report_at(at, f"a {o['kind']} needs its outer_diameter (the tongue's printed hole, mm)")
+            ok = False
+        elif o["kind"] != "pin" and o["outer_diameter"] <= o["pin_diameter"] + o["clearance"]:
+            v.report_at(f"{at}.outer_diameter", f"{format_number(o['outer_diameter'])} mm is not wider than the "
+                        f"pin and its play ({format_number(o['pin_diameter'] + o['clearance'])} mm)")
+            ok = False
+    names = [o["name"] for o in (block or {}).get("options", [])]
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            v.report_at(f"pins.options[{i}].name", f"joint hardware {n!r} is listed twice")
+            ok = False
+    return menu_from_block(block, own) if ok and v.ok("pins") else None
 
 
 def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
@@ -253,6 +295,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
     printed to order: its reference types, ranges and template)."""
     sec, jt, ends, mat = f["section"], f["joint"], f["ends"], f["material"]
     material = Material(mat.get("name", ""), mat["density"], mat["min_wall"])
+    friction = friction_range(jt["friction"], ctx.report, "joint.friction")[1]
     raw = f.get("balls")
     listed = isinstance(raw, list)
     kinds = tuple(Balls(b["diameter"], b["density"], b.get("clearance", 0.2), b.get("name", ""))
@@ -309,7 +352,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
                 if multi_curv:
                     name += f"-k{format_number(curv)}"
                 out.append(RodType(name, f["name"], length, scale, curv, geom, material, kinds[0] if kinds else None,
-                                   ctx.origin(l_rel), heavier=kinds[1:], friction=jt["friction"]))
+                                   ctx.origin(l_rel), heavier=kinds[1:], friction=friction))
     return out if ok else []
 
 
@@ -389,6 +432,7 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     if length is None or curv is None:
         return []
     sec, jt = f["section"], f["joint"]
+    friction = friction_range(jt["friction"], ctx.report, "joint.friction")[1]
     scale = 1.0 if scales is not None else f["scale"][0]
     h, t = sec["height"] * scale, sec["thickness"] * scale
     hinge = Hinge(jt["layout"], jt["pin_diameter"], jt["pin_clearance"], jt["knuckle_radius"] * scale,
@@ -420,14 +464,14 @@ def _expand_ranges(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | No
     origin = ctx.origin("length")
     template = RodType(f"{f['name']}-{fmt(length[0])}", f["name"], length[0], scale, k0,
                        RodGeometry(length[0], h, t, k0, hinge, first, second), material, kinds[0] if kinds else None,
-                       origin, heavier=kinds[1:], friction=jt["friction"])
+                       origin, heavier=kinds[1:], friction=friction)
     s_ref = 1.0 if scales is None else min(max(1.0, scales[0]), scales[1])
     refs = []
     for lv in length:
         g = graduated(RodGeometry(lv, h, t, k0, hinge, first, second), s_ref, material.min_wall)
         name = f"{f['name']}-{fmt(lv)}" + (f"-s{fmt(s_ref)}" if s_ref != 1.0 else "")
         refs.append(RodType(name, f["name"], lv, s_ref if scales is not None else scale, k0, g, material,
-                            kinds[0] if kinds else None, origin, heavier=kinds[1:], friction=jt["friction"]))
+                            kinds[0] if kinds else None, origin, heavier=kinds[1:], friction=friction))
     res = f["length"].get("resolution")
     if res is not None and math.floor(length[1] / res + 1e-9) * res < length[0] - 1e-9:
         ctx.report("length.resolution", f"no multiple of {fmt(res)} mm lies between {fmt(length[0])} and "

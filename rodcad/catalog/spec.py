@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from rodcad.yamlio import MISSING, Validator
-from rodcad.yamlspec import Field, ListOf, Nullable, Num, Obj, OneOrList, Str
+from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, OneOrList, Str
 
 if TYPE_CHECKING:  # pragma: no cover
     pass
@@ -17,7 +17,7 @@ from rodcad.catalog.model import CATALOG_FORMAT, mm_pos
 #: Longest design, catalog or family name (it names folders and files).
 MAX_NAME = 100
 
-__all__ = ["ListOrRange", "OneOrMany", "catalog_schema", "catalog_spec", "family_spec", "node_spec"]
+__all__ = ["ListOrRange", "OneOrMany", "catalog_schema", "catalog_spec", "family_spec", "node_spec", "pins_spec"]
 
 
 class ListOrRange(OneOrList):
@@ -193,10 +193,11 @@ def family_spec() -> Obj:
                                                description="Pin hole diameter minus pin diameter (mm). "
                                                "Under load each pin bears on the far side of its holes; "
                                                "rodcad places the holes so the loaded chain hangs on its design."),
-                        "friction": Field(Num(minimum=0, maximum=2), default=0.3,
-                                          description="Friction coefficient of the pin in its holes. Default "
-                                          "0.3: the middle of the 0.2-0.4 published for dry PLA on steel (and "
-                                          "on PLA); the friction band rodcad reports grows in proportion to it."),
+                        "friction": Field(OneOrList(Num(minimum=0, maximum=2), min_items=1), default=[0.2, 0.4],
+                                          description="Friction coefficient of the pin in its holes: a number, "
+                                          "or [lo, hi] where it is known as a range (the friction band is "
+                                          "reported for hi). Default [0.2, 0.4]: published for dry PLA on "
+                                          "steel; measure yours with `rodcad calibrate friction`."),
                         "knuckle_radius": Field(Num(maximum=100, **mm_pos), required=True,
                                                 description="Outer radius of the knuckles around the "
                                                 "hinge axis (mm, before scaling)."),
@@ -330,6 +331,77 @@ def node_spec() -> Obj:
     )
 
 
+def pins_spec() -> Obj:
+    """Spec of a catalog's ``pins`` block: the joint hardware the planner chooses from, per
+    joint (:mod:`rodcad.catalog.pins`; without the block, :data:`rodcad.catalog.pins.
+    DEFAULT_OPTIONS` and the families' own pin)."""
+    from rodcad.catalog.pins import DEFAULT_PRESSURE, DEFAULT_SAFETY, PIN_KINDS
+
+    mm = dict(exclusive_minimum=0, maximum=50, unit="mm")
+    pair = dict(min_items=1)
+    option = Obj(
+        {
+            "name": Field(Str(pattern=_NAME, pattern_hint=_NAME_HINT, max_length=MAX_NAME), required=True,
+                          description="Unique name, e.g. bearing-682 (the bill of materials lists it). An option "
+                          "named like the families' own pin (steel-pin-<diameter>) replaces it."),
+            "kind": Field(Str(choices=PIN_KINDS), required=True,
+                          description="pin: a steel pin in printed holes; bushing: a sleeve pressed into the "
+                          "tongue, the pin turning in it; bearing: ball bearings pressed into the tongue on a pin "
+                          "the fork holds."),
+            "description": Field(Str(), description="What to buy and how it goes in."),
+            "pin_diameter": Field(Num(**mm), required=True, description="The steel pin (mm)."),
+            "clearance": Field(Num(minimum=0, maximum=2, unit="mm"), required=True,
+                               description="Diametral play where the pin turns (mm): printed holes minus the pin, "
+                               "a sleeve's bore minus the pin, a bearing's radial play. The fork's holes are the "
+                               "pin plus this."),
+            "friction": Field(OneOrList(Num(minimum=0, maximum=2), **pair), required=True,
+                              description="Friction coefficient where the pin turns: a number or [lo, hi] (the "
+                              "band is reported for hi)."),
+            "torque": Field(OneOrList(Num(minimum=0, maximum=100, unit="N mm"), **pair), default=[0.0, 0.0],
+                            description="Friction moment that does not grow with the load (N mm per joint; a "
+                            "bearing's lubricant): a number or [lo, hi]."),
+            "outer_diameter": Field(Num(**mm), description="bushing, bearing: the sleeve's or bearings' outer "
+                                    "diameter, the tongue's printed hole (mm)."),
+            "width": Field(Num(**mm), description="bushing, bearing: each one's length along the pin (mm; a "
+                           "bushing without it is cut to the tongue's thickness)."),
+            "count": Field(Num(integer=True, minimum=1, maximum=10), default=1,
+                           description="bearings side by side per joint."),
+            "part_mass": Field(Num(minimum=0, maximum=100, unit="g"),
+                               description="Each sleeve or bearing (g; a sleeve without it: from sleeve_density)."),
+            "part_load": Field(Num(exclusive_minimum=0, maximum=1e5, unit="N"),
+                               description="Each bearing's static load rating (N)."),
+            "sleeve_density": Field(Num(exclusive_minimum=0, maximum=25, unit="g/cm^3"), default=2.2,
+                                    description="A sleeve's material (PTFE 2.2, brass 8.5)."),
+            "sleeve_pressure": Field(Num(exclusive_minimum=0, maximum=1000, unit="MPa"), default=3.0,
+                                     description="Bearing stress a sleeve takes under its pin (MPa; PTFE about 3)."),
+            "pin_density": Field(Num(exclusive_minimum=0, maximum=25, unit="g/cm^3"), default=7.85,
+                                 description="The pin's material (g/cm^3)."),
+            "pin_yield": Field(Num(exclusive_minimum=0, maximum=5000, unit="MPa"), default=600.0,
+                               description="The pin's yield stress (MPa; spring-steel wire about 1500)."),
+            "cost": Field(Num(minimum=0, maximum=1e6), default=0.05,
+                          description="Per joint, in any one currency: the planner takes the cheapest option that "
+                          "carries the joint's load and keeps the chain within its friction band."),
+            "measured": Field(Bool(), default=False,
+                              description="The friction was measured (rodcad calibrate friction); report.md says so."),
+        },
+        description="One kind of joint hardware.",
+    )
+    return Obj(
+        {
+            "safety": Field(Num(minimum=1, maximum=100), description="Safety factor on every rated load "
+                            f"(default {DEFAULT_SAFETY:g})."),
+            "pressure": Field(Num(exclusive_minimum=0, maximum=1000, unit="MPa"),
+                              description="Bearing stress the printed plastic takes under a pin or sleeve, long "
+                              f"term (MPa, default {DEFAULT_PRESSURE:g} for PLA)."),
+            "options": Field(ListOf(option, min_items=1), description="The hardware to choose from, besides the "
+                             "families' own pin (default: 1.5 mm steel pins, 1 mm spring-steel wire, a PTFE "
+                             "bushing and 682 ball bearings)."),
+        },
+        description="Joint hardware the planner picks from, per joint: the cheapest whose rated load carries the "
+        "joint's force and whose friction keeps the chain within a tenth of its tolerance.",
+    )
+
+
 def catalog_spec() -> Obj:
     """The spec of a whole catalog file."""
     family = family_spec()
@@ -389,6 +461,7 @@ def catalog_spec() -> Obj:
             ),
             "defaults": Field(defaults),
             "node": Field(node_spec()),
+            "pins": Field(pins_spec()),
             "families": Field(ListOf(entry, min_items=1), required=True,
                               description="Rod families, in the order their types are listed."),
         },

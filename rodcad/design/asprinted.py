@@ -46,9 +46,10 @@ from optimize import (
 from optimize.distance import ShapeDistance
 from rodcad.catalog.model import RodType
 from rodcad.design.fit import DEFAULT_TOLERANCE
+from rodcad.design.hardware import FRICTION_SHARE, JointHardware, choose_hardware, solver_moment
 from rodcad.design.shell import curve_size
 
-__all__ = ["anchor_holes", "as_printed", "AsPrinted", "DesignedChain", "fused_joints",
+__all__ = ["anchor_holes", "as_printed", "AsPrinted", "chain_hardware", "DesignedChain", "fused_joints",
            "hole_frame", "hole_plan", "HolePlan", "joint_bands", "loose_joints", "narrower",
            "pins_of", "plan_holes", "plan_of", "printed_chain", "robust_option",
            "sensitive_joints", "too_wide"]
@@ -238,7 +239,8 @@ def _solve(lengths, masses, com, offsets, clearance, anchors, limits, end_limits
 
 def as_printed(*, lengths, masses, com, plan: HolePlan, anchors, target, limits=None, end_limits=None,
                design_equilibrium=None, design_masses=None, design_com=None, pin_radius=None,
-               mu: float = 0.3, mass_tolerance: float = 0.03, g: float = 9.81, seed: int = 0) -> AsPrinted:
+               mu: float = 0.3, mass_tolerance: float = 0.03, g: float = 9.81, seed: int = 0,
+               capacity=None) -> AsPrinted:
     """The chain as printed, and its friction and mass bands.
 
     Args:
@@ -252,6 +254,8 @@ def as_printed(*, lengths, masses, com, plan: HolePlan, anchors, target, limits=
             the bands), with ``design_masses`` and ``design_com`` (default: masses, com).
         pin_radius: (N+1,) or a number, mm: where friction acts (the pins' radii).
         mu: friction coefficient; mass_tolerance: relative, 95 %.
+        capacity: (N+1,) the friction moment each pin holds (the solver's force x mm: the
+            chosen hardware's), instead of ``mu`` and ``pin_radius``.
         g: gravity in the solver's units; seed: the mass band's draws.
 
     Raises:
@@ -280,7 +284,8 @@ def as_printed(*, lengths, masses, com, plan: HolePlan, anchors, target, limits=
         a, b = np.asarray(anchors, float)
         args = dict(com=dc, limits=lim, end_limits=end_limits, g=g, result=eq)
         try:
-            fb = friction_band(lengths, dm, a, b, mu=mu, pin_radius=pin_radius, **args)
+            fb = (friction_band(lengths, dm, a, b, mu=mu, pin_radius=pin_radius, **args) if capacity is None
+                  else friction_band(lengths, dm, a, b, capacity=capacity, **args))
         except (ValueError, np.linalg.LinAlgError) as err:
             notes.append(f"no friction band: {err}")
         try:
@@ -319,10 +324,31 @@ class DesignedChain(Protocol):
     notes: list[str]
 
 
+def chain_hardware(rods: Sequence[RodType], chain: DesignedChain) -> JointHardware | None:
+    """Every pin's hardware for a designed chain (:func:`rodcad.design.hardware.choose_hardware`):
+    its friction band within :data:`rodcad.design.hardware.FRICTION_SHARE` of the design's
+    tolerance times the target's size. None where the catalog has no menu or the equilibrium
+    is not a stable one (the bands need it)."""
+    menu = chain.design.catalog.pins
+    eq = chain.equilibrium
+    if menu is None or not (eq.success and eq.stable) or chain.target_points is None:
+        return None
+    tol = chain.design.tolerance if chain.design.tolerance is not None else DEFAULT_TOLERANCE
+    size = curve_size(chain.plan.curve if chain.plan is not None else chain.target_points)
+    runs = chain.plan.fused if chain.plan is not None else []
+    n = len(chain.masses)
+    return choose_hardware(rods, menu, lengths=chain.lengths, masses=chain.masses, com=chain.com,
+                           anchors=chain.design.anchors, limits=chain.limits, end_limits=chain.end_limits,
+                           g=chain.design.g, equilibrium=eq, fused=fused_joints(runs, n),
+                           budget=FRICTION_SHARE * tol * size)
+
+
 def plan_holes(rods: Sequence[RodType], chain: DesignedChain) -> HolePlan:
-    """:func:`hole_plan` for a designed chain of catalog rods (their joints' clearances),
-    compensated where its equilibrium was found."""
+    """:func:`hole_plan` for a designed chain of catalog rods (their joints' clearances: the
+    chosen hardware's, else the catalog's), compensated where its equilibrium was found."""
     clearance, _, _ = pins_of(rods)
+    if getattr(chain, "hardware", None) is not None:
+        clearance = chain.hardware.clearance()
     eq = chain.equilibrium
     runs = chain.plan.fused if chain.plan is not None else []
     return hole_plan(eq.points, chain.masses, eq.reaction, clearance=clearance, com=chain.com, limits=chain.limits,
@@ -337,6 +363,8 @@ def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted | 
     where the chain with its play reaches no configuration (a taut chain) or its solve does
     not converge."""
     _, radius, mu = pins_of(rods)
+    hw = getattr(chain, "hardware", None)
+    capacity = None if hw is None else solver_moment(hw.capacity, chain.design.g)
     b = chain.as_built
     hung_m, hung_c = (chain.masses, chain.com) if b is None else (b.masses, b.com)
     tol = float(chain.design.catalog.print_settings.get("mass_tolerance", 0.03))
@@ -345,7 +373,7 @@ def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted | 
                         anchors=chain.design.anchors, target=chain.target_points, limits=chain.limits,
                         end_limits=chain.end_limits, design_equilibrium=chain.equilibrium, design_masses=chain.masses,
                         design_com=chain.com, pin_radius=radius, mu=mu, mass_tolerance=tol, g=chain.design.g,
-                        seed=chain.seed)
+                        seed=chain.seed, capacity=capacity)
     except ValueError as err:
         chain.notes.append(f"the chain as printed (every pin bearing in its holes) was not solved: {err}")
         return None

@@ -48,6 +48,7 @@ from rodcad.cad.rods import (
     write_rod_files,
 )
 from rodcad.design.asprinted import anchor_holes, chain_hardware, plan_holes, printed_chain
+from rodcad.design.hung import design_hung, hung_com
 from rodcad.design.chains import ChainSpec, design_chains
 from rodcad.design.fit import DEFAULT_TOLERANCE, curve_fit, fit_limit
 from rodcad.design.chandelier import ChandelierDesign, design_chandelier
@@ -102,7 +103,7 @@ def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
 
 
 def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]], *, jobs: int | None,
-               progress: Progress, label: str, fused: Sequence[tuple[int, int]] = (), holes=None
+               progress: Progress, label: str, fused: Sequence[tuple[int, int]] = (), holes=None, sizes=None
                ) -> tuple[list[ChainFabrication], list[str]]:
     """Every rod of every chain built in one go (identical rods once); split per chain. The
     sockets' roofs go onto as few print layers as the rods allow (the rods of ``fused``
@@ -113,7 +114,7 @@ def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]
     keep = {i for a, b in fused for i in range(a, b + 1)}
     with progress.step(label) as st:
         fab = fabricate_chain(types, masses, seed=design.fabrication_seed, jobs=jobs, progress=st.count,
-                              layers=layers, keep_roofs=keep, holes=holes)
+                              layers=layers, keep_roofs=keep, holes=holes, sizes=sizes)
     if len(chains) == 1:
         return [fab], list(fab.problems)
     out, k = [], 0
@@ -126,10 +127,15 @@ def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]
 
 
 def as_built(rods: Sequence[FabricatedRod], lengths: np.ndarray, limits: np.ndarray | None, anchors: np.ndarray,
-             target: np.ndarray, g: float, end_limits: np.ndarray | None = None) -> AsBuilt:
-    """Re-simulate a chain with the masses and centres of mass of its real solids."""
+             target: np.ndarray, g: float, end_limits: np.ndarray | None = None, metal=None) -> AsBuilt:
+    """Re-simulate a chain with the masses and centres of mass of its real solids and, where
+    given, the joint hardware's metal on them (``metal``, (N, 2) g at each rod's hinge axes)."""
     masses = np.array([r.mass for r in rods], float)
     com = np.array([r.com for r in rods], float)
+    if metal is not None:
+        solid = masses
+        masses = solid + np.asarray(metal, float).sum(axis=1)
+        com = hung_com(masses, com, lengths, metal)
     a, b = anchors
     eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None, g=g,
                            end_limits=end_limits)
@@ -164,12 +170,20 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     cad = design.cad if cad is None else cad
     arrays = _arrays(design, jobs, progress)
     spec = ChainSpec("", np.asarray(design.anchors, float), design.target_curve)
+    ivfn = _intervals_fn(design, jobs, progress) if cad else None
     (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
-                             n_starts=N_STARTS, g=design.g, progress=progress,
-                             intervals=_intervals_fn(design, jobs, progress) if cad else None)
+                             n_starts=N_STARTS, g=design.g, progress=progress, intervals=ivfn)
     cd = chain.design
     if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
         design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
+    rods = [design.catalog[name] for name in cd.plan.type_names]
+    with progress.step("joint hardware (pins, bushings or bearings for each joint's load and friction) and "
+                       "the masses designed with it hanging on the rods"):
+        ivs = None if ivfn is None else dict(ivfn(list({r.name: r for r in rods}.values())))
+        hung = design_hung(cd, rods, lambda c: chain_hardware(rods, design, c), method=method, seed=seed,
+                           n_starts=N_STARTS, g=design.g, intervals=ivs)
+    if hung is not None:
+        cd = hung.design
     p, pr, chk = cd.plan, cd.plan.problem, cd.check
     result = BuildResult(
         design=design, method=method, seed=seed, type_names=list(p.type_names),
@@ -180,9 +194,8 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         plan=p, chain_design=cd, notes=list(p.notes), end_limits=pr.end_limits,
     )
     result.notes += _design_notes(result)
-    rods = [design.catalog[name] for name in result.type_names]
-    with progress.step("joint hardware: pins, bushings or bearings per joint for its load and friction"):
-        result.hardware = chain_hardware(rods, result)
+    result.hung = hung
+    result.hardware = None if hung is None else hung.hardware
     result.holes = plan_holes(rods, result)
     snap = cd.buildable
     if snap is not None and snap.snapped:
@@ -191,9 +204,10 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
             f"come in whole numbers): max error {100 * snap.error_before:.3g} % -> "
             f"{100 * snap.error_after:.3g} % of the span")
     if cad:
-        (fab,), problems = _fabricate(design, [(result.type_names, result.masses)], jobs=jobs, progress=progress,
+        (fab,), problems = _fabricate(design, [(result.type_names, result.printed_masses)], jobs=jobs,
+                                      progress=progress,
                                       label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
-                                      fused=p.fused, holes=result.holes.holes)
+                                      fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
         result.fabrication = fab
         result.notes += problems
         if p.fused:
@@ -205,7 +219,7 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
                     raise InputError([design.problem("constraints.fuse", str(err))]) from None
         with progress.step("as-built check (masses and centres of mass from the solids)"):
             result.as_built = as_built(as_printed_rods(fab), result.lengths, result.limits, design.anchors,
-                                       result.target_points, design.g, result.end_limits)
+                                       result.target_points, design.g, result.end_limits, metal=result.metal)
         if result.end_limits is not None:
             with progress.step("the anchor fixture (stops for the end rods), checked against the rods at rest"):
                 result.fixture, result.fixture_problems = build_fixture_for(result)
@@ -224,8 +238,11 @@ def build_fixture_for(result: BuildResult) -> tuple[Any, list[str]]:
     d = result.design
     rods = [d.catalog[name] for name in result.type_names]
     angles = result.equilibrium.angles
+    hw = result.hardware
     solid = fixture_solid(d.anchors, rods[0], rods[-1], result.end_limits, rest_angles=(angles[0], angles[-1]),
-                          pin_holes=None if result.holes is None else anchor_holes(result.holes, result.equilibrium.points))
+                          pin_holes=None if result.holes is None else anchor_holes(result.holes, result.equilibrium.points),
+                          hole_diameters=None if hw is None or None in (hw.options[0], hw.options[-1]) else
+                          (hw.options[0].fork_hole, hw.options[-1].fork_hole))
     printer = d.catalog.printer
     problems = check_fixture(solid, placed_rods(result.equilibrium.points, rods), anchors=d.anchors,
                              end_limits=result.end_limits,
@@ -338,8 +355,11 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                     check_files(tmp / "fixture.step", tmp / "fixture.stl", result.fixture.volume)
                 extra = [AssemblyPart("fixture", result.fixture, np.eye(4), (0.55, 0.55, 0.6))]
             with progress.step("writing assembly.step"):
+                hw = result.hardware
                 write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
-                               name=result.design.name, extra=extra)
+                               name=result.design.name, extra=extra,
+                               pin_diameters=None if hw is None else [None if o is None else o.pin_diameter
+                                                                      for o in hw.options])
             with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
                 write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,
                                   profile=print_profile(result.design.catalog))

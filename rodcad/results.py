@@ -95,6 +95,37 @@ class BuildResult:
     holes: HolePlan | None = None
     as_printed: AsPrinted | None = None
     hardware: JointHardware | None = None
+    hung: Any = None  # rodcad.design.hung.HungDesign: the masses designed with the hardware on
+
+    @property
+    def rods(self) -> list:
+        """The chain's rod types (:class:`rodcad.catalog.model.RodType`)."""
+        return [self.design.catalog[name] for name in self.type_names]
+
+    @property
+    def attached(self) -> np.ndarray:
+        """(N, 2) g of joint hardware each rod carries at its hinge axes (the plastic its
+        hardware's holes take or add included; 0 without hardware)."""
+        if self.hardware is None:
+            return np.zeros((self.n, 2))
+        return self.hardware.attached(self.rods)
+
+    @property
+    def metal(self) -> np.ndarray | None:
+        """(N, 2) g of the hardware's metal (pins, sleeves, bearings) on each rod's hinge axes,
+        None without hardware."""
+        return None if self.hardware is None else self.hardware.attached(self.rods, plastic=False)
+
+    @property
+    def printed_masses(self) -> np.ndarray:
+        """(N,) each rod as its tables know it (its family's own holes, no hardware): what the
+        fabrication builds for (g)."""
+        return self.masses - self.attached.sum(axis=1)
+
+    @property
+    def hole_sizes(self) -> list[tuple[float, float]] | None:
+        """Per rod, its pin holes' diameters (mm) for the chosen hardware, None without."""
+        return None if self.hardware is None else self.hardware.holes(self.rods)
 
     @property
     def ok(self) -> bool:

@@ -254,7 +254,8 @@ def fixture_solid(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
                   rest_angles: Sequence[float] | None = None, swing_deg: float = 30.0,
                   stop_radius: float = 3.0, stop_gap: float = 0.01, rim: float = 2.5,
                   mount: str = "hole", hang_diameter: float = 5.0, screw_diameter: float = 3.5,
-                  hang_height: float | None = None, min_wall: float = 1.0, pin_holes: Any = None) -> Solid:
+                  hang_height: float | None = None, min_wall: float = 1.0, pin_holes: Any = None,
+                  hole_diameters: Sequence[float] | None = None) -> Solid:
     """The anchor fixture of a chain: one printed solid holding both anchor pins (see the
     module docstring for its shape).
 
@@ -272,6 +273,8 @@ def fixture_solid(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
             without touching the fixture (deg).
         pin_holes: (2, 2) the anchor pins' holes' centres minus A and B (mm), or None (on
             them): the pin-play compensation puts them where the loaded pins sit on A and B.
+        hole_diameters: (2,) the anchor pins' holes (mm; the joint hardware's), or None: the
+            end rods' own.
         stop_radius: radius of the stop pegs (mm).
         stop_gap: the gap between a stop and the rod resting on it (mm).
         rim: material around the knuckles, stops and mount holes (mm).
@@ -383,7 +386,8 @@ def fixture_solid(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
         pegs = [cylinder_solid(s.center, s.radius, z0, z1) for s in stops]
         body = one_part(body.fuse(*pegs).clean(), "adding the stops", "fixture")
     shift = np.zeros((2, 2)) if pin_holes is None else np.asarray(pin_holes, float).reshape(2, 2)
-    holes = [cylinder_solid(a[k] + shift[k], hinges[k].hole_diameter / 2, z0 - 1, z1 + 1) for k in (0, 1)]
+    dia = [h.hole_diameter for h in hinges] if hole_diameters is None else [float(v) for v in hole_diameters]
+    holes = [cylinder_solid(a[k] + shift[k], dia[k] / 2, z0 - 1, z1 + 1) for k in (0, 1)]
     holes += [cylinder_solid(p, hole_d / 2, z0 - 1, z1 + 1) for p in mounts]
     body = one_part(body.cut(*holes).clean(), "drilling the pin and mount holes", "fixture")
     body.label = "fixture"

@@ -62,7 +62,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from rodcad.fabrication.layers import LayerGrid
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, print_matrix, rod_matrices
 from rodcad.cad.frame import pin_solid
-from rodcad.cad.solids import NO_SHIFT, Holes, mass_properties, type_solid, with_voids
+from rodcad.cad.solids import (NO_SHIFT, OWN_SIZES, Holes, Sizes, hole_volume_change, mass_properties, type_solid,
+                               with_voids)
 from rodcad.colors import mass_colors
 from rodcad.fabrication.cavities import (
     CAPPED_K,
@@ -138,6 +139,8 @@ class FabricatedRod:
         ball_mass_each: mass of one ball (g; 0 without balls).
         holes: each pin hole's centre minus its hinge axis (mm, rod frame): the pin-play
             compensation (:func:`rodcad.cad.solids.build_rod`).
+        hole_sizes: each pin hole's diameter where the joint hardware's differs from the
+            hinge's own (mm; None: the hinge's own).
     """
 
     index: int
@@ -174,6 +177,7 @@ class FabricatedRod:
     ball_mass_each: float = 0.0
     socket_height: float | tuple[float, ...] = 0.0
     holes: Holes = NO_SHIFT
+    hole_sizes: Sizes = OWN_SIZES
 
 
 @dataclass
@@ -303,29 +307,32 @@ def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
 
 
 def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, Any],
-                     holes: Holes = NO_SHIFT) -> FabricatedRod:
+                     holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) -> FabricatedRod:
     """Rebuild the solid from a solved plan (one boolean; the pin holes moved by ``holes``,
-    which keeps the volume and moves the centre of mass a little) and collect the numbers."""
+    which keeps the volume and moves the centre of mass a little, and of the diameters
+    ``sizes``, the joint hardware's, which change the volume by the knuckles' annuli) and
+    collect the numbers."""
     plan = RodPlan.from_json(data)
     rho = rod.material.density / 1000.0
     socks, cavs, rs, r = plan.sockets, plan.cavities, plan.socket_radius, plan.cavity_radius
-    solid = with_voids(type_solid(rod, holes), plan.silo_groups(), rod.name)
+    solid = with_voids(type_solid(rod, holes, sizes), plan.silo_groups(), rod.name)
     meas = plan.measured
     if meas is None:
         raise FabricationError(f"rod {index} ({rod.name}): its plan was never built")
     props = mass_properties(solid)
     volume = props.volume
-    if abs(volume - meas.volume) > 1e-6 * meas.volume:
+    cut = hole_volume_change(rod.geometry, sizes)  # 0 for the hinge's own holes
+    if abs(volume - (meas.volume - cut)) > 1e-6 * meas.volume:
         raise FabricationError(f"rod {index} ({rod.name}): rebuilt volume {volume} differs from the solved "
-                               f"{meas.volume} mm^3")
+                               f"{meas.volume} mm^3" + (f" less its hardware's holes' {cut:.4g} mm^3" if cut else ""))
     wall = rod.material.min_wall
     if meas.min_wall < wall - 1e-6:
         raise FabricationError(f"rod {index} ({rod.name}): a wall of {meas.min_wall:.3f} mm around a void is "
                                f"thinner than the minimum {wall} mm")
     kind = rod.ball_kinds[plan.ball_kind] if len(socks) else None
     com = meas.com
-    if holes != NO_SHIFT:  # measured again: the plan's solid had its holes on the axes
-        metal = kind.mass * len(socks) if kind else 0.0
+    metal = kind.mass * len(socks) if kind else 0.0
+    if holes != NO_SHIFT or sizes != OWN_SIZES:  # measured again: the plan's solid had its own holes on the axes
         c = np.array(props.center[:2]) * volume * rho + (kind.mass * socks.sum(axis=0)[:2] if kind else 0.0)
         com = (float(c[0] / (volume * rho + metal)), float(c[1] / (volume * rho + metal)))
     pm = print_matrix(solid)
@@ -334,14 +341,14 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         if not roofs or z - roofs[-1] > 1e-6:
             roofs.append(float(z))
     pause = roofs[0] if roofs else None
-    goal = plan.mass
-    mass = meas.mass
+    goal = plan.mass - cut * rho  # the plan's mass is for the hinge's own holes
+    mass = meas.mass if not cut else volume * rho + metal
     if abs(mass - goal) > MASS_TOL * goal:
         raise FabricationError(f"rod {index} ({rod.name}): built {mass:.4f} g for {goal:.4f} g")
     note = _print_note(rod)
     return FabricatedRod(
         index=index, type_name=rod.name, target_mass=float(target), mass=mass,
-        com=com, plastic_volume=meas.volume, filament_mass=meas.volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
+        com=com, plastic_volume=volume, filament_mass=volume * rho, cavity_count=len(cavs), cavity_radius=r if len(cavs) else 0.0,
         ball_count=len(socks), ball_diameter=kind.diameter if kind is not None else None,
         ball_name=kind.name if kind is not None else "", ball_mass_each=kind.mass if kind is not None else 0.0,
         pause_z=pause, mass_error=(mass - goal) / goal, in_range=not plan.message, message=plan.message,
@@ -349,7 +356,7 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         min_wall=meas.min_wall, layout=plan.layout, print_matrix=pm,
         file_stem=f"{index:02d}_{rod.name}", print_note=note, thickness=rod.geometry.thickness,
         pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=tuple(roofs), socket_height=plan.socket_height,
-        holes=holes)
+        holes=holes, hole_sizes=sizes)
 
 
 def _filled_result(rod: RodType, target: float) -> FabricatedRod:
@@ -391,7 +398,8 @@ def _print_note(rod: RodType) -> str:
 def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: int = 0, jobs: int | None = None,
                     progress: Callable[[int, int], None] | None = None,
                     cache: DiskCache | None = None, layers: LayerGrid | None = None,
-                    keep_roofs: Collection[int] = (), holes: Sequence[Holes] | None = None) -> ChainFabrication:
+                    keep_roofs: Collection[int] = (), holes: Sequence[Holes] | None = None,
+                    sizes: Sequence[Sizes] | None = None) -> ChainFabrication:
     """Cavities and ball sockets for every rod of a chain, built on the B-rep.
 
     Identical rods (same type, same target mass to 1 microgram) are built
@@ -412,6 +420,9 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
         layers: the print's layers (None: every socket as laid out).
         keep_roofs: positions whose sockets stay as laid out (the rods of fused pieces).
         holes: per position, its pin holes' offsets (:func:`rodcad.cad.solids.build_rod`).
+        sizes: per position, its pin holes' diameters (the joint hardware's; None: the
+            hinge's own). ``masses`` are for the rods with their own holes (the rods'
+            tables'); a built rod weighs that less the plastic its hardware's holes take.
 
     Returns:
         The :class:`ChainFabrication`; e.g. ``all(abs(r.mass_error) < 1e-3 for r in fab.rods)``.
@@ -428,14 +439,16 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
         types, masses, layers, seed=seed, jobs=jobs, cache=cache, keep=keep_roofs)
     keys: dict[tuple[Any, ...], int] = {}
     distinct: list[tuple[RodType, float, RoofPlan | None]] = []
-    moved: list[Holes] = []  # per distinct rod, its holes (not part of the plan: same volume)
+    moved: list[tuple[Holes, Sizes]] = []  # per distinct rod, its holes (not part of the plan)
     where: list[int] = []
-    for rod, m, roof, hl in zip(types, masses, roofs, holes or [NO_SHIFT] * len(types)):
-        k = (rod.name, round(float(m), 6), None if roof is None else roof.key(), hl)
+    for rod, m, roof, hl, sz in zip(types, masses, roofs, holes or [NO_SHIFT] * len(types),
+                                    sizes or [OWN_SIZES] * len(types)):
+        sz = tuple(None if d is None or abs(d - rod.geometry.hinge.hole_diameter) < 1e-9 else float(d) for d in sz)
+        k = (rod.name, round(float(m), 6), None if roof is None else roof.key(), hl, sz)
         if k not in keys:
             keys[k] = len(distinct)
             distinct.append((rod, float(m), roof))
-            moved.append(hl)
+            moved.append((hl, sz))
         where.append(keys[k])
     plans: list[dict[str, Any] | None] = []
     todo: list[int] = []
@@ -484,7 +497,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     finally:
         if pool is not None:
             pool.shutdown()
-    built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i], moved[i])
+    built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i], *moved[i])
              for i, (rod, m, _) in enumerate(distinct)]
     rods: list[FabricatedRod] = []
     problems: list[str] = []
@@ -539,7 +552,7 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
 
 
 def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",
-                   extra: Sequence[AssemblyPart] = ()) -> Path:
+                   extra: Sequence[AssemblyPart] = (), pin_diameters: Sequence[float | None] | None = None) -> Path:
     """Write the chain in its simulated pose as a STEP assembly.
 
     Each rod is a solid named 'NN_TYPE' (its rods/ file stem), placed with its
@@ -555,12 +568,14 @@ def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, nam
         path: destination file.
         name: root assembly name.
         extra: further parts (the anchor fixture), placed in the chain plane.
+        pin_diameters: (N+1,) each pin's diameter (the joint hardware's; None: the rods').
     """
     pts = np.asarray(points, dtype=float)
     if pts.shape != (len(fab.rods) + 1, 2):
         raise ValueError(f"points must have shape ({len(fab.rods) + 1}, 2), not {pts.shape}")
     fused = {j + 1 for p in fab.pieces for j in range(p.first, p.last)}
-    pins = [None if j in fused else (fab.rods[min(j, len(fab.rods) - 1)].pin_diameter,
+    pins = [None if j in fused else (fab.rods[min(j, len(fab.rods) - 1)].pin_diameter
+                                     if pin_diameters is None or pin_diameters[j] is None else pin_diameters[j],
                                      fab.rods[min(j, len(fab.rods) - 1)].thickness) for j in range(len(pts))]
     parts = fab.parts
     nodes = chain_parts([r.file_stem for r in parts], [r.solid for r in parts], pts,

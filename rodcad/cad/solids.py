@@ -58,6 +58,9 @@ __all__ = [
     "void_template",
     "with_spherical_voids",
     "with_voids",
+    "hole_volume_change",
+    "OWN_SIZES",
+    "Sizes",
 ]
 
 
@@ -69,6 +72,30 @@ Holes = tuple[tuple[float, float], tuple[float, float]]
 
 #: Both pin holes on their hinge axes.
 NO_SHIFT: Holes = ((0.0, 0.0), (0.0, 0.0))
+
+#: The pin holes' diameters at the first and second joint (mm); None: the hinge's own
+#: (``pin_diameter + pin_clearance``). Joint hardware with a sleeve or bearings has a wider
+#: hole in its tongue, a thinner pin thinner holes (:mod:`rodcad.catalog.pins`).
+Sizes = tuple[float | None, float | None]
+
+#: Both pin holes the hinge's own.
+OWN_SIZES: Sizes = (None, None)
+
+
+def hole_volume_change(g: RodGeometry, sizes: Sizes) -> float:
+    """Plastic (mm^3) the holes ``sizes`` remove beyond the hinge's own holes (negative where
+    they are narrower): each hole cuts its knuckle's layers only (the tongue's, or the
+    fork's two prongs), the rest of the hinge zone being clear already."""
+    hg = g.hinge
+    d0 = hg.hole_diameter
+    out = 0.0
+    for joint, d in enumerate(sizes):
+        if d is None:
+            continue
+        layer = hg.tongue_thickness if hg.knuckle(joint) == "tongue" else \
+            g.thickness - hg.tongue_thickness - 2 * hg.layer_gap
+        out += math.pi / 4 * (d * d - d0 * d0) * layer
+    return out
 
 
 class GeometryError(ValueError):
@@ -199,7 +226,7 @@ def _end_cuts(g: RodGeometry) -> list[Solid]:
     return out
 
 
-def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
+def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) -> Solid:
     """Build a rod's exact B-rep solid in the rod frame.
 
     Args:
@@ -209,6 +236,8 @@ def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
             rod frame (mm): the pin-play compensation (:mod:`rodcad.design.asprinted`), at most
             the clearance's half, inside the knuckle. The body, knuckles and hinge zones stay
             on the hinge axes, where the loaded pins put them.
+        sizes: each pin hole's diameter (:data:`Sizes`; mm): the joint hardware's. A hole
+            must leave the material's minimum wall in its knuckle (the planner's choice does).
 
     Returns:
         A valid build123d ``Solid``.
@@ -243,8 +272,8 @@ def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
             clear.append(cylinder_solid(p, r, -tm / 2 - 1, -a))
         else:  # slot for the partner's tongue
             clear.append(cylinder_solid(p, r, -a - gap, a + gap))
-        clear.append(cylinder_solid(p + np.asarray(holes[joint], float), hg.hole_diameter / 2, -tm / 2 - 1,
-                                    tm / 2 + 1))
+        d = hg.hole_diameter if sizes[joint] is None else sizes[joint]
+        clear.append(cylinder_solid(p + np.asarray(holes[joint], float), d / 2, -tm / 2 - 1, tm / 2 + 1))
     for cut in clear:
         body = one_solid(body.cut(cut), "clearing the hinge zones and pin holes")
     body = one_solid(body.clean(), "cleaning up")
@@ -253,9 +282,9 @@ def build_rod(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
 
 
 @lru_cache(maxsize=128)
-def rod_solid(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT) -> Solid:
+def rod_solid(g: RodGeometry, name: str = "", holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) -> Solid:
     """:func:`build_rod`, cached per process. Do not modify the result."""
-    return build_rod(g, name, holes)
+    return build_rod(g, name, holes, sizes)
 
 
 def hinge_zone(g: RodGeometry, joint: int) -> Solid:
@@ -391,7 +420,7 @@ def with_voids(solid: Solid, voids: Sequence[tuple[Any, ...]], name: str = "") -
 
 
 
-def type_solid(rod: RodType, holes: Holes = NO_SHIFT) -> Solid:
+def type_solid(rod: RodType, holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) -> Solid:
     """The exact B-rep solid of a catalog rod type in the rod frame, labelled with the
     type's name (its pin holes moved by ``holes``, see :func:`build_rod`). Built once per
     process.
@@ -401,6 +430,6 @@ def type_solid(rod: RodType, holes: Holes = NO_SHIFT) -> Solid:
             in the catalog).
     """
     try:
-        return rod_solid(rod.geometry, rod.name, holes)
+        return rod_solid(rod.geometry, rod.name, holes, sizes)
     except GeometryError as err:
         raise InputError([rod.origin.problem(f"rod type {rod.name!r}: {err}")]) from None

@@ -29,7 +29,7 @@ from optimize import METHODS, EquilibriumResult, InverseProblem, shape_distance
 from optimize.discretize import Discretization
 from optimize.distance import ShapeDistance
 from rodcad.cad.rods import FabricatedRod, fabricate_chain
-from rodcad.check.recheck import CheckResult, simulate
+from rodcad.check.recheck import CheckResult, simulate, with_hardware
 from rodcad.design.masses import ChainDesign, design_buildable
 from rodcad.design.plan import ChainPlan
 from rodcad.fabrication.intervals import chain_intervals
@@ -91,6 +91,26 @@ def _holes(built, which: list[int]):
         return None
 
 
+def _hardware(built, rods) -> tuple[np.ndarray, np.ndarray, list]:
+    """Per rod: the joint hardware's metal at its hinge axes ((N, 2) g), the plastic its
+    hardware's holes add against the rods' tables ((N,) g, negative where wider) and the holes'
+    diameters (design.json ``rods[].hardware``; zeros and None in a build without it)."""
+    from rodcad.cad.solids import hole_volume_change
+
+    n = built.n
+    metal, plastic, sizes = np.zeros((n, 2)), np.zeros(n), []
+    for i, r in enumerate(built.data.get("rods") or []):
+        hw = r.get("hardware") if isinstance(r, dict) else None
+        if not hw or i >= n:
+            sizes.append((None, None))
+            continue
+        metal[i] = [float(v) for v in hw["metal_g"]]
+        sz = tuple(float(v) for v in hw["holes_mm"])
+        sizes.append(sz)
+        plastic[i] = -hole_volume_change(rods[i].geometry, sz) * rods[i].material.density / 1000.0
+    return metal, plastic, sizes
+
+
 def _allowed(res: CheckResult) -> float:
     data = res.built.data
     err = (data.get("error") or {}).get("max_rel_span")
@@ -124,15 +144,22 @@ def rebalance(res: CheckResult, *, jobs: int | None = None, progress: Progress |
     seed = types.fabrication_seed
     with progress.step(f"masses the {len(free)} unedited rods can really be built at"):
         table = chain_intervals([types.rods[i] for i in free], seed=seed, jobs=jobs)
+    # the joint hardware hangs on the rods: its metal at their hinge axes, its holes' plastic in
+    # the solids (the tables are for the family's own holes); the masses below are as they hang
+    metal, plastic, sizes = _hardware(built, types.rods)
+    extra = metal.sum(axis=1) + plastic
+    hung0, com0 = with_hardware(built, res.masses, res.com)
     bounds = np.array([r.mass_range for r in built.rods], float)
     intervals: list[list[tuple[float, float]]] = []
     for i, r in enumerate(res.readings):
         if i in edited:
-            bounds[i] = (r.mass, r.mass * (1 + PIN_REL))
-            intervals.append([(r.mass, r.mass * (1 + PIN_REL))])
+            m = float(hung0[i])
+            bounds[i] = (m, m * (1 + PIN_REL))
+            intervals.append([(m, m * (1 + PIN_REL))])
         else:
-            intervals.append(table[types.rods[i].name])
-    problem = InverseProblem(built.target, built.lengths, bounds, com=res.com, limits=built.limits, g=types.g,
+            bounds[i] = bounds[i] + extra[i] if np.any(metal) else bounds[i]
+            intervals.append([(lo + extra[i], hi + extra[i]) for lo, hi in table[types.rods[i].name]])
+    problem = InverseProblem(built.target, built.lengths, bounds, com=com0, limits=built.limits, g=types.g,
                              end_limits=built.end_limits)
     disc = Discretization(built.target, built.lengths, 0.0, 0.0, [])
     plan = ChainPlan(built.target, disc, [r.type for r in built.rods], problem, 0.0)
@@ -147,8 +174,9 @@ def rebalance(res: CheckResult, *, jobs: int | None = None, progress: Progress |
     notes: list[str] = []
     if redesigned:
         with progress.step(f"building {len(redesigned)} re-designed rods (cavities, ball sockets, exact B-rep)") as st:
-            fab = fabricate_chain([types.rods[i] for i in redesigned], [float(new[i]) for i in redesigned], seed=seed,
-                                  jobs=jobs, progress=st.count, holes=_holes(built, redesigned))
+            fab = fabricate_chain([types.rods[i] for i in redesigned], [float(new[i] - extra[i]) for i in redesigned],
+                                  seed=seed, jobs=jobs, progress=st.count, holes=_holes(built, redesigned),
+                                  sizes=[sizes[i] for i in redesigned])
         for i, r in zip(redesigned, fab.rods):
             fabricated[i] = dataclasses.replace(r, index=i, file_stem=built.rods[i].stem)
         notes += fab.problems
@@ -157,6 +185,7 @@ def rebalance(res: CheckResult, *, jobs: int | None = None, progress: Progress |
     for i, r in fabricated.items():
         masses[i] = r.mass
         com[i] = r.com
+    masses, com = with_hardware(built, masses, com)
     with progress.step("as-built check of the re-balanced chain"):
         eq = simulate(built, masses, com, types.g)
     out = Rebalanced(cd, redesigned, fabricated, masses, com, eq, shape_distance(built.target, eq.points),

@@ -29,6 +29,7 @@ from optimize.distance import ShapeDistance
 from rodcad.check.built import BuiltChain, load_built
 from rodcad.check.measure import JointOverlap, RodReading, joint_overlaps, read_rods
 from rodcad.check.types import ChainTypes, chain_types
+from rodcad.design.hung import hung_com
 from rodcad.design.asprinted import AsPrinted, as_printed, fused_joints, plan_of
 from rodcad.errors import InputError, Problem
 from rodcad.progress import Progress
@@ -95,17 +96,34 @@ def simulate(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) -
                              g=g, end_limits=built.end_limits)
 
 
+def with_hardware(built: BuiltChain, masses: np.ndarray, com: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rods' masses and centres of mass as they hang: with the joint hardware's metal
+    design.json gives at each rod's hinge axes (``rods[].hardware.metal_g``; none in an
+    older build)."""
+    rods = built.data.get("rods") or []
+    metal = np.array([(r.get("hardware") or {}).get("metal_g", [0.0, 0.0]) for r in rods], float).reshape(-1, 2)
+    if metal.shape[0] != len(masses) or not np.any(metal):
+        return masses, com
+    hung = np.asarray(masses, float) + metal.sum(axis=1)
+    return hung, hung_com(hung, com, built.lengths, metal)
+
+
 def printed(built: BuiltChain, masses: np.ndarray, com: np.ndarray, g: float) -> AsPrinted | None:
     """The chain as printed (pins in their holes) with these masses and centres of mass, the
-    holes and clearances design.json gives; None where it gives none (an older build)."""
+    holes and clearances design.json gives (the joint hardware's where it has some); None
+    where it gives none (an older build)."""
     rods = built.data.get("rods")
     try:
         offsets = [r["holes_mm"] for r in rods]
         clear = [float(r["params"]["pin_clearance"]) for r in rods]
     except (KeyError, TypeError):
         return None
+    clear = clear + clear[-1:]
+    pins = (built.data.get("hardware") or {}).get("pins")
+    if pins and len(pins) == len(clear):
+        clear = [0.0 if p.get("option") is None else float(p["clearance_mm"]) for p in pins]
     runs = built.data.get("fused") or []
-    plan = plan_of(offsets, clear + clear[-1:], built.limits if built.n > 1 else None, fused_joints(runs, built.n))
+    plan = plan_of(offsets, clear, built.limits if built.n > 1 else None, fused_joints(runs, built.n))
     return as_printed(lengths=built.lengths, masses=masses, com=com, plan=plan, anchors=built.anchors,
                       target=built.target, limits=built.limits if built.n > 1 else None,
                       end_limits=built.end_limits, g=g)
@@ -134,8 +152,8 @@ def check(outdir: str | Path, *, assembly: str | Path | None = None,
         types = chain_types(built)
     with progress.step(f"re-reading {built.n} rods (valid closed solids, pin holes, mass, centre of mass)"):
         readings = read_rods(built, types.rods, assembly=asm)
-    masses = np.array([r.mass for r in readings], float)
-    com = np.array([r.com for r in readings], float)
+    masses, com = with_hardware(built, np.array([r.mass for r in readings], float),
+                                np.array([r.com for r in readings], float))
     with progress.step("re-simulating the chain (and with every pin bearing in its holes)"):
         eq = simulate(built, masses, com, types.g)
         try:

@@ -27,7 +27,7 @@ from rodcad.cad.printfile import write_print_files
 from rodcad.cad.reread import write_rod_step, write_rod_stl
 from rodcad.cad.rods import ChainFabrication, chain_parts, write_rod_files
 from rodcad.check.rebalance import Rebalanced
-from rodcad.check.recheck import CheckResult, equilibrium_json
+from rodcad.check.recheck import CheckResult, equilibrium_json, with_hardware
 from rodcad.outdir import MARKER, staged_output
 from rodcad.outputs.design_json import (
     ball_text,
@@ -129,15 +129,18 @@ def rebalanced_json(res: CheckResult, rb: Rebalanced) -> dict[str, Any]:
     b = res.built
     cd = rb.design
     span = b.span
+    hung_m, hung_c = with_hardware(b, res.masses, res.com)  # with the joint hardware's metal, as they hang
     for i, rod in enumerate(data["rods"]):
         r = res.readings[i]
         fab = rod["fabrication"]
+        if rod.get("hardware") and (r.edited or i in rb.fabricated):
+            rod["hardware"]["printed_mass"] = float(r.mass if r.edited else rb.fabricated[i].mass)
         if r.edited:
-            rod["mass"] = float(r.mass)
-            rod["com"] = [float(v) for v in r.com]
+            rod["mass"] = float(hung_m[i])
+            rod["com"] = [float(v) for v in hung_c[i]]
             if "holes_mm" in rod:  # design.json's com is in the hole frame (contract.md "As printed")
                 rod["com_rod_frame"] = rod["com"]
-                rod["com"] = [float(v) for v in hole_frame([b.lengths[i]], [r.com], [rod["holes_mm"]])[1][0]]
+                rod["com"] = [float(v) for v in hole_frame([b.lengths[i]], [hung_c[i]], [rod["holes_mm"]])[1][0]]
             fab.update({"mass": float(r.mass), "com": [float(v) for v in r.com],
                         "filament_g": float(r.mass - b.rods[i].ball_mass - b.rods[i].fill_mass),
                         "plastic_volume_mm3": float(r.volume), "edited": True,

@@ -95,6 +95,7 @@ class AsPrinted:
             ``notes``). mu: the friction coefficient used.
         mass_band: the 95 % mass band; mass_tolerance: the relative tolerance used.
         notes: what could not be computed.
+        hardware: the friction band is the joint hardware's (per pin), not ``mu``'s.
     """
 
     plan: HolePlan
@@ -109,6 +110,7 @@ class AsPrinted:
     mass_band: MassBand | None
     mass_tolerance: float
     notes: list[str]
+    hardware: bool = False
 
 
 def pins_of(rods: Sequence[RodType]) -> tuple[np.ndarray, np.ndarray, float]:
@@ -293,7 +295,7 @@ def as_printed(*, lengths, masses, com, plan: HolePlan, anchors, target, limits=
         except (ValueError, np.linalg.LinAlgError) as err:
             notes.append(f"no mass band: {err}")
     return AsPrinted(plan, spacings, np.asarray(masses, float), com_h, res, shape_distance(tgt, res.points), unc,
-                     fb, mu, mb, mass_tolerance, notes)
+                     fb, mu, mb, mass_tolerance, notes, capacity is not None)
 
 
 def sensitive_joints(band: Sequence[float], allowance: float) -> list[int]:
@@ -324,23 +326,23 @@ class DesignedChain(Protocol):
     notes: list[str]
 
 
-def chain_hardware(rods: Sequence[RodType], chain: DesignedChain) -> JointHardware | None:
-    """Every pin's hardware for a designed chain (:func:`rodcad.design.hardware.choose_hardware`):
-    its friction band within :data:`rodcad.design.hardware.FRICTION_SHARE` of the design's
-    tolerance times the target's size. None where the catalog has no menu or the equilibrium
-    is not a stable one (the bands need it)."""
-    menu = chain.design.catalog.pins
-    eq = chain.equilibrium
-    if menu is None or not (eq.success and eq.stable) or chain.target_points is None:
+def chain_hardware(rods: Sequence[RodType], design: Any, cd: Any) -> JointHardware | None:
+    """Every pin's hardware for a designed chain (``cd``, a :class:`rodcad.design.masses.
+    ChainDesign` of ``design``'s, :class:`rodcad.design.model.Design`), by :func:`rodcad.design.
+    hardware.choose_hardware`: its friction band within :data:`rodcad.design.hardware.
+    FRICTION_SHARE` of the design's tolerance times the target's size. None where the catalog
+    has no menu or the equilibrium is not a stable one (the bands need it)."""
+    menu = design.catalog.pins
+    eq = cd.check.equilibrium
+    if menu is None or not (eq.success and eq.stable):
         return None
-    tol = chain.design.tolerance if chain.design.tolerance is not None else DEFAULT_TOLERANCE
-    size = curve_size(chain.plan.curve if chain.plan is not None else chain.target_points)
-    runs = chain.plan.fused if chain.plan is not None else []
-    n = len(chain.masses)
-    return choose_hardware(rods, menu, lengths=chain.lengths, masses=chain.masses, com=chain.com,
-                           anchors=chain.design.anchors, limits=chain.limits, end_limits=chain.end_limits,
-                           g=chain.design.g, equilibrium=eq, fused=fused_joints(runs, n),
-                           budget=FRICTION_SHARE * tol * size)
+    p = cd.plan.problem
+    tol = design.tolerance if design.tolerance is not None else DEFAULT_TOLERANCE
+    n = p.n
+    return choose_hardware(rods, menu, lengths=p.lengths, masses=cd.result.masses, com=p.com,
+                           anchors=design.anchors, limits=p.limits if n > 1 else None, end_limits=p.end_limits,
+                           g=design.g, equilibrium=eq, fused=fused_joints(cd.plan.fused, n),
+                           budget=FRICTION_SHARE * tol * curve_size(cd.plan.curve))
 
 
 def plan_holes(rods: Sequence[RodType], chain: DesignedChain) -> HolePlan:

@@ -46,6 +46,9 @@ __all__ = ["FRICTION_SHARE", "JointHardware", "best_capacity", "choose_hardware"
 #: tolerance, a band of 0.1 % of the target's size.
 FRICTION_SHARE = 0.1
 
+#: A pin is cut this much longer than the hinge is thick (mm; the bill of materials' length).
+PIN_EXTRA = 1.0
+
 #: The design's ``g`` is in m/s^2 with masses in g: a solver force is g m/s^2 = mN x g / 9.81.
 G_STD = 9.81
 
@@ -180,11 +183,12 @@ class JointHardware:
             out.append((pair[0], pair[1]))
         return out
 
-    def attached(self, rods: Sequence[RodType]) -> tuple[np.ndarray, np.ndarray]:
+    def attached(self, rods: Sequence[RodType], *, plastic: bool = True) -> np.ndarray:
         """What each rod carries of the hardware, at its hinge axes: (N, 2) g at its first and
         second end. A pin rides with the fork it passes through, a sleeve or bearings with
-        their tongue; each knuckle's plastic against the family's hole (negative where the hole
-        is wider) with that knuckle. The anchor pins hang on the fixture."""
+        their tongue; with ``plastic``, each knuckle's plastic against the family's hole
+        (negative where the hole is wider) with that knuckle (the solids built have it; the
+        rods' tables do not). The anchor pins hang on the fixture."""
         n = len(rods)
         out = np.zeros((n, 2))
         for i, r in enumerate(rods):
@@ -197,11 +201,11 @@ class JointHardware:
                     continue
                 kind = h.knuckle(end)
                 layer = h.tongue_thickness if kind == "tongue" else prongs
-                m = o.plastic_delta(kind, h.hole_diameter, layer, r.material.density)
+                m = o.plastic_delta(kind, h.hole_diameter, layer, r.material.density) if plastic else 0.0
                 if kind == "tongue":
                     m += o.parts_mass(h.tongue_thickness)
                 if kind == "fork" and 0 < k < n:  # an interior pin: through one fork and one tongue
-                    m += o.pin_mass(g.thickness)
+                    m += o.pin_mass(g.thickness + PIN_EXTRA)
                 out[i, end] = m
         return out
 
@@ -215,6 +219,23 @@ class JointHardware:
             e = counts.setdefault(o.name, [o, 0])
             e[1] += 1
         return [(name, o.description, c) for name, (o, c) in counts.items()]
+
+
+def _mirrored(lengths, points) -> bool:
+    """The chain's rods and joints read the same from B to A, mirrored about the perpendicular
+    bisector of AB (to 1e-9 of its size): a symmetric design, whose masses and loads the
+    hardware's own asymmetry must not tip."""
+    l = np.asarray(lengths, float)
+    p = np.asarray(points, float)
+    a, b = p[0], p[-1]
+    u = (b - a) / np.hypot(*(b - a))
+    rel = p - a
+    along, across = rel @ u, rel @ np.array([-u[1], u[0]])
+    span = float(np.hypot(*(b - a)))
+    size = max(span, float(np.ptp(across)))
+    return bool(np.allclose(l, l[::-1], rtol=1e-9, atol=0)
+                and np.allclose(along, span - along[::-1], atol=1e-9 * size)
+                and np.allclose(across, across[::-1], atol=1e-9 * size))
 
 
 def choose_hardware(rods: Sequence[RodType], menu: PinMenu, *, lengths, masses, com, anchors, limits,
@@ -302,6 +323,18 @@ def choose_hardware(rods: Sequence[RodType], menu: PinMenu, *, lengths, masses, 
         upgraded.append(k)
         exact = None
         rounds += 1
+    if _mirrored(lengths, equilibrium.points) and upgraded:
+        # a mirror-symmetric chain gets mirror-symmetric hardware: each pair of mirror pins the
+        # one of less friction (a smaller box of moments: the band can only narrow)
+        for k in range(n + 1):
+            t = n - k
+            if not none[k] and cands[k][pick[k]][0].capacity(forces[k]) < cands[t][pick[t]][0].capacity(forces[t]):
+                name = cands[k][pick[k]][0].name
+                same = [j for j, (o, _) in enumerate(cands[t]) if o.name == name]
+                if same:
+                    pick[t] = same[0]
+                    upgraded.append(t)
+        band = None
     if band is None:
         try:
             band = friction_band(lengths, m, a, b, capacity=solver_moment(caps(), g), **kw).band

@@ -17,6 +17,7 @@ from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
 from rodcad.design.asprinted import anchor_holes
+from rodcad.outputs.hardware import hardware_bill, hardware_json, rod_hardware_json
 from rodcad.outputs.printed import as_printed_json, printed_rod_fields
 
 __all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
@@ -208,6 +209,8 @@ def design_json(r) -> dict[str, Any]:
             rod["fabrication"] = fabrication_json(r.fabrication.rods[i], _piece_of(r.fabrication, i))
         if getattr(r, "as_printed", None) is not None:
             rod.update(printed_rod_fields(r.as_printed, r.lengths, r.com, i))
+        if getattr(r, "hardware", None) is not None:
+            rod["hardware"] = rod_hardware_json(r, i)
         rods.append(rod)
     out: dict[str, Any] = {
         **_header(d, r.method or None, r.seed, r.time_s),
@@ -242,6 +245,8 @@ def design_json(r) -> dict[str, Any]:
             out["as_built"]["curve"] = curve_error(r.plan.curve, r.as_built.equilibrium.points, curvature, d.span)
     if getattr(r, "as_printed", None) is not None:
         out.update(as_printed_json(r.as_printed, r.plan.curve if r.plan is not None else None, curvature, d.span))
+    if getattr(r, "hardware", None) is not None:
+        out["hardware"] = hardware_json(r)
     out["print"] = print_profile(d.catalog)
     out["bill_of_materials"] = bill_of_materials(r)
     if getattr(r, "fixture", None) is not None:
@@ -280,6 +285,14 @@ def bill_of_materials(r) -> dict[str, Any]:
         "pins": {"count": r.n + 1, "diameter_mm": pin_d, "length_mm": round(thick + 1.0, 2),
                  "note": "one per joint plus one at each anchor"},
     }
+    hw = hardware_bill(r, round(thick + 1.0, 2)) if getattr(r, "hardware", None) is not None else []
+    if hw:  # the chosen hardware's pins: by diameter (the most used first)
+        by_d = Counter()
+        for e in hw:
+            by_d[e["pins"]["diameter_mm"]] += e["pins"]["count"]
+        bom["pins"]["diameter_mm"] = by_d.most_common(1)[0][0]
+        bom["pins"]["diameters_mm"] = {f"{k:g}": v for k, v in sorted(by_d.items())}
+        bom["hardware"] = hw
     fused = [(a, b) for a, b in (r.plan.fused if getattr(r, "plan", None) is not None else [])]
     if fused:
         bom["pins"]["count"] -= sum(b - a for a, b in fused)

@@ -89,6 +89,11 @@ def _worst(per_joint) -> int:
     return int(np.argmax(per_joint)) - 1
 
 
+def _friction_label(ap: AsPrinted) -> str:
+    """The friction the band is for: one coefficient, or the joint hardware's ranges."""
+    return "each joint's hardware, at the top of its friction range" if ap.hardware else f"coefficient {ap.mu:g}"
+
+
 def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
     """report.md's sentences on the chain as printed: pins in their holes, friction, mass."""
     pct = 100.0 / size
@@ -110,7 +115,7 @@ def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
     if fb is not None:
         j = _worst(fb.per_joint)
         lines.append(
-            f"- **Pin friction** (coefficient {ap.mu:g}): the chain can come to rest anywhere within "
+            f"- **Pin friction** ({_friction_label(ap)}): the chain can come to rest anywhere within "
             f"{fb.band:.3g} mm ({fb.band * pct:.3g} % of its size) of its design"
             + ("" if fb.tight else " (an upper bound: its many stops make the exact band costly)")
             + f", most at joint {j}. To settle it "
@@ -134,7 +139,7 @@ def draw_bands(ax, ap: AsPrinted, points: np.ndarray, size: float) -> None:
     under 2 % of the chain's size (drawn over the rods)."""
     from matplotlib.patches import Circle
 
-    bands = [(ap.friction, "C1", f"pin friction band (mu {ap.mu:g})"),
+    bands = [(ap.friction, "C1", f"pin friction band ({_friction_label(ap)})"),
              (ap.mass_band, "C4", f"mass band (+-{100 * ap.mass_tolerance:g} %, 95 %)")]
     largest = max([float(np.max(b.per_joint)) for b, _, _ in bands if b is not None], default=0.0)
     scale = 1.0

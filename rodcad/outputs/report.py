@@ -11,6 +11,7 @@ import numpy as np
 from rodcad.outputs.printed import as_printed_lines, printed_summary
 from rodcad import __version__
 from rodcad.fabrication.layers import LayerGrid
+from rodcad.outputs.hardware import hardware_lines, hardware_summary
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
 
 __all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
@@ -147,6 +148,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
             row += f" {f.mass:.3f} | {f.filament_mass:.2f} | {cav} | {balls} | {pause} | {where} |"
         add(row)
     add("")
+    for line in hardware_lines(r, data):
+        add(line)
     add("## Bill of materials")
     add("")
     bom = data["bill_of_materials"]
@@ -157,8 +160,18 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         add(f"- rods {first} to {last} are ONE printed piece (their joints fused at the bend, no pins between them)"
             + (f": `{piece['file']}`" if "file" in piece else ""))
     pins = bom["pins"]
-    add(f"- {pins['count']} pins, {pins['diameter_mm']:g} mm diameter, cut to {pins['length_mm']:g} mm "
-        f"({pins['note']})")
+    if bom.get("hardware"):
+        for e in bom["hardware"]:
+            add(f"- {e['joints']} joint(s) with {e['option']}: {e['description']}; "
+                f"{e['pins']['count']} x {e['pins']['diameter_mm']:g} mm pin cut to {e['pins']['length_mm']:g} mm"
+                + (f", {e['sleeves']['count']} x sleeve {e['sleeves']['outer_diameter_mm']:g} mm OD cut to "
+                   f"the tongue" if "sleeves" in e else "")
+                + (f", {e['bearings']['count']} x bearing {e['bearings']['bore_mm']:g} x "
+                   f"{e['bearings']['outer_diameter_mm']:g} x {e['bearings']['width_mm']:g} mm" if "bearings" in e
+                   else ""))
+    else:
+        add(f"- {pins['count']} pins, {pins['diameter_mm']:g} mm diameter, cut to {pins['length_mm']:g} mm "
+            f"({pins['note']})")
     if "filament_g" in bom:
         add(f"- Filament: {bom['filament_g']:.1f} g in all ({d.catalog[r.type_names[0]].material.name})")
         for ball in bom["metal_balls"]:
@@ -292,6 +305,9 @@ def summary_text(r, outdir: Path | None) -> str:
                     if r.plan.added_stops else ""))
         if r.end_limits is not None or r.plan.added_stops:
             L.append(f"  joints        {_joints_text(r)}")
+    hw = hardware_summary(r)
+    if hw is not None:
+        L.append(f"  joint parts   {hw}")
     if r.as_built is not None:
         L.append(f"  as built      {_fmt_err(r.as_built.distance.as_dict())}")
     if getattr(r, "as_printed", None) is not None:
@@ -308,8 +324,9 @@ def summary_text(r, outdir: Path | None) -> str:
         balls = ", ".join(f"{b['count']} x {ball_text(b['diameter_mm'], b.get('kind') or '')}"
                           for b in bom["metal_balls"]) or "none"
         balls += "".join(f"; {b['grams']:.1f} g of {b['name']}" for b in bom.get("fill", []))
-        L.append(f"  filament      {bom['filament_g']:.1f} g; metal balls: {balls}; "
-                 f"pins: {bom['pins']['count']} x {bom['pins']['diameter_mm']:g} mm")
+        pins = ("pins: " + ", ".join(f"{v} x {k} mm" for k, v in bom["pins"]["diameters_mm"].items())
+                if "diameters_mm" in bom["pins"] else f"pins: {bom['pins']['count']} x {bom['pins']['diameter_mm']:g} mm")
+        L.append(f"  filament      {bom['filament_g']:.1f} g; metal balls: {balls}; {pins}")
     for note in r.notes:
         L.append(f"  note: {note}")
     if outdir is not None:

@@ -1,0 +1,120 @@
+"""The joint hardware in the outputs: design.json's ``hardware`` and ``rods[].hardware``, the
+bill of materials' pins, sleeves and bearings, report.md's "Joint hardware" section and the
+summary's line (from a :class:`rodcad.results.BuildResult` with its
+:class:`rodcad.design.hardware.JointHardware`)."""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any
+
+import numpy as np
+
+__all__ = ["hardware_bill", "hardware_json", "hardware_lines", "hardware_summary", "rod_hardware_json"]
+
+
+def _f(x) -> float | None:
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def rod_hardware_json(r, i: int) -> dict[str, Any] | None:
+    """design.json's ``rods[i].hardware``: the option at each of its joints, the metal it
+    carries there (g, at the hinge axes) and what it weighs printed, without that metal."""
+    hw = r.hardware
+    if hw is None:
+        return None
+    metal = r.metal[i]
+    holes = hw.holes(r.rods)[i]
+    return {"first": None if hw.options[i] is None else hw.options[i].name,
+            "second": None if hw.options[i + 1] is None else hw.options[i + 1].name,
+            "metal_g": [float(v) for v in metal], "holes_mm": [float(v) for v in holes],
+            "printed_mass": float(r.masses[i] - metal.sum())}
+
+
+def hardware_json(r) -> dict[str, Any] | None:
+    """design.json's ``hardware``: per pin (0 at anchor A .. N at B) its option, load, rated
+    load, friction and the moment it holds; the band it was chosen for."""
+    hw = r.hardware
+    if hw is None:
+        return None
+    pins = []
+    for k, o in enumerate(hw.options):
+        if o is None:
+            pins.append({"pin": k, "option": None, "note": "fused joint: no pin"})
+            continue
+        pins.append({"pin": k, "option": o.name, "kind": o.kind, "pin_diameter_mm": o.pin_diameter,
+                     "clearance_mm": o.clearance, "holes_mm": {"tongue": o.tongue_hole, "fork": o.fork_hole},
+                     "friction": list(o.friction), "torque_nmm": list(o.torque), "measured": o.measured,
+                     "load_n": _f(hw.loads[k]), "rated_n": _f(hw.rated[k]), "safety": hw.safety,
+                     "capacity_nmm": _f(hw.capacity[k])})
+    hung = r.hung
+    return {"pins": pins, "friction_band_mm": None if hw.band is None else _f(hw.band),
+            "budget_mm": _f(hw.budget), "upgraded": [int(k) for k in hw.upgraded],
+            "overloaded": [int(k) for k in hw.overloaded], "notes": list(hw.notes),
+            "design_rounds": None if hung is None else int(hung.rounds),
+            "com_change_mm": None if hung is None else _f(hung.com_change)}
+
+
+def hardware_bill(r, length: float) -> list[dict[str, Any]]:
+    """The bill of materials' ``hardware``: each option used, how many joints, what to buy
+    (pins cut to ``length`` mm; bearings counted one by one)."""
+    hw = r.hardware
+    if hw is None:
+        return []
+    used = Counter(o.name for o in hw.options if o is not None)
+    out = []
+    for name, joints in used.items():
+        o = next(x for x in hw.options if x is not None and x.name == name)
+        entry = {"option": name, "description": o.description, "joints": joints,
+                 "pins": {"count": joints, "diameter_mm": o.pin_diameter, "length_mm": length}}
+        if o.kind == "bushing":
+            entry["sleeves"] = {"count": joints, "outer_diameter_mm": o.outer_diameter, "length_mm": length}
+        if o.kind == "bearing":
+            entry["bearings"] = {"count": joints * o.count, "outer_diameter_mm": o.outer_diameter,
+                                 "bore_mm": o.pin_diameter, "width_mm": o.width}
+        out.append(entry)
+    return out
+
+
+def hardware_lines(r, data: dict[str, Any]) -> list[str]:
+    """report.md's "Joint hardware" section."""
+    hw = data.get("hardware")
+    if hw is None:
+        return []
+    L = ["## Joint hardware", "",
+         "Each joint has the cheapest hardware of the catalog that carries its load (with a safety factor of "
+         f"{r.hardware.safety:g}) and keeps the chain's friction band within "
+         f"{hw['budget_mm']:.3g} mm (a tenth of the tolerance): the band is reported at the top of every "
+         "part's friction range. Pin 0 is at anchor A, pin k between rods k-1 and k.", "",
+         "| pin | hardware | load N | rated N | friction | holds N mm | tongue / fork hole mm |",
+         "|---|---|---|---|---|---|---|"]
+    for p in hw["pins"]:
+        if p["option"] is None:
+            L.append(f"| {p['pin']} | fused: no pin | - | - | - | - | - |")
+            continue
+        lo, hi = p["friction"]
+        fr = f"{lo:g}-{hi:g}" + (" (measured)" if p["measured"] else "")
+        L.append(f"| {p['pin']} | {p['option']} | {p['load_n']:.2f} | {p['rated_n']:.0f} | {fr} | "
+                 f"{p['capacity_nmm']:.3g} | {p['holes_mm']['tongue']:g} / {p['holes_mm']['fork']:g} |")
+    L.append("")
+    band = hw["friction_band_mm"]
+    if band is not None:
+        L.append(f"With these parts the chain rests within {band:.3g} mm of its design wherever friction holds it.")
+    for n in hw["notes"]:
+        L.append(f"- Note: {n}")
+    L.append("- The rods' masses are designed with this hardware hanging on them (a pin rides with its fork, "
+             "a bushing or bearing with its tongue): weigh each printed rod without it, against "
+             "`rods[].hardware.printed_mass` (and the table above).")
+    L.append("")
+    return L
+
+
+def hardware_summary(r) -> str | None:
+    """The summary's line: how many joints get what."""
+    hw = r.hardware
+    if hw is None:
+        return None
+    used = Counter(o.name for o in hw.options if o is not None)
+    band = "" if hw.band is None else f"; friction band {hw.band:.3g} mm (budget {hw.budget:.3g} mm)"
+    return ", ".join(f"{c} x {name}" for name, c in used.items()) + band

@@ -21,6 +21,8 @@ import pytest
 from optimize import solve_equilibrium
 from optimize.problem import InverseProblem
 from pinhole_model import hang_built, step_holes
+from rodcad.catalog.loader import load_catalog
+from rodcad.catalog.pins import PinMenu, family_pin
 from rodcad.cli import main
 from rodcad.design.asprinted import HolePlan, as_printed, hole_plan, loose_joints, sensitive_joints
 
@@ -160,7 +162,9 @@ def test_robust_finds_the_joints_beyond_the_allowance():
     n = ch["l"].size
     prob = InverseProblem(target=ch["target"], lengths=ch["l"], mass_bounds=np.tile([0.1, 100.0], (n, 1)),
                           com=ch["com"], limits=ch["lim"], end_limits=ch["ends"])
-    kw = dict(mu=0.3, pin_radius=1.5, mass_tolerance=0.03)
+    # a menu of one pin, 3 mm with friction 0.3: the band of mu |F| r as before the menus
+    kw = dict(menu=PinMenu((family_pin(3.0, 0.2, [0.3]),)), rod=load_catalog("pla-parametric").types[0],
+              mass_tolerance=0.03)
     eq = prob.simulate(ch["m"])
     ap = as_printed(lengths=ch["l"], masses=ch["m"], com=ch["com"], plan=HolePlan(np.zeros(n + 1), np.zeros((n, 2, 2)),
                     False), anchors=ch["anchors"], target=ch["target"], limits=ch["lim"], end_limits=ch["ends"],
@@ -174,13 +178,19 @@ def test_robust_finds_the_joints_beyond_the_allowance():
 
 
 def test_robust_holds_the_joints_friction_would_move_too_far(tmp_path):
-    """With pins that grip (friction 1.0) the semicircle's friction band exceeds the default 1 %
-    tolerance at its free joints: robust (the default) holds those joints both ways, and the
-    chain it prints has a smaller band than the same design with ``robust: false``."""
+    """With pins that grip (friction 1.0) and no other hardware in the catalog the semicircle's
+    friction band exceeds the default 1 % tolerance at its free joints: robust (the default)
+    holds those joints both ways, and the chain it prints has a smaller band than the same
+    design with ``robust: false``. With the default hardware menu beside the gripping pin, the
+    planner picks parts that let the joints hang: robust holds none, and the band is within a
+    tenth of the tolerance."""
     text = (ROOT / "catalogs" / "pla-parametric.yaml").read_text()
     assert "    pin_clearance: 0.2" in text
-    (tmp_path / "grippy.yaml").write_text(text.replace("name: pla-parametric", "name: grippy").replace(
-        "    pin_clearance: 0.2", "    pin_clearance: 0.2\n    friction: 1.0"))
+    grippy = text.replace("name: pla-parametric", "name: grippy").replace(
+        "    pin_clearance: 0.2", "    pin_clearance: 0.2\n    friction: 1.0")
+    (tmp_path / "menu.yaml").write_text(grippy.replace("name: grippy", "name: grippy-menu"))
+    (tmp_path / "grippy.yaml").write_text(grippy + "\npins:\n  options:\n    - {name: steel-pin-3, kind: pin, "
+                                          "pin_diameter: 3, clearance: 0.2, friction: 1.0}\n")
     base = "design: 1\nname: semicircle\ncatalog: grippy.yaml\nanchors: [[0, 0], [200, 0]]\ntarget: {form: semicircle}\n"
     out = {}
     for robust in (True, False):
@@ -195,3 +205,9 @@ def test_robust_holds_the_joints_friction_would_move_too_far(tmp_path):
     assert any(n.startswith("robust: joint(s)") for n in firm["notes"])
     assert firm["friction_band_mm"] < loose["friction_band_mm"]
     assert firm["as_printed"]["curve"]["rel_size"] < 0.01  # and it still hangs on the curve
+    (tmp_path / "m.yaml").write_text(base.replace("grippy.yaml", "menu.yaml"))
+    assert main(["build", str(tmp_path / "m.yaml"), "-o", str(tmp_path / "out-menu"), "--no-cad", "-q"]) == 0
+    chosen = json.loads((tmp_path / "out-menu" / "design.json").read_text())
+    assert not any(n.startswith("robust") for n in chosen["notes"])
+    assert chosen["friction_band_mm"] <= 0.1 * 0.01 * size * (1 + 1e-9)
+    assert {p["option"] for p in chosen["hardware"]["pins"]} - {"steel-pin-3"}  # other parts than the gripping pin

@@ -39,6 +39,7 @@ from optimize import (
     PinPlayResult,
     compensate_pin_play,
     friction_band,
+    joint_forces,
     mass_band,
     shape_distance,
     solve_pin_play,
@@ -46,12 +47,13 @@ from optimize import (
 from optimize.distance import ShapeDistance
 from rodcad.catalog.model import RodType
 from rodcad.design.fit import DEFAULT_TOLERANCE
-from rodcad.design.hardware import FRICTION_SHARE, JointHardware, choose_hardware, solver_moment
+from rodcad.design.hardware import (FRICTION_SHARE, JointHardware, best_capacity, choose_hardware, newtons,
+                                    solver_moment)
 from rodcad.design.shell import curve_size
 
 __all__ = ["anchor_holes", "as_printed", "AsPrinted", "chain_hardware", "DesignedChain", "fused_joints",
            "hole_frame", "hole_plan", "HolePlan", "joint_bands", "loose_joints", "narrower",
-           "pins_of", "plan_holes", "plan_of", "printed_chain", "robust_option",
+           "pins_of", "plan_holes", "plan_of", "printed_chain", "Robust", "robust_option",
            "sensitive_joints", "too_wide"]
 
 #: Draws of the mass band (about 1 % sampling error on its 95th percentile).
@@ -386,29 +388,52 @@ def printed_chain(rods: Sequence[RodType], chain: DesignedChain) -> AsPrinted | 
     return ap
 
 
-def joint_bands(problem, masses, robust: tuple[float, float, float, float], *, seed: int = 0) -> np.ndarray | None:
-    """Per chain joint (N+1,), the larger of its friction band and its 95 % mass band (mm), for
-    design option ``robust`` (:attr:`rodcad.design.decide.Allowed.robust`: allowance, mu, pin
-    radius, mass tolerance).
+@dataclass(frozen=True)
+class Robust:
+    """Design option ``robust`` as the planner reads it (:attr:`rodcad.design.decide.Allowed.robust`).
+
+    Attributes:
+        allowance: the band a joint may have before it is held both ways (mm: the default
+            tolerance x the target's size).
+        menu: the catalog's joint hardware (:class:`rodcad.catalog.pins.PinMenu`): a joint's
+            friction band is that of the least-friction hardware that carries its load.
+        rod: a rod of the family (its knuckles decide what hardware fits).
+        mass_tolerance: the catalog's ``print.mass_tolerance``.
+    """
+
+    allowance: float
+    menu: Any
+    rod: RodType
+    mass_tolerance: float
+
+
+def joint_bands(problem, masses, robust: Robust, *, seed: int = 0) -> np.ndarray | None:
+    """Per chain joint (N+1,), the larger of its friction band (with the least-friction joint
+    hardware of the catalog that carries each pin's load: :func:`rodcad.design.hardware.
+    best_capacity`) and its 95 % mass band (mm), for design option ``robust``.
 
     Args:
         problem: the design's :class:`optimize.InverseProblem` (mm, radians).
         masses: (N,) its masses (g).
+        robust: :class:`Robust`.
         seed: the mass band's draws (4000 of them: a few per cent of sampling error).
 
     Returns:
         The bands, or None where the equilibrium is not found, not stable, or a band cannot be
         computed.
     """
-    _, mu, radius, tol = robust
     eq = problem.simulate(masses)
     if not (eq.success and eq.stable) or problem.n < 2:
         return None
     a, b = problem.anchors
     kw = dict(com=problem.com, limits=problem.limits, end_limits=problem.end_limits, g=problem.g, result=eq)
+    forces = newtons(np.hypot(*joint_forces(eq.reaction, masses, g=problem.g).T), problem.g)
+    least = best_capacity(robust.menu, [robust.rod] * problem.n, forces)
+    tau = solver_moment(np.where(np.isfinite(least), least, 0.0), problem.g)
     try:
-        fb = friction_band(problem.lengths, masses, a, b, mu=mu, pin_radius=radius, **kw).per_joint
-        mb = mass_band(problem.lengths, masses, a, b, tol=tol, n_samples=4000, seed=seed, **kw).per_joint
+        fb = friction_band(problem.lengths, masses, a, b, capacity=tau, **kw).per_joint
+        mb = mass_band(problem.lengths, masses, a, b, tol=robust.mass_tolerance, n_samples=4000, seed=seed,
+                       **kw).per_joint
     except (ValueError, np.linalg.LinAlgError):
         return None
     return np.maximum(fb, mb)
@@ -424,16 +449,17 @@ def narrower(bands: np.ndarray | None, than: np.ndarray | None) -> bool:
     return bands is not None and (than is None or float(bands.max()) < float(than.max()))
 
 
-def loose_joints(problem, masses, *, allowance: float, mu: float, pin_radius: float,
-                 mass_tolerance: float, seed: int = 0) -> list[int]:
-    """The bends (j = 0..N-2) of a verified design whose friction or mass band exceeds
-    ``allowance`` (mm): :func:`joint_bands` and :func:`too_wide`."""
-    return too_wide(joint_bands(problem, masses, (allowance, mu, pin_radius, mass_tolerance), seed=seed), allowance)
+def loose_joints(problem, masses, *, allowance: float, mass_tolerance: float, menu, rod: RodType,
+                 seed: int = 0) -> list[int]:
+    """The bends (j = 0..N-2) of a verified design whose friction band (with the least-friction
+    hardware of ``menu`` for ``rod``'s knuckles) or mass band exceeds ``allowance`` (mm):
+    :func:`joint_bands` and :func:`too_wide`."""
+    return too_wide(joint_bands(problem, masses, Robust(allowance, menu, rod, mass_tolerance), seed=seed), allowance)
 
-def robust_option(curve, pf, catalog) -> tuple[float, float, float, float]:
+
+def robust_option(curve, pf, catalog) -> Robust:
     """The planner's ``robust`` setting (:attr:`rodcad.design.decide.Allowed.robust`) for a
-    family printed to order: (allowance mm = the default tolerance x the target's size, the
-    family's friction coefficient, its pin radius mm, the catalog's mass tolerance)."""
-    t = pf.family.template
-    return (DEFAULT_TOLERANCE * curve_size(np.asarray(curve, float)), float(t.friction),
-            t.geometry.hinge.pin_diameter / 2, float(catalog.print_settings.get("mass_tolerance", 0.03)))
+    family printed to order: the default tolerance x the target's size, the catalog's joint
+    hardware for the family's knuckles, its mass tolerance."""
+    return Robust(DEFAULT_TOLERANCE * curve_size(np.asarray(curve, float)), catalog.pins, pf.family.template,
+                  float(catalog.print_settings.get("mass_tolerance", 0.03)))

@@ -40,7 +40,7 @@ from optimize.statics import exact_masses
 from optimize.stops import needed_stop_sides
 from optimize.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
-from rodcad.design.asprinted import joint_bands, narrower, too_wide
+from rodcad.design.asprinted import Robust, joint_bands, narrower, too_wide
 from rodcad.design.laying import (HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, graduate,
                                   lay_rods)
 
@@ -80,17 +80,17 @@ class Allowed:
             of stopped joints is printed as one piece too).
         verify: check the result against the solver and hold more joints where it fails
             (off for one shell of rods, whose stops are fixed by the shell).
-        robust: (allowance mm, mu, pin radius mm, mass tolerance) for design option ``robust``:
-            an accepted design whose friction or mass band exceeds the allowance at a joint
-            gets that joint held both ways in one more round (:func:`rodcad.design.asprinted.
-            loose_joints`); None: off.
+        robust: design option ``robust`` (:class:`rodcad.design.asprinted.Robust`): an accepted
+            design whose band at a joint exceeds the allowance even with the least-friction
+            joint hardware that carries it, or whose mass band does, gets that joint held both
+            ways in one more round (:func:`rodcad.design.asprinted.loose_joints`); None: off.
     """
 
     stops: bool = True
     anchor_stops: bool = True
     fuse: str = "auto"
     verify: bool = True
-    robust: tuple[float, float, float, float] | None = None
+    robust: Robust | None = None
 
 
 @dataclass
@@ -245,12 +245,13 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             bands = joint_bands(laid.problem, masses, allowed.robust, seed=seed)
             if robust is None:  # the first accepted design: hold the joints whose band is too wide
                 robust = (d, bands)
-                new = [j for j in too_wide(bands, allowed.robust[0]) if j not in locks | fused]
+                new = [j for j in too_wide(bands, allowed.robust.allowance) if j not in locks | fused]
             else:  # the design that holds them, kept where its bands are narrower
                 best = d if narrower(bands, robust[1]) else robust[0]
                 notes.append(f"robust: joint(s) {sorted(set(best.held) - set(robust[0].held))} held both ways, "
-                             "where pin friction or the print's mass tolerance moved the chain more than "
-                             f"{allowed.robust[0]:.3g} mm" if best is d else "robust: holding the joints whose "
+                             "where pin friction (with the least-friction joint hardware of the catalog that "
+                             "carries the load) or the print's mass tolerance moved the chain more than "
+                             f"{allowed.robust.allowance:.3g} mm" if best is d else "robust: holding the joints whose "
                              "bands exceed the tolerance does not narrow them here; the design keeps them free")
                 break
         if not new:

@@ -150,7 +150,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
                  end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0,
-                 report=None, robust: tuple[float, float, float, float] | None = None):
+                 report=None, robust=None):
     """Lay rods printed to order on a target (see the module's docstring); how each joint
     holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 

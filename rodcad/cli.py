@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "rodcad.commands.simulate",
     "rodcad.commands.check",
     "rodcad.commands.catalog",
+    "rodcad.commands.calibrate",
     "rodcad.commands.schema",
     "rodcad.commands.demo",
 )

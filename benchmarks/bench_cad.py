@@ -28,7 +28,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
 
-    from rodcad.cad.rods import fabricate_chain, write_assembly, write_rod_files
+    from rodcad.cad.chainfiles import write_assembly, write_rod_files
+    from rodcad.cad.rods import fabricate_chain
     from rodcad.catalog.cache import DiskCache
     from rodcad.catalog.loader import load_catalog
     from rodcad.catalog.massrange import mass_infos

@@ -22,19 +22,16 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from optimize import (
-    EquilibriumResult,
     shape_distance,
     solve_equilibrium,
 )
 from optimize.discretize import MAX_RODS
-from optimize.distance import ShapeDistance
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
 from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
@@ -44,19 +41,17 @@ from rodcad.cad.rods import (
     FabricatedRod,
     check_files,
     fabricate_chain,
-    write_assembly,
-    write_rod_files,
 )
+from rodcad.cad.chainfiles import write_assembly, write_rod_files
 from rodcad.design.asprinted import anchor_holes, chain_hardware, plan_holes, printed_chain
 from rodcad.design.hung import design_hung, hung_com
 from rodcad.design.chains import ChainSpec, design_chains
-from rodcad.design.fit import DEFAULT_TOLERANCE, curve_fit, fit_limit
-from rodcad.design.chandelier import ChandelierDesign, design_chandelier
-from rodcad.design.frame import FramePlan, frame_outline, plan_frame
-from rodcad.design.masses import ChainDesign, check_equilibrium
+from rodcad.design.chandelier import design_chandelier
+from rodcad.design.frame import frame_outline, plan_frame
+from rodcad.design.masses import check_equilibrium
 from rodcad.catalog.model import RodType
 from rodcad.design.model import Design
-from rodcad.design.plan import CatalogArrays, ChainPlan, catalog_arrays
+from rodcad.design.plan import CatalogArrays, catalog_arrays
 from rodcad.design.printed import rods_of
 from rodcad.design.shell import curve_size
 from rodcad.errors import InputError

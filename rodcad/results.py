@@ -172,7 +172,9 @@ class BuildResult:
                          curvature=[self.design.catalog[n].curvature for n in self.type_names], plan=self.plan,
                          inverse=self.chain_design.result, check=self.chain_design.check, fit=fit,
                          tolerance=self.tolerance, family_ranges=fam.ranges if fam is not None else None,
-                         constraints=self.design.constraints)
+                         constraints=self.design.constraints,
+                         hardware_g=None if self.hardware is None else self.attached.sum(axis=1),
+                         shot=all(r.fill is not None for r in self.rods))
 
 
 @dataclass

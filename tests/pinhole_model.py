@@ -149,9 +149,10 @@ def _rad(pair):
     return [-np.inf if pair[0] is None else np.radians(pair[0]), np.inf if pair[1] is None else np.radians(pair[1])]
 
 
-def step_holes(path: Path, print_matrix, hole_radius: float, length: float) -> np.ndarray:
+def step_holes(path: Path, print_matrix, hole_radius, length: float) -> np.ndarray:
     """(2, 2) the pin holes' centres (rod frame) measured on a rod's STEP file: the axes of its
-    cylindrical faces of the hole's radius, the one near x = 0 first."""
+    cylindrical faces of the hole's radius (one, or one per end: (first, second)), the one near
+    x = 0 first."""
     from build123d import GeomType, import_step
     from OCP.BRepAdaptor import BRepAdaptor_Surface
 
@@ -161,7 +162,7 @@ def step_holes(path: Path, print_matrix, hole_radius: float, length: float) -> n
         if face.geom_type != GeomType.CYLINDER:
             continue
         cyl = BRepAdaptor_Surface(face.wrapped).Cylinder()
-        if abs(cyl.Radius() - hole_radius) > 1e-6:
+        if min(abs(cyl.Radius() - r) for r in np.atleast_1d(hole_radius)) > 1e-6:
             continue
         loc = cyl.Location()
         found.append((inv @ np.array([loc.X(), loc.Y(), loc.Z(), 1.0]))[:2])
@@ -181,6 +182,13 @@ def hang_built(d: dict, holes: np.ndarray) -> np.ndarray:
     n = len(rods)
     mass = np.array([r["fabrication"]["mass"] for r in rods])
     com = np.array([r["fabrication"]["com"] for r in rods])  # rod frame, from the B-rep
+    # the joint hardware's metal (pins, sleeves, bearings) at the rods' hinge axes, where the
+    # loaded pins sit (design.json rods[].hardware.metal_g)
+    metal = np.array([(r.get("hardware") or {}).get("metal_g", [0.0, 0.0]) for r in rods], float)
+    lengths = np.array([r["length"] for r in rods], float)
+    hung = mass + metal.sum(axis=1)
+    com = (mass[:, None] * com + np.column_stack([metal[:, 1] * lengths, np.zeros(n)])) / hung[:, None]
+    mass = hung
     axis = holes[:, 1] - holes[:, 0]
     spacing = np.hypot(axis[:, 0], axis[:, 1])
     turn = np.arctan2(axis[:, 1], axis[:, 0])
@@ -190,6 +198,8 @@ def hang_built(d: dict, holes: np.ndarray) -> np.ndarray:
     lim = np.array([_rad(r["limits_deg"]) for r in rods[:-1]]) + np.diff(turn)[:, None]
     ends = np.array([_rad(p) for p in d["anchor_limits_deg"]]) + np.array([[turn[0]], [turn[-1]]])
     clearance = np.array([r["params"]["pin_clearance"] for r in rods] + [rods[-1]["params"]["pin_clearance"]])
+    if d.get("hardware"):  # each pin's own play
+        clearance = np.array([p.get("clearance_mm", 0.0) if p.get("option") else 0.0 for p in d["hardware"]["pins"]])
     pts = np.array(d["simulated"]["points"])
     theta = np.arctan2(*np.diff(pts, axis=0).T[::-1])
     start = pts[:-1] + np.column_stack([np.cos(theta) * holes[:, 0, 0] - np.sin(theta) * holes[:, 0, 1],

@@ -48,11 +48,11 @@ def test_printed_semicircle_hangs_on_its_target(printed_semicircle):
     holes, plain = [], []
     for r in rods:
         f = r["fabrication"]
-        rh = (r["params"]["pin_diameter"] + r["params"]["pin_clearance"]) / 2
+        rh = np.array(r["hardware"]["holes_mm"]) / 2  # the joint hardware's holes
         h = step_holes(out / f["file"], f["print_matrix"], rh, r["length"])
         axes = np.array([[0.0, 0.0], [r["length"], 0.0]])
         np.testing.assert_allclose(h - axes, r["holes_mm"], atol=1e-6)  # as design.json says
-        assert np.all(np.hypot(*(h - axes).T) <= r["params"]["pin_clearance"] / 2 + 1e-9)
+        assert np.all(np.hypot(*(h - axes).T) <= r["params"]["pin_clearance"] / 2 + 1e-9)  # the family's, the widest
         assert abs(np.hypot(*(h[1] - h[0])) - r["printed_pin_spacing"]) < 1e-6
         holes.append(h)
         plain.append(axes)
@@ -67,12 +67,16 @@ def test_printed_semicircle_hangs_on_its_target(printed_semicircle):
     # what is left is the as-built chain's own distance (the solids' masses and centres of mass:
     # balls at their sockets' layers move a graduated rod's centre of mass by ~0.1 mm)
     assert err <= d["as_built"]["error"]["max_mm"] + 1e-5 * size
-    assert 2e-3 * size < err_plain < 1e-2 * size
+    # the play moves an uncompensated chain far more than what is left (the joint hardware's
+    # play is 0.02-0.2 mm: 0.1 % of the size or so)
+    play = max(p["clearance_mm"] for p in d["hardware"]["pins"])
+    assert max(4 * err, 2 * play) < err_plain < 1e-2 * size
     np.testing.assert_allclose(d["as_printed"]["points"], pins, atol=1e-6 * size)
     # the anchor fixture's pin holes sit opposite the end rods' holes: the loaded pins on A and B
     a, b = np.array(d["anchors"], float)
     sim = np.array(d["simulated"]["points"])
-    rh = (rods[0]["params"]["pin_diameter"] + rods[0]["params"]["pin_clearance"]) / 2
+    hw = d["hardware"]["pins"]
+    rh = np.array([hw[0]["holes_mm"]["fork"], hw[-1]["holes_mm"]["fork"]]) / 2  # the anchor pins' holes
     found = step_holes(out / "fixture.step", np.eye(4), rh, float(np.hypot(*(b - a))))  # A's, then B's
     for k, (anchor, p, q, off) in enumerate(((a, sim[0], sim[1], rods[0]["holes_mm"][0]),
                                              (b, sim[-2], sim[-1], rods[-1]["holes_mm"][1]))):
@@ -88,11 +92,12 @@ def test_design_json_and_report_as_printed(printed_semicircle):
     out, d = printed_semicircle
     assert d["print"]["mass_tolerance"] == 0.03
     assert d["friction_band_mm"] > 0 and d["mass_band_mm"] > 0
-    assert d["bands"]["friction"]["mu"] == 0.3
+    assert d["bands"]["friction"]["mu"] == 0.4  # the family's pin at the top of its range
     assert max(d["bands"]["friction"]["per_joint_mm"]) == pytest.approx(d["friction_band_mm"])
-    for r in d["rods"]:
-        c = r["params"]["pin_clearance"]
-        assert c == 0.2
+    pins = d["hardware"]["pins"]
+    for i, r in enumerate(d["rods"]):
+        assert r["params"]["pin_clearance"] == 0.2
+        c = (pins[i]["clearance_mm"] + pins[i + 1]["clearance_mm"]) / 2  # each hole moves half its pin's
         # about the length minus the clearance (less where a pin's force leans on the chord)
         assert r["length"] - c - 1e-9 <= r["printed_pin_spacing"] <= r["length"] - 0.5 * c
         h0, h1 = np.array(r["holes_mm"])

@@ -204,7 +204,11 @@ def test_check_reports_the_shape_of_the_edited_rods(built, edited, tmp_path, cap
     # and check's chain is the forward simulation with those masses and centres of mass
     lengths = np.array([d["length"] for d in data["rods"]])
     a, b = np.array(data["anchors"], float)
-    eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=_limits(data))
+    # with the joint hardware's metal on the rods' hinge axes (design.json rods[].hardware)
+    metal = np.array([d["hardware"]["metal_g"] for d in data["rods"]], float)
+    hung = masses + metal.sum(axis=1)
+    com = (masses[:, None] * com + np.column_stack([metal[:, 1] * lengths, np.zeros(len(lengths))])) / hung[:, None]
+    eq = solve_equilibrium(lengths, hung, a, b, com=com, limits=_limits(data))
     pts = np.array(res["simulated"]["points"])
     gap = np.max(np.hypot(*(pts - eq.points).T)) / span
     with capsys.disabled():

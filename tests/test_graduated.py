@@ -155,7 +155,8 @@ def test_scaled_rods_fabricated_and_written(cat, tmp_path: Path) -> None:
     import trimesh
 
     from rodcad.cad.export import import_step
-    from rodcad.cad.rods import fabricate_chain, write_rod_files
+    from rodcad.cad.chainfiles import write_rod_files
+    from rodcad.cad.rods import fabricate_chain
     from rodcad.catalog.massrange import mass_info
 
     thin, thick = cat.rod("rod", 40.0, 0.01, scale=0.6), cat.rod("rod", 40.0, -0.01, scale=1.5)

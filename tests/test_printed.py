@@ -604,7 +604,8 @@ def test_rods_printed_to_order_are_built_and_checked(tmp_path):
     assert any(r["params"]["ends"]["second"]["setback"] == 0 for r in rods[:-1])  # a stop printed to order
     for r in rods:
         assert r["fabrication"]["in_range"]
-        assert r["fabrication"]["mass"] == pytest.approx(r["mass"], rel=2e-3)
+        # the rod as built weighs what it hangs less its joint hardware's metal
+        assert r["fabrication"]["mass"] == pytest.approx(r["hardware"]["printed_mass"], rel=2e-3)
     assert data["as_built"]["error"]["max_rel_span"] < 1e-3
     assert data["curve"]["rel_span"] < SHAPE_REL
     assert len(list((out / "rods").glob("*.step"))) == 4 and len(list((out / "rods").glob("*.stl"))) == 4

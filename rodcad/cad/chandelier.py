@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from rodcad.cad.export import AssemblyGroup, AssemblyPart, rod_matrices, rod_matrix
-from rodcad.cad.rods import chain_parts
+from rodcad.cad.chainfiles import chain_parts
 from rodcad.cad.solids import type_solid
 from rodcad.design.chandelier import ChainResult
 from rodcad.design.frame import FrameCheck, FramePlan

@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING, Any
 from build123d import Plane, Solid
 
 from rodcad.catalog.chamber import Chamber, plan_chamber
-from rodcad.cad.solids import GeometryError, mass_properties, one_solid, type_solid
+from rodcad.cad.solids import (NO_SHIFT, OWN_SIZES, GeometryError, Holes, Sizes, hole_volume_change, mass_properties,
+                               one_solid, type_solid)
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
@@ -60,8 +61,11 @@ def chamber_solids(chamber: Chamber) -> list[Solid]:
     return out
 
 
-def build_filled(rod: RodType, target: float) -> FilledRod:
-    """The rod of ``target`` g (clipped to its range) with its chamber, measured on the B-rep.
+def build_filled(rod: RodType, target: float, holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) -> FilledRod:
+    """The rod of ``target`` g (clipped to its range) with its chamber, measured on the B-rep,
+    its pin holes moved by ``holes`` and of the joint hardware's ``sizes``
+    (:func:`rodcad.cad.solids.build_rod`; ``target`` is for the hinge's own holes, the goal
+    then less the plastic the hardware's holes take).
 
     Raises:
         GeometryError: the cut is not one valid solid with a closed cell per box.
@@ -70,8 +74,9 @@ def build_filled(rod: RodType, target: float) -> FilledRod:
 
     assert rod.fill is not None
     chamber, goal, message = plan_chamber(rod, target)
-    plain = type_solid(rod)
+    plain = type_solid(rod, holes, sizes)
     rho = rod.material.density / 1000.0
+    goal -= hole_volume_change(rod.geometry, sizes) * rho
     if chamber is None:
         props = mass_properties(plain)
         return FilledRod(plain, None, props.volume, props.volume * rho, (props.center[0], props.center[1]),

@@ -33,12 +33,13 @@ from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
 from OCP.TopLoc import TopLoc_Location
 
 from rodcad.cad.export import assembly_leaves, export_step, export_stl, transformed
-from rodcad.cad.solids import GeometryError, cylinder_solid, mass_properties, type_solid
+from rodcad.cad.solids import NO_SHIFT, OWN_SIZES, GeometryError, cylinder_solid, mass_properties, type_solid
 from rodcad.catalog.model import RodType
 
 __all__ = [
     "PinHole",
     "hinge_reference",
+    "hole_radii",
     "measure",
     "moved",
     "pair_overlap",
@@ -184,14 +185,28 @@ def pin_hole(solid: Solid, x: float, *, pin_radius: float, hole_radius: float, k
     return PinHole(blocked, around)
 
 
-def hinge_reference(rod: RodType) -> tuple[PinHole, PinHole]:
+def hole_radii(rod: RodType, sizes=OWN_SIZES) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Per joint, (the radius of a pin that passes, the hole's radius) (mm): the hinge's own
+    pin and hole, or the joint hardware's hole ``sizes`` (a pin 0.05 mm under its radius)."""
+    h = rod.geometry.hinge
+    out = []
+    for d in sizes:
+        hole = h.hole_diameter if d is None else float(d)
+        out.append((min(h.pin_diameter, hole - 0.1) / 2, hole / 2))
+    return out[0], out[1]
+
+
+def hinge_reference(rod: RodType, sizes=OWN_SIZES) -> tuple[PinHole, PinHole]:
     """:func:`pin_hole` at both joints of the rod type's plain solid, as designed (no
-    cavities or sockets: they stay clear of the hinges)."""
-    solid = type_solid(rod)
+    cavities or sockets: they stay clear of the hinges), with the joint hardware's holes
+    ``sizes`` (:data:`rodcad.cad.solids.Sizes`)."""
+    solid = type_solid(rod, NO_SHIFT, tuple(sizes))
     g = rod.geometry
-    kw = dict(pin_radius=g.hinge.pin_diameter / 2, hole_radius=g.hinge.hole_diameter / 2,
-              knuckle_radius=g.hinge.knuckle_radius, thickness=g.thickness)
-    return pin_hole(solid, 0.0, **kw), pin_hole(solid, g.length, **kw)
+    out = []
+    for x, (pin, hole) in zip((0.0, g.length), hole_radii(rod, sizes)):
+        out.append(pin_hole(solid, x, pin_radius=pin, hole_radius=hole, knuckle_radius=g.hinge.knuckle_radius,
+                            thickness=g.thickness))
+    return out[0], out[1]
 
 
 def _bend(axis_x: float, phi_deg: float) -> gp_Trsf:

@@ -23,7 +23,7 @@ The data flow for one rod (type + target mass), one step per function (the numbe
                                centre of mass from the B-rep plus the balls
     chain    -> fabricate_chain(): identical (type, mass, holes) built once, distinct
                                rods in worker processes (one task per type), disk-cached
-             -> write_rod_files(), write_assembly(): STEP/STL, checked on re-read
+             -> rodcad.cad.chainfiles: STEP/STL, checked on re-read, and the assembly
 
 Void shapes (all printable without support in the print orientation, see
 :data:`rodcad.fabrication.layout.VOIDS`): cavities are spheres cut flat at 45 degrees ('capped'),
@@ -43,11 +43,9 @@ may sit off the hinge axes (``holes``: the pin-play compensation). Units: mm, mm
 from __future__ import annotations
 
 import math
-import shutil
 import time
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,8 +58,7 @@ from rodcad.parallel import default_jobs, worker_pool
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
     from rodcad.fabrication.layers import LayerGrid
-from rodcad.cad.export import AssemblyPart, check_files, export_assembly, print_matrix, rod_matrices
-from rodcad.cad.frame import pin_solid
+from rodcad.cad.export import check_files, print_matrix, rod_matrices
 from rodcad.cad.solids import (NO_SHIFT, OWN_SIZES, Holes, Sizes, hole_volume_change, mass_properties, type_solid,
                                with_voids)
 from rodcad.colors import mass_colors
@@ -86,8 +83,6 @@ __all__ = [
     "FabricatedRod",
     "mass_colors",
     "rod_matrices",
-    "write_assembly",
-    "write_rod_files",
 ]
 
 
@@ -359,11 +354,12 @@ def _assemble_result(rod: RodType, target: float, index: int, data: dict[str, An
         holes=holes, hole_sizes=sizes)
 
 
-def _filled_result(rod: RodType, target: float) -> FabricatedRod:
-    """A rod with a fill: its chamber cut, checked and measured (:mod:`rodcad.cad.filled`)."""
+def _filled_result(rod: RodType, target: float, holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) -> FabricatedRod:
+    """A rod with a fill: its chamber cut, checked and measured (:mod:`rodcad.cad.filled`), its
+    pin holes moved by ``holes`` and of the joint hardware's ``sizes``."""
     from rodcad.cad.filled import build_filled
 
-    b = build_filled(rod, target)
+    b = build_filled(rod, target, holes, sizes)
     if b.min_wall < rod.material.min_wall - 1e-6:
         raise FabricationError(f"{rod.name}: a wall of {b.min_wall:.3f} mm around its chamber is thinner than "
                                f"the minimum {rod.material.min_wall} mm")
@@ -382,7 +378,7 @@ def _filled_result(rod: RodType, target: float) -> FabricatedRod:
         print_matrix=pm, file_stem=f"00_{rod.name}", print_note=_print_note(rod), thickness=rod.geometry.thickness,
         pin_diameter=rod.geometry.hinge.pin_diameter, pause_zs=() if pause is None else (pause,),
         fill_mass=c.fill_mass if c is not None else 0.0, fill_name=rod.fill.name if rod.fill else "",
-        chamber_volume=c.volume if c is not None else 0.0)
+        chamber_volume=c.volume if c is not None else 0.0, holes=holes, hole_sizes=sizes)
 
 
 def _print_note(rod: RodType) -> str:
@@ -497,7 +493,7 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     finally:
         if pool is not None:
             pool.shutdown()
-    built = [_filled_result(rod, m) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i], *moved[i])
+    built = [_filled_result(rod, m, *moved[i]) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i], *moved[i])
              for i, (rod, m, _) in enumerate(distinct)]
     rods: list[FabricatedRod] = []
     problems: list[str] = []
@@ -509,102 +505,3 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
         if fr.message:
             problems.append(f"Rod {index} ({rod.name}): {fr.message}.")
     return ChainFabrication(rods, problems, len(distinct), time.perf_counter() - t0)
-
-
-def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
-    """Write outdir/rods/NN_TYPE.step and .stl for every chain position (one NN-MM_piece
-    file for the rods of a fused piece, :attr:`ChainFabrication.parts`).
-
-    NN is the rod's 0-based index (as in design.json), two digits or more.
-    The solids are in print orientation on the bed (rod frame +y up, the -y
-    face on Z = 0, see :data:`rodcad.cad.export.PRINT_ROTATION`). Rods that share
-    a solid are written and checked once, then copied. Checks: the STEP
-    re-imports as one valid solid of the same volume (1e-6), the STL is
-    watertight and encloses the B-rep's volume within 0.1 %.
-
-    Returns:
-        The paths written (STEP, STL per rod).
-
-    Raises:
-        FabricationError: a check failed.
-    """
-    from rodcad.cad.export import export_step, export_stl, transformed
-
-    rods_dir = Path(outdir) / "rods"
-    rods_dir.mkdir(parents=True, exist_ok=True)
-    written: list[Path] = []
-    first: dict[int, tuple[Path, Path]] = {}
-    for r in fab.parts:
-        step = rods_dir / f"{r.file_stem}.step"
-        stl = rods_dir / f"{r.file_stem}.stl"
-        src = first.get(id(r.solid))
-        if src is None:
-            on_bed = transformed(r.solid, r.print_matrix)
-            export_step(on_bed, step, r.file_stem)
-            export_stl(on_bed, stl)
-            check_files(step, stl, r.plastic_volume)
-            first[id(r.solid)] = (step, stl)
-        else:
-            shutil.copyfile(src[0], step)
-            shutil.copyfile(src[1], stl)
-        written += [step, stl]
-    return written
-
-
-def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",
-                   extra: Sequence[AssemblyPart] = (), pin_diameters: Sequence[float | None] | None = None) -> Path:
-    """Write the chain in its simulated pose as a STEP assembly.
-
-    Each rod is a solid named 'NN_TYPE' (its rods/ file stem), placed with its
-    frame origin at ``points[i]`` and x along points[i] -> points[i+1] (chain
-    plane xy, y up, hinge axes along z), coloured by mass from blue (lightest)
-    to red (heaviest); every joint gets a pin 'pin_NN' (pin diameter, through
-    the rod thickness), but a fused piece is one solid 'NN-MM_piece' at its first rod, with
-    no pins at its fused joints.
-
-    Args:
-        fab: the fabricated chain.
-        points: (N+1, 2) joint positions (mm).
-        path: destination file.
-        name: root assembly name.
-        extra: further parts (the anchor fixture), placed in the chain plane.
-        pin_diameters: (N+1,) each pin's diameter (the joint hardware's; None: the rods').
-    """
-    pts = np.asarray(points, dtype=float)
-    if pts.shape != (len(fab.rods) + 1, 2):
-        raise ValueError(f"points must have shape ({len(fab.rods) + 1}, 2), not {pts.shape}")
-    fused = {j + 1 for p in fab.pieces for j in range(p.first, p.last)}
-    pins = [None if j in fused else (fab.rods[min(j, len(fab.rods) - 1)].pin_diameter
-                                     if pin_diameters is None or pin_diameters[j] is None else pin_diameters[j],
-                                     fab.rods[min(j, len(fab.rods) - 1)].thickness) for j in range(len(pts))]
-    parts = fab.parts
-    nodes = chain_parts([r.file_stem for r in parts], [r.solid for r in parts], pts,
-                        [r.mass / (getattr(r, "last", r.index) - r.index + 1) for r in parts], pins,
-                        at=[r.index for r in parts])
-    return export_assembly(path, [*nodes, *extra], name)
-
-
-def chain_parts(names: Sequence[str], solids: Sequence[Any], points: np.ndarray, masses: Sequence[float],
-                pins: Sequence[tuple[float, float] | None], mass_scale: tuple[float, float] | None = None,
-                at: Sequence[int] | None = None) -> list[AssemblyPart]:
-    """The parts of one chain in its pose: rod i named ``names[i]`` with its rod frame at
-    joint p_i and x along p_i -> p_{i+1} (part k at rod ``at[k]`` when given: a fused piece
-    at its first rod), coloured by mass (blue light, red heavy; on ``mass_scale`` (lo, hi)
-    when given, for one scale over several chains), and a pin 'pin_NN' through every joint,
-    ``pins[j] = (diameter, length)`` (mm; None: no pin), centred on the chain plane.
-    """
-    lo, hi = mass_scale if mass_scale is not None else (None, None)
-    colors = mass_colors(masses, lo, hi)
-    mats = rod_matrices(points)
-    where = range(len(names)) if at is None else at
-    parts = [AssemblyPart(name, solid, mats[i], tuple(float(c) for c in col[:3]))
-             for name, solid, i, col in zip(names, solids, where, colors)]
-    for j, (p, pin) in enumerate(zip(np.asarray(points, dtype=float), pins)):
-        if pin is None:
-            continue
-        diameter, length = pin
-        m = np.eye(4)
-        m[:2, 3] = p
-        m[2, 3] = -length / 2
-        parts.append(AssemblyPart(f"pin_{j:02d}", pin_solid(diameter, length), m, (0.75, 0.75, 0.78)))
-    return parts

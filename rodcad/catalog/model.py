@@ -58,7 +58,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from rodcad.catalog.sections import CURVED_BODY, end_reach, graduated, max_body_scale
+from rodcad.catalog.sections import end_reach, graduated, max_body_scale
 
 from rodcad.catalog.ends import EndShape, Hinge
 from rodcad.catalog.stock import Balls, Fill, Material, Origin, Printer

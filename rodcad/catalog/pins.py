@@ -257,10 +257,16 @@ def _order(options: Sequence[PinOption]) -> tuple[PinOption, ...]:
     return tuple(sorted(options, key=lambda o: (o.cost, o.friction[1] * o.radius + o.torque[1] / 1e3)))
 
 
+def _pair(v) -> tuple[float, float]:
+    """A number or [lo, hi] (or [x]) as (lo, hi)."""
+    vals = [float(x) for x in v] if isinstance(v, (list, tuple)) else [float(v)]
+    return vals[0], vals[-1]
+
+
 def family_pin(pin_diameter: float, clearance: float, friction) -> PinOption:
     """The family's own joint (``joint.pin_diameter``, ``pin_clearance``, ``friction``: a
     number or [lo, hi]) as a menu option: a steel dowel pin (or an M3 screw) in printed holes."""
-    f = tuple(float(x) for x in friction) if isinstance(friction, (list, tuple)) else (float(friction),) * 2
+    f = _pair(friction)
     return PinOption(name=f"steel-pin-{pin_diameter:g}", kind="pin",
                      description=f"{pin_diameter:g} mm steel dowel pin in {pin_diameter + clearance:g} mm printed holes",
                      pin_diameter=float(pin_diameter), clearance=float(clearance), friction=f, pin_yield=600.0,
@@ -272,8 +278,7 @@ def option_from(d: dict) -> PinOption:
     kw = dict(d)
     for key in ("friction", "torque"):
         if key in kw:
-            v = kw[key]
-            kw[key] = tuple(float(x) for x in v) if isinstance(v, (list, tuple)) else (float(v),) * 2
+            kw[key] = _pair(kw[key])
     kw.setdefault("description", "")
     return PinOption(**kw)
 

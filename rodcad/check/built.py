@@ -52,6 +52,7 @@ class BuiltRod:
             whole piece; ``print_matrix`` places this rod's frame in it), or None.
         socket_height: its sockets' flat roofs above the ball centres (mm; 0 where
             design.json does not say: the socket radius; a tuple: one per ball).
+        hole_sizes: its pin holes' diameters for its joint hardware (mm; None: the hinge's own).
     """
 
     index: int
@@ -75,6 +76,7 @@ class BuiltRod:
     ball_kind: str = ""
     piece: tuple[int, int] | None = None
     socket_height: float | tuple[float, ...] = 0.0
+    hole_sizes: tuple[float | None, float | None] = (None, None)
 
     @property
     def stem(self) -> str:
@@ -284,7 +286,17 @@ def _rod(rd: _Reader, outdir: Path, i: int, r: Any) -> BuiltRod | None:
                     (float(lo_hi[0]), float(lo_hi[1])), pin, thick, fill_mass, fill_center,
                     float(fab["ball_diameter_mm"]) if isinstance(fab.get("ball_diameter_mm"), (int, float)) else None,
                     str(fab.get("ball_kind") or ""), None if piece is None else (piece[0], piece[1]),
-                    _socket_height(fab.get("socket_height_mm")))
+                    _socket_height(fab.get("socket_height_mm")), _hole_sizes(r))
+
+
+def _hole_sizes(r: Any) -> tuple[float | None, float | None]:
+    """The rod's pin holes' diameters for its joint hardware (design.json ``rods[].hardware.
+    holes_mm``), or (None, None): the hinge's own (an older build, or no hardware)."""
+    hw = r.get("hardware") if isinstance(r, dict) else None
+    holes = hw.get("holes_mm") if isinstance(hw, dict) else None
+    if isinstance(holes, list) and len(holes) == 2 and all(isinstance(v, (int, float)) and v > 0 for v in holes):
+        return float(holes[0]), float(holes[1])
+    return None, None
 
 
 def _folder_problems(outdir: Path) -> list[Problem]:

@@ -30,6 +30,7 @@ from rodcad.cad.export import rod_matrices
 from rodcad.cad.reread import (
     PinHole,
     hinge_reference,
+    hole_radii,
     measure,
     moved,
     pair_overlap,
@@ -190,7 +191,7 @@ def _assembly_solids(built: BuiltChain, path: Path) -> tuple[dict[int, Any], lis
 
 
 def _read_one(rod: BuiltRod, solid: Any | None, density: float,
-              reference: Callable[[RodType], tuple[PinHole, PinHole]], rtype: RodType,
+              reference: Callable[..., tuple[PinHole, PinHole]], rtype: RodType,
               source: Path | None = None) -> RodReading | str:
     """Measure one rod (``solid`` already in the rod frame, read from ``source``, or None:
     read its STEP file); a string says what is wrong with it."""
@@ -206,7 +207,7 @@ def _read_one(rod: BuiltRod, solid: Any | None, density: float,
     change = (mass - rod.mass) / rod.mass
     shift = float(np.hypot(*(com - rod.com)))
     edited = abs(change) > EDIT_MASS_REL or shift > EDIT_COM_MM
-    pins = _pins(rod, solid, rtype, reference(rtype) if edited else None)
+    pins = _pins(rod, solid, rtype, reference(rtype, rod.hole_sizes) if edited else None)
     if isinstance(pins, str):
         return pins
     return RodReading(rod.index, source or rod.file, solid, volume, mass, com, edited, change, shift, pins)
@@ -218,16 +219,17 @@ def _pins(rod: BuiltRod, solid: Any, rtype: RodType, ref: tuple[PinHole, PinHole
     unchanged solid), or what is wrong with them."""
     g = rtype.geometry
     pins = []
+    radii = hole_radii(rtype, rod.hole_sizes)
     for k, x in enumerate((0.0, rod.length)):
         if ref is None or k not in ends:  # an unchanged solid keeps its holes: skip the booleans
             pins.append(PinHole(0.0, math.nan))
             continue
-        p = pin_hole(solid, x, pin_radius=g.hinge.pin_diameter / 2, hole_radius=g.hinge.hole_diameter / 2,
+        p = pin_hole(solid, x, pin_radius=radii[k][0], hole_radius=radii[k][1],
                      knuckle_radius=g.hinge.knuckle_radius, thickness=g.thickness)
         which = ("first", "(0, 0)") if k == 0 else ("second", f"({rod.length:.3f}, 0)")
         if p.blocked > BLOCKED_TOL:
             return (f"its {which[0]} pin hole is blocked: {p.blocked:.3g} mm^3 of material where the "
-                    f"{g.hinge.pin_diameter:g} mm pin goes (along z through {which[1]} of the rod frame); the hole "
+                    f"{2 * radii[k][0]:g} mm pin goes (along z through {which[1]} of the rod frame); the hole "
                     "was filled or moved. Keep the rod where it was saved: its placement is how rodcad finds "
                     "the holes")
         if p.around < MIN_AROUND * ref[k].around:
@@ -239,7 +241,7 @@ def _pins(rod: BuiltRod, solid: Any, rtype: RodType, ref: tuple[PinHole, PinHole
 
 
 def _read_piece(rods: list[BuiltRod], solid: Any | None, density: float,
-                reference: Callable[[RodType], tuple[PinHole, PinHole]], rtypes: list[RodType],
+                reference: Callable[..., tuple[PinHole, PinHole]], rtypes: list[RodType],
                 source: Path | None = None) -> list[RodReading] | str:
     """Measure a fused piece as a whole (``solid`` in its first rod's frame, or None: read
     the piece's STEP file once). For the re-simulation its rods keep their built mass
@@ -267,7 +269,7 @@ def _read_piece(rods: list[BuiltRod], solid: Any | None, density: float,
     for k, (r, m, rtype) in enumerate(zip(rods, mats, rtypes)):
         own = moved(solid, np.linalg.inv(m))  # the piece in this rod's frame
         ends = tuple(e for e, outer in ((0, k == 0), (1, k == len(rods) - 1)) if outer)
-        pins = _pins(r, own, rtype, reference(rtype) if edited and ends else None, ends)
+        pins = _pins(r, own, rtype, reference(rtype, r.hole_sizes) if edited and ends else None, ends)
         if isinstance(pins, str):
             return f"rod {r.index}: {pins}"
         out.append(RodReading(r.index, source or r.file, own, volume * r.mass / built.sum(), r.mass * scale,
@@ -292,12 +294,13 @@ def read_rods(built: BuiltChain, types: list[RodType], *, assembly: Path | None 
     problems: list[Problem] = []
     if assembly is not None:
         solids, problems = _assembly_solids(built, assembly)
-    refs: dict[str, tuple[PinHole, PinHole]] = {}
+    refs: dict[tuple, tuple[PinHole, PinHole]] = {}
 
-    def ref(rtype: RodType) -> tuple[PinHole, PinHole]:
-        if rtype.name not in refs:
-            refs[rtype.name] = hinge_reference(rtype)
-        return refs[rtype.name]
+    def ref(rtype: RodType, sizes=(None, None)) -> tuple[PinHole, PinHole]:
+        key = (rtype.name, tuple(sizes))
+        if key not in refs:
+            refs[key] = hinge_reference(rtype, sizes)
+        return refs[key]
 
     out: list[RodReading] = []
     for rod, rtype in zip(built.rods, types):

@@ -25,7 +25,8 @@ from rodcad.design.asprinted import hole_frame
 from rodcad.cad.export import export_assembly
 from rodcad.cad.printfile import write_print_files
 from rodcad.cad.reread import write_rod_step, write_rod_stl
-from rodcad.cad.rods import ChainFabrication, chain_parts, write_rod_files
+from rodcad.cad.chainfiles import chain_parts, write_rod_files
+from rodcad.cad.rods import ChainFabrication
 from rodcad.check.rebalance import Rebalanced
 from rodcad.check.recheck import CheckResult, equilibrium_json, with_hardware
 from rodcad.outdir import MARKER, staged_output

@@ -31,7 +31,8 @@ def curve_fit(curve: np.ndarray, points: np.ndarray, curvature) -> float:
 
 
 def fit_limit(*, curve: np.ndarray, target_points: np.ndarray, curvature, plan, inverse, check,
-              fit: float, tolerance: float, family_ranges=None, constraints=None) -> str:
+              fit: float, tolerance: float, family_ranges=None, constraints=None, hardware_g=None,
+              shot: bool = False) -> str:
     """One line: what keeps the chain from hanging within ``tolerance`` and what would reach it.
 
     Args:
@@ -45,6 +46,9 @@ def fit_limit(*, curve: np.ndarray, target_points: np.ndarray, curvature, plan, 
         tolerance: the figure aimed at.
         family_ranges: the family's ranges, for rods printed to order (or None).
         constraints: the design's :class:`rodcad.design.model.Constraints` (or None).
+        hardware_g: (N,) g of joint hardware hanging on each rod (or None): said where the
+            rods at their lightest carry some.
+        shot: the rods already have the widest mass range rodcad prints (a shot chamber).
     """
     laid = curve_fit(curve, target_points, curvature)
     pct = f"{100 * fit:.3g} % of its size off the curve (tolerance {100 * tolerance:.3g} %)"
@@ -84,14 +88,19 @@ def fit_limit(*, curve: np.ndarray, target_points: np.ndarray, curvature, plan, 
     if inverse is not None and not inverse.exact and np.any(inverse.at_bounds != 0):
         lo = int(np.sum(inverse.at_bounds < 0))
         hi = int(np.sum(inverse.at_bounds > 0))
+        light = ""
+        if hardware_g is not None and np.any(inverse.at_bounds < 0):
+            g = np.asarray(hardware_g, float)[inverse.at_bounds < 0]
+            light = (f"; the joint hardware (pins, bushings, bearings) adds {g.min():.2g}-{g.max():.2g} g to the "
+                     "rods at their lightest")
         if c is not None and c.joints == "free":
+            wider = "" if shot else " or use a catalog with a wider mass range (pla-shot)"
             return (f"hangs {pct}: weights alone cannot hold it ({lo} rod(s) at their lightest, {hi} at their "
-                    "heaviest); allow stops (remove constraints.joints: free) or use a catalog with a wider "
-                    "mass range (pla-shot)")
+                    f"heaviest{light}); allow stops (remove constraints.joints: free){wider}")
         extra = "" if c is None or c.anchor_stops_allowed else " or let the fixture stop the end rods " \
             "(remove constraints.anchor_stops: none)"
         return (f"hangs {pct}: the rods' mass ranges cannot balance it ({lo} rod(s) at their lightest, {hi} at "
-                f"their heaviest); a catalog with a wider mass range (heavier inserts, or pla-shot){extra} "
+                f"their heaviest{light}); a catalog with a wider mass range (heavier inserts, or pla-shot){extra} "
                 "would reach it")
     if not eq.stable or not check.unique:
         return (f"hangs {pct}: the masses balance the target, but the chain settles in another shape there; "

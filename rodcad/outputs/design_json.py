@@ -203,7 +203,9 @@ def design_json(r) -> dict[str, Any]:
     for i, name in enumerate(r.type_names):
         rod = _rod_json(i, d.catalog[name], r.lengths[i], r.masses[i], r.com[i], r.limits, r.n)
         printed = r.plan is not None and r.plan.rods  # rods printed to order: their own ranges
-        bounds = r.plan.problem.mass_bounds[i] if printed else mass_info(d.catalog[name]).mass_range
+        # as the rods hang: with their joint hardware (the plan's bounds have it already)
+        bounds = r.plan.problem.mass_bounds[i] if printed else \
+            np.asarray(mass_info(d.catalog[name]).mass_range, float) + r.attached[i].sum()
         rod["mass_range"] = [float(v) for v in bounds]
         if r.fabrication is not None:
             rod["fabrication"] = fabrication_json(r.fabrication.rods[i], _piece_of(r.fabrication, i))

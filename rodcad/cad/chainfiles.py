@@ -1,0 +1,118 @@
+"""A built chain's files: every rod's STEP and STL (checked on re-read) and the assembly in
+its hanging pose (:func:`chain_parts`: the parts of one chain placed and coloured by mass,
+also a chandelier's and a re-balanced chain's)."""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rodcad.cad.export import AssemblyPart, check_files, export_assembly, rod_matrices
+from rodcad.cad.frame import pin_solid
+from rodcad.cad.rods import ChainFabrication
+from rodcad.colors import mass_colors
+
+__all__ = ["chain_parts", "write_assembly", "write_rod_files"]
+
+
+def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
+    """Write outdir/rods/NN_TYPE.step and .stl for every chain position (one NN-MM_piece
+    file for the rods of a fused piece, :attr:`ChainFabrication.parts`).
+
+    NN is the rod's 0-based index (as in design.json), two digits or more.
+    The solids are in print orientation on the bed (rod frame +y up, the -y
+    face on Z = 0, see :data:`rodcad.cad.export.PRINT_ROTATION`). Rods that share
+    a solid are written and checked once, then copied. Checks: the STEP
+    re-imports as one valid solid of the same volume (1e-6), the STL is
+    watertight and encloses the B-rep's volume within 0.1 %.
+
+    Returns:
+        The paths written (STEP, STL per rod).
+
+    Raises:
+        FabricationError: a check failed.
+    """
+    from rodcad.cad.export import export_step, export_stl, transformed
+
+    rods_dir = Path(outdir) / "rods"
+    rods_dir.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    first: dict[int, tuple[Path, Path]] = {}
+    for r in fab.parts:
+        step = rods_dir / f"{r.file_stem}.step"
+        stl = rods_dir / f"{r.file_stem}.stl"
+        src = first.get(id(r.solid))
+        if src is None:
+            on_bed = transformed(r.solid, r.print_matrix)
+            export_step(on_bed, step, r.file_stem)
+            export_stl(on_bed, stl)
+            check_files(step, stl, r.plastic_volume)
+            first[id(r.solid)] = (step, stl)
+        else:
+            shutil.copyfile(src[0], step)
+            shutil.copyfile(src[1], stl)
+        written += [step, stl]
+    return written
+
+
+def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",
+                   extra: Sequence[AssemblyPart] = (), pin_diameters: Sequence[float | None] | None = None) -> Path:
+    """Write the chain in its simulated pose as a STEP assembly.
+
+    Each rod is a solid named 'NN_TYPE' (its rods/ file stem), placed with its
+    frame origin at ``points[i]`` and x along points[i] -> points[i+1] (chain
+    plane xy, y up, hinge axes along z), coloured by mass from blue (lightest)
+    to red (heaviest); every joint gets a pin 'pin_NN' (pin diameter, through
+    the rod thickness), but a fused piece is one solid 'NN-MM_piece' at its first rod, with
+    no pins at its fused joints.
+
+    Args:
+        fab: the fabricated chain.
+        points: (N+1, 2) joint positions (mm).
+        path: destination file.
+        name: root assembly name.
+        extra: further parts (the anchor fixture), placed in the chain plane.
+        pin_diameters: (N+1,) each pin's diameter (the joint hardware's; None: the rods').
+    """
+    pts = np.asarray(points, dtype=float)
+    if pts.shape != (len(fab.rods) + 1, 2):
+        raise ValueError(f"points must have shape ({len(fab.rods) + 1}, 2), not {pts.shape}")
+    fused = {j + 1 for p in fab.pieces for j in range(p.first, p.last)}
+    pins = [None if j in fused else (fab.rods[min(j, len(fab.rods) - 1)].pin_diameter
+                                     if pin_diameters is None or pin_diameters[j] is None else pin_diameters[j],
+                                     fab.rods[min(j, len(fab.rods) - 1)].thickness) for j in range(len(pts))]
+    parts = fab.parts
+    nodes = chain_parts([r.file_stem for r in parts], [r.solid for r in parts], pts,
+                        [r.mass / (getattr(r, "last", r.index) - r.index + 1) for r in parts], pins,
+                        at=[r.index for r in parts])
+    return export_assembly(path, [*nodes, *extra], name)
+
+
+def chain_parts(names: Sequence[str], solids: Sequence[Any], points: np.ndarray, masses: Sequence[float],
+                pins: Sequence[tuple[float, float] | None], mass_scale: tuple[float, float] | None = None,
+                at: Sequence[int] | None = None) -> list[AssemblyPart]:
+    """The parts of one chain in its pose: rod i named ``names[i]`` with its rod frame at
+    joint p_i and x along p_i -> p_{i+1} (part k at rod ``at[k]`` when given: a fused piece
+    at its first rod), coloured by mass (blue light, red heavy; on ``mass_scale`` (lo, hi)
+    when given, for one scale over several chains), and a pin 'pin_NN' through every joint,
+    ``pins[j] = (diameter, length)`` (mm; None: no pin), centred on the chain plane.
+    """
+    lo, hi = mass_scale if mass_scale is not None else (None, None)
+    colors = mass_colors(masses, lo, hi)
+    mats = rod_matrices(points)
+    where = range(len(names)) if at is None else at
+    parts = [AssemblyPart(name, solid, mats[i], tuple(float(c) for c in col[:3]))
+             for name, solid, i, col in zip(names, solids, where, colors)]
+    for j, (p, pin) in enumerate(zip(np.asarray(points, dtype=float), pins)):
+        if pin is None:
+            continue
+        diameter, length = pin
+        m = np.eye(4)
+        m[:2, 3] = p
+        m[2, 3] = -length / 2
+        parts.append(AssemblyPart(f"pin_{j:02d}", pin_solid(diameter, length), m, (0.75, 0.75, 0.78)))
+    return parts

@@ -96,6 +96,7 @@ class BuildResult:
     as_printed: AsPrinted | None = None
     hardware: JointHardware | None = None
     hung: Any = None  # rodcad.design.hung.HungDesign: the masses designed with the hardware on
+    tapping: Any = None  # rodcad.design.tapping.TapResult: the hung chain tapped in MuJoCo
 
     @property
     def rods(self) -> list:

@@ -19,6 +19,10 @@ from rodcad.design.hardware import choose_hardware, newtons, solver_moment
 from rodcad.design.loader import load_design
 from rodcad import pipeline
 
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 @pytest.fixture(scope="module")
 def semicircle():
@@ -232,3 +236,58 @@ def test_bad_pins_block_names_file_line_column_and_key(tmp_path):
     assert out.returncode == 2
     assert f"{f}:12:" in out.stderr and "pins.options[0]" in out.stderr and "outer_diameter" in out.stderr
     assert f"{f}:13:" in out.stderr and "pins.options[1].outer_diameter" in out.stderr
+
+
+def _rested_inside(r, label):
+    """The designed chain with its chosen hardware's friction (top of each range), hung 0.01 rad
+    off its shape in MuJoCo and then tapped (the build's own simulation, rodcad.design.tapping),
+    and released by the independent MuJoCo reference (tests/mujoco_chain.py, no rodcad code)
+    from the same start: every rest within the band rodcad reports, per joint, plus MuJoCo's
+    settling error and the band's second-order term."""
+    from mujoco_chain import settle_chain
+    from optimize.endlimits import limit_turn
+
+    t = r.tapping
+    fb = r.as_printed.friction
+    assert t is not None and t.converged, t.message
+    second = fb.band ** 2 / float(np.min(r.lengths))  # a rod turned by band / l leaves its tangent by ~band^2 / 2l
+    for k, rest in enumerate(t.rests):
+        settle = t.drift + t.end_error[k] + float(np.sum(r.lengths)) * t.violation[k]
+        disp = np.hypot(*(rest - r.equilibrium.points).T)
+        assert np.all(disp <= fb.per_joint + second + settle), (label, k, (disp - fb.per_joint).max())
+    # the independent engine, from the start the build let go of
+    theta0 = np.unwrap(np.arctan2(*np.diff(t.start, axis=0).T[::-1]))
+    ends = None
+    if r.end_limits is not None:
+        ends = np.asarray(r.end_limits, float).copy()
+        th = np.unwrap(r.equilibrium.angles)
+        for e, a in ((0, th[0]), (1, th[-1])):
+            ends[e] += limit_turn(a, ends[e])
+    out = settle_chain(r.lengths, r.masses, *r.design.anchors, com=r.com, limits=r.limits, angles0=theta0,
+                       end_limits=ends, frictionloss=solver_moment(r.hardware.capacity, r.design.g),
+                       soft_timeconst=0, max_time=240.0, tol=1e-7, g=r.design.g)  # low friction: slow to stop
+    size = max(float(np.ptp(r.equilibrium.points[:, 0])), float(np.ptp(r.equilibrium.points[:, 1])))
+    assert out["converged"] and out["end_error"] < 1e-6 * size
+    disp = np.hypot(*(out["points"] - r.equilibrium.points).T)
+    assert np.all(disp <= fb.per_joint + second + 1e-6 * size), (label, (disp - fb.per_joint).max())
+    return float(t.deviation.max()), fb.band
+
+
+def test_mujoco_with_the_chosen_pins_rests_inside_the_reported_band(semicircle):
+    dev, band = _rested_inside(semicircle, "semicircle")
+    assert band <= semicircle.hardware.budget * (1 + 1e-9) and dev <= band * 1.05
+
+
+@pytest.mark.parametrize("what", ["necklace", "drawn"])
+def test_mujoco_with_the_chosen_pins_rests_inside_the_band_necklace_and_a_drawn_shape(what, build_store):
+    pytest.importorskip("mujoco")
+    if what == "necklace":
+        r = build_store.result(ROOT / "examples" / "necklace.yaml")
+    else:
+        from drawn_shapes import design_text, family
+
+        shape = family(10, seed=7)[1]  # a drop: stops both sides, free joints, anchor stops
+        r = build_store.result(f"{shape.name}.yaml", text=design_text(shape))
+        if not r.meets_tolerance:
+            pytest.skip(f"{shape.name} exits 1: no design to hang")
+    _rested_inside(r, what)

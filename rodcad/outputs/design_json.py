@@ -17,7 +17,7 @@ from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
 from rodcad.design.asprinted import anchor_holes
-from rodcad.outputs.hardware import hardware_bill, hardware_json, rod_hardware_json
+from rodcad.outputs.hardware import hardware_bill, hardware_json, rod_hardware_json, tapping_json
 from rodcad.outputs.printed import as_printed_json, printed_rod_fields
 
 __all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
@@ -249,6 +249,8 @@ def design_json(r) -> dict[str, Any]:
         out.update(as_printed_json(r.as_printed, r.plan.curve if r.plan is not None else None, curvature, d.span))
     if getattr(r, "hardware", None) is not None:
         out["hardware"] = hardware_json(r)
+    if getattr(r, "tapping", None) is not None:
+        out["tapping"] = tapping_json(r)
     out["print"] = print_profile(d.catalog)
     out["bill_of_materials"] = bill_of_materials(r)
     if getattr(r, "fixture", None) is not None:

@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["hardware_bill", "hardware_json", "hardware_lines", "hardware_summary", "rod_hardware_json"]
+__all__ = ["hardware_bill", "hardware_json", "hardware_lines", "hardware_summary", "rod_hardware_json", "tapping_json",
+           "tapping_sentence"]
 
 
 def _f(x) -> float | None:
@@ -54,6 +55,33 @@ def hardware_json(r) -> dict[str, Any] | None:
             "overloaded": [int(k) for k in hw.overloaded], "notes": list(hw.notes),
             "design_rounds": None if hung is None else int(hung.rounds),
             "com_change_mm": None if hung is None else _f(hung.com_change)}
+
+
+def tapping_json(r) -> dict[str, Any] | None:
+    """design.json's ``tapping``: where the chain rests after it is hung 0.01 rad off its shape
+    (``deviation_mm[0]``) and after each light tap (MuJoCo with the pins' friction)."""
+    t = getattr(r, "tapping", None)
+    if t is None:
+        return None
+    return {"taps": int(t.taps), "seed": int(t.seed), "deviation_mm": [_f(v) for v in t.deviation],
+            "final_mm": _f(t.deviation[-1]), "largest_mm": _f(np.max(t.deviation)),
+            "per_joint_mm": [_f(v) for v in t.per_joint], "final_points": [[_f(x), _f(y)] for x, y in t.rests[-1]],
+            "converged": bool(t.converged), "settle_error_mm": _f(t.drift + np.max(t.end_error)),
+            "message": t.message}
+
+
+def tapping_sentence(r, size: float) -> str | None:
+    """report.md's line on tapping: where the simulated chain came to rest."""
+    t = getattr(r, "tapping", None)
+    if t is None:
+        return None
+    dev = t.deviation
+    return (f"- **Tapped** (MuJoCo, each pin's friction at the top of its range): hung 0.01 rad off its shape the "
+            f"chain came to rest {dev[0]:.3g} mm from its design; after each of {t.taps} light taps it rested "
+            f"within {dev[1:].min():.3g}-{dev[1:].max():.3g} mm ({100 * dev[1:].max() / size:.3g} % of its size), "
+            f"{dev[-1]:.3g} mm after the last. Taps free the pins and let the chain settle anywhere in its band, "
+            "not back onto the design: with these parts the band itself is small."
+            + ("" if t.converged else f" (not every settle came to rest: {t.message})"))
 
 
 def hardware_bill(r, length: float) -> list[dict[str, Any]]:

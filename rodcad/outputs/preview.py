@@ -52,7 +52,9 @@ def plot_chain(r, *paths: Path) -> None:
     if r.as_built is not None:
         ax.plot(*r.as_built.equilibrium.points.T, ":", color="k", lw=1, zorder=5, label="as built")
     if getattr(r, "as_printed", None) is not None:
-        draw_bands(ax, r.as_printed, pts, max(d.span, float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1]))))
+        tapped = getattr(r, "tapping", None)
+        draw_bands(ax, r.as_printed, pts, max(d.span, float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1]))),
+                   rest=None if tapped is None else tapped.rests[-1])
     title = f"{d.name}: {r.n} rods"
     if r.method:
         title += f", {r.method}"

@@ -118,9 +118,8 @@ def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
             f"- **Pin friction** ({_friction_label(ap)}): the chain can come to rest anywhere within "
             f"{fb.band:.3g} mm ({fb.band * pct:.3g} % of its size) of its design"
             + ("" if fb.tight else " (an upper bound: its many stops make the exact band costly)")
-            + f", most at joint {j}. To settle it "
-            "onto its design, tap it lightly a few times once it hangs: each tap frees the pins for a moment and "
-            "gravity moves the chain toward its design.")
+            + f", most at joint {j}. Hang it gently: a chain let go far off its shape rests near the band's "
+            "edge, and light taps free the pins and bring it back inside the band (not onto the design).")
     mb = ap.mass_band
     if mb is not None:
         j = _worst(mb.per_joint)
@@ -133,10 +132,12 @@ def as_printed_lines(ap: AsPrinted, size: float) -> list[str]:
     return lines
 
 
-def draw_bands(ax, ap: AsPrinted, points: np.ndarray, size: float) -> None:
+def draw_bands(ax, ap: AsPrinted, points: np.ndarray, size: float, rest: np.ndarray | None = None) -> None:
     """On a preview: a circle around every joint of the friction band's radius (orange) and
     of the mass band's (purple), magnified by a stated power of ten where the largest would be
-    under 2 % of the chain's size (drawn over the rods)."""
+    under 2 % of the chain's size (drawn over the rods); with ``rest`` ((N+1, 2), the chain
+    after its simulated taps), a green cross where each joint came to rest, its distance from
+    the design magnified alike."""
     from matplotlib.patches import Circle
 
     bands = [(ap.friction, "C1", f"pin friction band ({_friction_label(ap)})"),
@@ -153,3 +154,7 @@ def draw_bands(ax, ap: AsPrinted, points: np.ndarray, size: float) -> None:
             if rad > 0:
                 ax.add_patch(Circle(p, rad * scale, fc=color, ec=color, alpha=0.35, lw=0.8, zorder=4.5,
                                     label=f"{label}{times}" if j == int(np.argmax(band.per_joint)) else None))
+    if rest is not None:
+        shown = points + scale * (np.asarray(rest, float) - points)
+        ax.plot(*shown.T, "x", color="C2", ms=6, mew=1.5, zorder=6,
+                label=f"rest after the simulated taps{', offset x' + format(scale, 'g') if scale > 1 else ''}")

@@ -11,7 +11,7 @@ import numpy as np
 from rodcad.outputs.printed import as_printed_lines, printed_summary
 from rodcad import __version__
 from rodcad.fabrication.layers import LayerGrid
-from rodcad.outputs.hardware import hardware_lines, hardware_summary
+from rodcad.outputs.hardware import hardware_lines, hardware_summary, tapping_sentence
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
 
 __all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
@@ -93,6 +93,9 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         size = float(data["curve"]["size_mm"]) if "curve" in data else float(d.span)
         for line in as_printed_lines(r.as_printed, size):
             add(line)
+        tapped = tapping_sentence(r, size)
+        if tapped:
+            add(tapped)
     if "inverse" in data:
         inv = data["inverse"]
         add(f"- Inverse design: {'exact' if inv['exact'] else 'best fit within the mass bounds'}; "

@@ -107,7 +107,7 @@ def test_design_json_and_report_as_printed(printed_semicircle):
         np.testing.assert_allclose(r["com"], [np.cos(t) * rel[0] + np.sin(t) * rel[1],
                                               -np.sin(t) * rel[0] + np.cos(t) * rel[1]], atol=1e-12)
     text = (out / "report.md").read_text()
-    assert "Pins in their holes" in text and "Pin friction" in text and "tap it" in text
+    assert "Pins in their holes" in text and "Pin friction" in text and "**Tapped**" in text
     assert "Print tolerance" in text
 
 

@@ -42,7 +42,10 @@ def test_a_drawn_shape_hangs_within_the_tolerance_or_exits_1_with_its_reason(sha
     if code == 0:
         assert fit <= 0.01 * (1 + 1e-9) and data["meets_tolerance"]
         assert data["simulated"]["stable"]
-        assert data["error"]["max_mm"] <= 1e-6 * data["curve"]["size_mm"]  # the designed shape, exactly
+        # the designed shape, exactly; or, for a tight shape whose rods' masses sit on their
+        # bounds once the joints' hardware hangs on them, a best fit within the tolerance
+        if data["error"]["max_mm"] > 1e-6 * data["curve"]["size_mm"]:
+            assert any(data["inverse"]["at_bounds"]) and "best fit" in data["inverse"]["message"]
     else:
         assert fit > 0.01 and not out.exists()
         line = err.strip().splitlines()[-1]

@@ -14,12 +14,8 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
 from rodcad.cad.mesh import DEFLECTION as STL_DEFLECTION
 from rodcad.cad.export import import_step, read_assembly
-from rodcad.cad.rods import (
-    fabricate_chain,
-    fabricate_rod,
-    write_assembly,
-    write_rod_files,
-)
+from rodcad.cad.chainfiles import write_assembly, write_rod_files
+from rodcad.cad.rods import fabricate_chain, fabricate_rod
 from rodcad.cad.solids import is_valid_solid, mass_properties, void_template
 from rodcad.catalog.cache import DiskCache
 from rodcad.catalog.loader import load_catalog

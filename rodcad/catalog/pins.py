@@ -71,6 +71,10 @@ DEFAULT_OPTIONS: tuple[dict, ...] = (
      "into the tongue, a 2 mm steel pin turning in it", "pin_diameter": 2.0, "clearance": 0.1,
      "friction": [0.05, 0.15], "outer_diameter": 4.0, "sleeve_density": 2.2, "sleeve_pressure": 3.0,
      "pin_yield": 600.0, "cost": 0.12},
+    {"name": "bearing-681", "kind": "bearing", "description": "two open 681 ball bearings (1 x 3 x 1 mm, light "
+     "oil) pressed into the tongue, on a 1 mm steel pin held by the fork", "pin_diameter": 1.0,
+     "clearance": 0.02, "friction": [0.001, 0.005], "torque": [0.0, 0.005], "outer_diameter": 3.0, "width": 1.0,
+     "count": 2, "part_mass": 0.03, "part_load": 10.0, "pin_yield": 1500.0, "cost": 0.6},
     {"name": "bearing-681x", "kind": "bearing", "description": "an open 681X ball bearing (1.5 x 4 x 2 mm, light "
      "oil) pressed into the tongue, on a 1.5 mm steel pin held by the fork", "pin_diameter": 1.5,
      "clearance": 0.02, "friction": [0.001, 0.005], "torque": [0.0, 0.005], "outer_diameter": 4.0, "width": 2.0,

@@ -344,8 +344,8 @@ def choose_hardware(rods: Sequence[RodType], menu: PinMenu, *, lengths, masses, 
     rated = np.array([np.nan if none[k] else cands[k][pick[k]][1] for k in range(n + 1)])
     if band is not None and band > budget:
         notes.append(f"the friction band is {band:.3g} mm with the least-friction hardware the catalog offers "
-                     f"(budget {budget:.3g} mm): measure the pins' friction (rodcad calibrate friction), add "
-                     "hardware of less friction to the catalog's pins, or tap the hung chain to settle it")
+                     f"(budget {budget:.3g} mm): measure the pins' friction (rodcad calibrate friction) or add hardware "
+                     "of less friction to the catalog's pins")
     if overloaded:
         notes.append(f"pin(s) {overloaded}: no hardware in the catalog carries the load with a safety factor of "
                      f"{menu.safety:g} (largest {forces[overloaded].max():.3g} N); the strongest that fits is used")

@@ -332,7 +332,9 @@ def chain_hardware(rods: Sequence[RodType], design: Any, cd: Any) -> JointHardwa
     """Every pin's hardware for a designed chain (``cd``, a :class:`rodcad.design.masses.
     ChainDesign` of ``design``'s, :class:`rodcad.design.model.Design`), by :func:`rodcad.design.
     hardware.choose_hardware`: its friction band within :data:`rodcad.design.hardware.
-    FRICTION_SHARE` of the design's tolerance times the target's size. None where the catalog
+    FRICTION_SHARE` of the design's tolerance (or of the default one, where the design's is
+    looser: a fixed menu's straight chords are no reason to let the chain rattle) times the
+    target's size. None where the catalog
     has no menu or the equilibrium is not a stable one (the bands need it)."""
     menu = design.catalog.pins
     eq = cd.check.equilibrium
@@ -344,7 +346,7 @@ def chain_hardware(rods: Sequence[RodType], design: Any, cd: Any) -> JointHardwa
     return choose_hardware(rods, menu, lengths=p.lengths, masses=cd.result.masses, com=p.com,
                            anchors=design.anchors, limits=p.limits if n > 1 else None, end_limits=p.end_limits,
                            g=design.g, equilibrium=eq, fused=fused_joints(cd.plan.fused, n),
-                           budget=FRICTION_SHARE * tol * curve_size(cd.plan.curve))
+                           budget=FRICTION_SHARE * min(tol, DEFAULT_TOLERANCE) * curve_size(cd.plan.curve))
 
 
 def plan_holes(rods: Sequence[RodType], chain: DesignedChain) -> HolePlan:

@@ -42,8 +42,8 @@ from rodcad.catalog.pins import PinMenu, PinOption
 __all__ = ["FRICTION_SHARE", "JointHardware", "best_capacity", "choose_hardware", "newtons", "pin_knuckles",
            "solver_moment"]
 
-#: The share of the design's tolerance the friction band may take: at the default 1 %
-#: tolerance, a band of 0.1 % of the target's size.
+#: The share of the design's tolerance the friction band may take (of the default 1 % where
+#: the design's is looser): a band of 0.1 % of the target's size at most.
 FRICTION_SHARE = 0.1
 
 #: A pin is cut this much longer than the hinge is thick (mm; the bill of materials' length).

@@ -113,7 +113,7 @@ def hardware_lines(r, data: dict[str, Any]) -> list[str]:
     L = ["## Joint hardware", "",
          "Each joint has the cheapest hardware of the catalog that carries its load (with a safety factor of "
          f"{r.hardware.safety:g}) and keeps the chain's friction band within "
-         f"{hw['budget_mm']:.3g} mm (a tenth of the tolerance): the band is reported at the top of every "
+         f"{hw['budget_mm']:.3g} mm (a tenth of the tolerance, 0.1 % of the size at most): the band is reported at the top of every "
          "part's friction range. Pin 0 is at anchor A, pin k between rods k-1 and k.", "",
          "| pin | hardware | load N | rated N | friction | holds N mm | tongue / fork hole mm |",
          "|---|---|---|---|---|---|---|"]

@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 from rodcad.catalog.coupon import CouponError, CouponGeometry, Reading, coupon_geometry, default_rider, fit_friction
 from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.pins import PinOption
 from rodcad.design.model import DEFAULT_CATALOG
+from rodcad.commands.group import command_group
 from rodcad.errors import InputError, Problem
 from rodcad.outdir import OutputFolderError, check_output_folder, staged_output
 from rodcad.yamlio import suggest
@@ -37,18 +37,10 @@ __all__ = ["register", "run_friction"]
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``calibrate`` command and its ``friction`` subcommand."""
-    parser = subparsers.add_parser(
-        "calibrate",
-        help="print a coupon that measures your joints' friction; turn its readings into catalog numbers",
-        description="Calibration coupons for the catalog's numbers that come from tables.",
-    )
-    sub = parser.add_subparsers(dest="calibrate_command", metavar="SUBCOMMAND")
-
-    def usage(args: argparse.Namespace) -> int:
-        parser.print_help(sys.stderr)
-        return 2
-
-    parser.set_defaults(handler=usage)
+    sub = command_group(subparsers, "calibrate",
+                        help="print a coupon that measures your joints' friction; turn its readings into catalog "
+                        "numbers", description="Calibration coupons for the catalog's numbers that come from tables.",
+                        dest="calibrate_command")
     f = sub.add_parser(
         "friction",
         help="a wheel-on-a-pin coupon for one joint hardware option, or mu from its readings",

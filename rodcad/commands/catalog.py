@@ -33,6 +33,7 @@ from rodcad.catalog.limits import TOLERANCE_DEG
 from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.model import Catalog
 from rodcad.catalog.spec import catalog_schema
+from rodcad.commands.group import command_group
 from rodcad.errors import InputError, Problem
 from rodcad.outputs.design_json import ball_text
 from rodcad.outdir import write_atomic
@@ -42,18 +43,9 @@ __all__ = ["SEED_KINDS", "check_report", "precompute", "register", "schema_text"
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``catalog`` command and its subcommands."""
-    parser = subparsers.add_parser(
-        "catalog",
-        help="check, export and describe rod catalogs",
-        description="Check, export and describe rod catalogs (YAML files of rod families).",
-    )
-    sub = parser.add_subparsers(dest="catalog_command", metavar="SUBCOMMAND")
-
-    def usage(args: argparse.Namespace) -> int:
-        parser.print_help(sys.stderr)
-        return 2
-
-    parser.set_defaults(handler=usage)
+    sub = command_group(subparsers, "catalog", help="check, export and describe rod catalogs",
+                        description="Check, export and describe rod catalogs (YAML files of rod families).",
+                        dest="catalog_command")
 
     check = sub.add_parser(
         "check",

@@ -44,7 +44,7 @@ from optimize.endlimits import as_end_limits, limit_turn
 from optimize.equilibrium import EquilibriumResult, solve_equilibrium
 from optimize.pins import joint_forces
 
-__all__ = ["FrictionBand", "friction_band", "friction_capacity", "response_band"]
+__all__ = ["FrictionBand", "friction_band", "friction_capacity"]
 
 #: Cells explored at most (each a set of stops that hold) before the band is reported as a
 #: lower bound (``FrictionBand.exhaustive`` False).
@@ -204,16 +204,6 @@ def _zonotope_max(A: np.ndarray, tau: np.ndarray, c=None):
     verts = g @ signs + c[:, None]
     k = int(np.argmax(np.hypot(verts[0], verts[1])))
     return float(np.hypot(*verts[:, k])), tau * signs[:, k]
-
-
-def response_band(response, capacity) -> np.ndarray:
-    """Each joint's largest displacement (N+1,) over the box of friction moments ``|m_k| <=
-    capacity_k`` mapped by ``response`` ((N+1, 2, N+1), :attr:`FrictionBand.response`): the
-    band of the equilibrium's own cell, exact where the box stays in it (``cells == 1``),
-    for other capacities than the band was computed with."""
-    r = np.asarray(response, float)
-    tau = np.asarray(capacity, float)
-    return np.array([_zonotope_max(r[j], tau)[0] for j in range(r.shape[0])])
 
 
 def _lp_support(direction, A, V, v0, tau):

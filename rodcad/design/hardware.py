@@ -16,9 +16,8 @@ The choice (:func:`choose_hardware`):
 2. while the friction band (at the top of every option's friction range) exceeds the budget
    (:data:`FRICTION_SHARE` of the design's tolerance times the target's size), the pin that
    adds most to the widest joint's band is upgraded to the cheapest fitting option that holds
-   less friction; the band of the equilibrium's own cell (a zonotope: exact where the box of
-   moments stays in that cell) steers the loop, the exact band is computed at its end and,
-   where it is still too wide, the loop goes on with it;
+   less friction (its share of that joint's band in the equilibrium's own cell), and the exact
+   band is computed again;
 3. it stops when the band is within the budget or no pin can be upgraded (the report says
    so: then design option ``robust`` may hold joints both ways).
 
@@ -35,7 +34,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize import friction_band, joint_forces
-from optimize.friction import response_band
 from rodcad.catalog.model import RodType
 from rodcad.catalog.pins import PinMenu, PinOption
 
@@ -209,17 +207,6 @@ class JointHardware:
                 out[i, end] = m
         return out
 
-    def bill(self) -> list[tuple[str, str, int]]:
-        """(option name, what it is, count) for every kind of hardware used: pins and, for
-        sleeves and bearings, the parts (a bearing option counts its bearings)."""
-        counts: dict[str, list] = {}
-        for o in self.options:
-            if o is None:
-                continue
-            e = counts.setdefault(o.name, [o, 0])
-            e[1] += 1
-        return [(name, o.description, c) for name, (o, c) in counts.items()]
-
 
 def _mirrored(lengths, points) -> bool:
     """The chain's rods and joints read the same from B to A, mirrored about the perpendicular
@@ -284,28 +271,19 @@ def choose_hardware(rods: Sequence[RodType], menu: PinMenu, *, lengths, masses, 
     band = None
     rounds = 0
     limit = max_rounds if max_rounds is not None else sum(len(c) for c in cands)
-    exact = None
     while True:
         tau = solver_moment(caps(), g)
         try:
-            fb = friction_band(lengths, m, a, b, capacity=tau, **kw) if exact is None else exact
+            fb = friction_band(lengths, m, a, b, capacity=tau, **kw)
         except (ValueError, np.linalg.LinAlgError) as err:
             notes.append(f"no friction band: {err}")
+            band = None
             break
-        exact = None
-        per = response_band(fb.response, tau)
-        worst = float(per.max())
-        if worst <= budget:  # the cell's band is within: the exact one decides
-            exact = friction_band(lengths, m, a, b, capacity=tau, **kw)
-            band = exact.band
-            if band <= budget:
-                break
-            per, worst = exact.per_joint, band
-        else:
-            band = fb.band if fb.cells == 1 else None
-        if rounds >= limit:
+        band = fb.band
+        if band <= budget or rounds >= limit:
             break
-        j = int(np.argmax(per))
+        # the pin adding most to the widest joint's band, in the equilibrium's own cell
+        j = int(np.argmax(fb.per_joint))
         share = tau * np.linalg.norm(fb.response[j], axis=0)
         best = None
         for k in np.argsort(-share):
@@ -321,7 +299,6 @@ def choose_hardware(rods: Sequence[RodType], menu: PinMenu, *, lengths, masses, 
         k, i = best
         pick[k] = i
         upgraded.append(k)
-        exact = None
         rounds += 1
     if _mirrored(lengths, equilibrium.points) and upgraded:
         # a mirror-symmetric chain gets mirror-symmetric hardware: each pair of mirror pins the

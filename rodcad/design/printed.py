@@ -35,8 +35,8 @@ from rodcad.design.decide import Allowed, decide
 from rodcad.design.laying import HI, LO, LOCK, PrintedFamily, STOP_SNAP_DEG
 from rodcad.design.shell import TRIES, ShellError, most_faithful, one_shell
 
-__all__ = ["FREE_SHARE", "FREER_FIT", "PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for",
-           "free_share", "freest", "fused_pieces", "plan_printed", "rods_of"]
+__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "fused_pieces", "plan_printed",
+           "rods_of"]
 
 @dataclass
 class PrintedPlan:
@@ -328,62 +328,6 @@ def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int,
         raise ShellError(f"{rods} rods of one length do not lay on this target with every corner a joint; change "
                          "the rod count, or drop same_shell")
     return None
-
-
-#: A plan whose stops and fused pieces leave fewer than this share of its joints free is laid
-#: again on longer rods (:func:`freest`).
-FREE_SHARE = 0.5
-
-#: ... and a plan on longer rods is kept only where its rods follow the curve within this share
-#: of the tolerance (the rest left for the chain as built and as printed).
-FREER_FIT = 0.75
-
-
-def free_share(p: PrintedPlan) -> float:
-    """The share of a plan's joints that hang freely (no stop, not fused)."""
-    n = len(p.rods) - 1
-    if n < 1:
-        return 1.0
-    held = set(p.stops) | {j for a, b in p.fused for j in range(a, b)}
-    return 1.0 - len(held) / n
-
-
-def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: PrintedPlan, *, tolerance: float,
-           **kw) -> PrintedPlan:
-    """The plan on the longest rods that follow the curve (``plan``), or one on longer rods that
-    keeps more of its joints free (the physics' advice: keep as many joints free as the shape
-    allows; a hanging chain, not a sculpture), where ``plan`` leaves fewer than
-    :data:`FREE_SHARE` free. A longer plan counts only where the solver accepted it (on target,
-    stable, nothing lower) and its rods' centrelines follow the curve within :data:`FREER_FIT` x
-    ``tolerance`` of the target's size. Longer rods: 1.5 and 2 times the plan's mean length
-    (within the family's range). ``kw`` as :func:`plan_printed`'s."""
-    from rodcad.design.fit import curve_fit
-
-    share = free_share(plan)
-    if share >= FREE_SHARE or len(plan.rods) < 3:
-        return plan
-    mean = float(np.mean(plan.problem.lengths))
-    top = float(pf.family.ranges.length[1])
-    best, best_share, best_len = plan, share, mean
-    for length in sorted({min(top, 1.5 * mean), min(top, 2.0 * mean)}):
-        if length <= 1.05 * mean:
-            continue
-        try:
-            p = plan_printed(curve, catalog, pf, preferred_length=length, **kw)
-        except ValueError:
-            continue
-        v = p.verified[1] if p.verified is not None else None
-        if v is None or not v.on_target or v.lower or p.unmet:
-            continue
-        if curve_fit(curve, p.discretization.points, [r.curvature for r in p.rods]) > FREER_FIT * tolerance:
-            continue
-        if free_share(p) > best_share + 1e-9:
-            best, best_share, best_len = p, free_share(p), float(np.mean(p.problem.lengths))
-    if best is not plan:
-        best.notes.append(f"rods of about {best_len:.0f} mm keep {100 * best_share:.0f} % of the joints free (the "
-                          f"longest rods that follow the curve, {mean:.0f} mm, {100 * share:.0f} %): a hanging chain, "
-                          "not a rigid one")
-    return best
 
 
 def rods_of(plans: Sequence) -> list[RodType]:

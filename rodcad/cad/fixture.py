@@ -134,7 +134,9 @@ def fixture_stops(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
     A peg touches the rod's side face (the one leading when the rod turns past the bound:
     at A the rod frame's +y face for 'hi'; at B its -y face for 'hi'), exactly
     ``stop_gap`` away at the bound, at an arc length from the anchor just past the end
-    face's chamfer. The position is exact for straight and arc-shaped bodies.
+    face's chamfer: placed from the section (exact for straight and arc-shaped bodies of the
+    family's section), then moved along the face's normal to ``stop_gap`` from the rod's solid
+    (a graduated body's face is not always where its section puts it).
     """
     a = np.asarray(anchors, dtype=float)
     lim = _limits(end_limits)
@@ -160,6 +162,17 @@ def fixture_stops(anchors: Any, first_rod: RodType, last_rod: RodType, end_limit
             m = end_rod_matrix(a, k, rod, float(theta))
             center = m[:2, :2] @ (c + n * (face + stop_gap + stop_radius)) + m[:2, 3]
             touch = m[:2, :2] @ (c + n * face) + m[:2, 3]
+            # measured on the solid: where the body's face is not where the section says (a
+            # curved graduated body rising to its end faces), the peg moves along the normal
+            # until it is stop_gap from the rod at its bound
+            body = placed(type_solid(rod), m)
+            normal = m[:2, :2] @ n
+            for _ in range(3):
+                gap = DistanceTo(cylinder_solid(tuple(center), stop_radius, -g.thickness, g.thickness))(body)
+                if gap <= 1e-9 or abs(gap - stop_gap) <= 1e-6:
+                    break
+                center = center - normal * (gap - stop_gap)
+                touch = touch - normal * (gap - stop_gap)
             out.append(FixtureStop(k, bound, float(theta), (float(center[0]), float(center[1])),
                                    float(stop_radius), (float(touch[0]), float(touch[1]))))
     return out

@@ -128,8 +128,7 @@ def as_built(rods: Sequence[FabricatedRod], lengths: np.ndarray, limits: np.ndar
     masses = np.array([r.mass for r in rods], float)
     com = np.array([r.com for r in rods], float)
     if metal is not None:
-        solid = masses
-        masses = solid + np.asarray(metal, float).sum(axis=1)
+        masses = masses + np.asarray(metal, float).sum(axis=1)
         com = hung_com(masses, com, lengths, metal)
     a, b = anchors
     eq = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits if len(lengths) > 1 else None, g=g,

@@ -18,6 +18,7 @@ from rodcad.design.chandelier import ChandelierDesign
 from rodcad.design.fit import DEFAULT_TOLERANCE, curve_fit, fit_limit
 from rodcad.design.frame import FramePlan
 from rodcad.design.hardware import JointHardware
+from rodcad.design.hung import printed_masses
 from rodcad.design.masses import ChainDesign
 from rodcad.design.model import Design
 from rodcad.design.plan import ChainPlan
@@ -106,10 +107,11 @@ class BuildResult:
     @property
     def attached(self) -> np.ndarray:
         """(N, 2) g of joint hardware each rod carries at its hinge axes (the plastic its
-        hardware's holes take or add included; 0 without hardware)."""
-        if self.hardware is None:
+        hardware's holes take or add included; 0 without hardware): what the masses were
+        designed with (:attr:`rodcad.design.hung.HungDesign.attached`)."""
+        if self.hung is None:
             return np.zeros((self.n, 2))
-        return self.hardware.attached(self.rods)
+        return self.hung.attached
 
     @property
     def metal(self) -> np.ndarray | None:
@@ -121,7 +123,7 @@ class BuildResult:
     def printed_masses(self) -> np.ndarray:
         """(N,) each rod as its tables know it (its family's own holes, no hardware): what the
         fabrication builds for (g)."""
-        return self.masses - self.attached.sum(axis=1)
+        return printed_masses(self.masses, self.attached)
 
     @property
     def hole_sizes(self) -> list[tuple[float, float]] | None:

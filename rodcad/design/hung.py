@@ -108,7 +108,6 @@ def design_hung(cd: ChainDesign, rods: Sequence[RodType], choose: Callable[[Chai
     hung = np.asarray(cd.result.masses, float)
     change = np.inf
     rounds = 0
-    att = hw.attached(rods)
     while rounds < ROUNDS:
         used = hw
         att = hw.attached(rods)
@@ -129,7 +128,7 @@ def design_hung(cd: ChainDesign, rods: Sequence[RodType], choose: Callable[[Chai
         nxt = choose(cd_new)
         same = nxt is not None and [o.name if o else None for o in nxt.options] == \
             [o.name if o else None for o in hw.options]
-        hw = nxt if same else used if nxt is None else nxt
+        hw = used if nxt is None else nxt
         if same and change <= COM_TOL:
             break
     # the hardware the last round's masses were designed with (its loads for those masses

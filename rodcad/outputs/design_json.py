@@ -17,7 +17,7 @@ from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType
 from rodcad.design.asprinted import anchor_holes
-from rodcad.outputs.hardware import hardware_bill, hardware_json, rod_hardware_json, tapping_json
+from rodcad.outputs.hardware import hardware_bill, hardware_json, rods_hardware_json, tapping_json
 from rodcad.outputs.printed import as_printed_json, printed_rod_fields
 
 __all__ = ['ball_text', 'design_json', 'fabrication_json', 'metal_balls', 'bill_of_materials', 'write_json', 'chandelier_json']
@@ -200,6 +200,7 @@ def design_json(r) -> dict[str, Any]:
     d = r.design
     eq = r.equilibrium
     rods = []
+    per_rod = rods_hardware_json(r) if getattr(r, "hardware", None) is not None else None
     for i, name in enumerate(r.type_names):
         rod = _rod_json(i, d.catalog[name], r.lengths[i], r.masses[i], r.com[i], r.limits, r.n)
         printed = r.plan is not None and r.plan.rods  # rods printed to order: their own ranges
@@ -211,8 +212,8 @@ def design_json(r) -> dict[str, Any]:
             rod["fabrication"] = fabrication_json(r.fabrication.rods[i], _piece_of(r.fabrication, i))
         if getattr(r, "as_printed", None) is not None:
             rod.update(printed_rod_fields(r.as_printed, r.lengths, r.com, i))
-        if getattr(r, "hardware", None) is not None:
-            rod["hardware"] = rod_hardware_json(r, i)
+        if per_rod is not None:
+            rod["hardware"] = per_rod[i]
         rods.append(rod)
     out: dict[str, Any] = {
         **_header(d, r.method or None, r.seed, r.time_s),

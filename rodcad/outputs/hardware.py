@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["hardware_bill", "hardware_json", "hardware_lines", "hardware_summary", "rod_hardware_json", "tapping_json",
+__all__ = ["hardware_bill", "hardware_json", "hardware_lines", "hardware_summary", "rods_hardware_json", "tapping_json",
            "tapping_sentence"]
 
 
@@ -19,18 +19,17 @@ def _f(x) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def rod_hardware_json(r, i: int) -> dict[str, Any] | None:
-    """design.json's ``rods[i].hardware``: the option at each of its joints, the metal it
-    carries there (g, at the hinge axes) and what it weighs printed, without that metal."""
+def rods_hardware_json(r) -> list[dict[str, Any]] | None:
+    """design.json's ``rods[].hardware``, per rod: the option at each of its joints, the metal
+    it carries there (g, at the hinge axes) and what it weighs printed, without that metal."""
     hw = r.hardware
     if hw is None:
         return None
-    metal = r.metal[i]
-    holes = hw.holes(r.rods)[i]
-    return {"first": None if hw.options[i] is None else hw.options[i].name,
-            "second": None if hw.options[i + 1] is None else hw.options[i + 1].name,
-            "metal_g": [float(v) for v in metal], "holes_mm": [float(v) for v in holes],
-            "printed_mass": float(r.masses[i] - metal.sum())}
+    metal, holes = r.metal, hw.holes(r.rods)
+    return [{"first": None if hw.options[i] is None else hw.options[i].name,
+             "second": None if hw.options[i + 1] is None else hw.options[i + 1].name,
+             "metal_g": [float(v) for v in metal[i]], "holes_mm": [float(v) for v in holes[i]],
+             "printed_mass": float(r.masses[i] - metal[i].sum())} for i in range(r.n)]
 
 
 def hardware_json(r) -> dict[str, Any] | None:

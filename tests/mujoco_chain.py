@@ -53,7 +53,7 @@ import time as _time
 import mujoco
 import numpy as np
 
-__all__ = ["settle_chain", "build_mjcf", "DEFAULTS"]
+__all__ = ["settle_chain", "build_mjcf", "closed_start", "DEFAULTS"]
 
 # Solver / model settings (tuned; see module docstring).
 DEFAULTS = dict(
@@ -164,8 +164,48 @@ def build_mjcf(lengths, masses, anchor_a, anchor_b, com, limits, g, *, timestep,
 
 
 def _qpos_from_angles(theta):
+    """Hinge angles: theta_0, then every bend wrapped to (-pi, pi] (the joint limits' range)."""
     theta = np.asarray(theta, float)
-    return np.concatenate([theta[:1], np.diff(theta)])
+    bends = np.angle(np.exp(1j * np.diff(theta)))
+    return np.concatenate([theta[:1], bends])
+
+
+def closed_start(lengths, anchor_a, anchor_b, angles, *, tol: float = 1e-12) -> np.ndarray:
+    """The chord angles nearest ``angles`` (least squares) whose chain ends on B: a chain let go
+    a little off its shape, as a hand holds it, not one broken open at B that the closure
+    equality snaps shut (a snap of a few mm throws a long, loose chain's lobe over its anchors
+    through its own rods: this model has no contacts). Gauss-Newton on the closure, minimum-norm
+    steps."""
+    lengths = np.asarray(lengths, float)
+    theta = np.array(angles, float)
+    goal = np.asarray(anchor_b, float) - np.asarray(anchor_a, float)
+    scale = max(float(lengths.sum()), 1e-300)
+    for _ in range(100):
+        r = np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)]) - goal
+        if np.hypot(*r) <= tol * scale:
+            return theta
+        J = np.vstack([-lengths * np.sin(theta), lengths * np.cos(theta)])
+        theta = theta - J.T @ np.linalg.solve(J @ J.T, r)
+    raise ValueError("no closed chain near these angles")
+
+
+def _in_turn(row, angle: float) -> np.ndarray:
+    """An anchor stop's (lo, hi) moved by whole turns to the turn of ``angle``.
+
+    A stop is a physical object: it bounds a rod's angle modulo 2 pi. MuJoCo's hinge angles are
+    unwrapped (theta_0 and, for the last rod, the sum of the hinges, as the start gives them), so
+    the stop's bounds must be in the start's turn: the whole turn that brings the bound (the
+    middle of a two-sided stop) within pi of the angle. Without it a design whose last rod's
+    angle was unwrapped to 543.5 deg met a stop at -176.5 deg a turn away, i.e. none."""
+    lo, hi = (float(v) for v in row)
+    if np.isfinite(lo) and np.isfinite(hi):
+        ref = 0.5 * (lo + hi)
+    elif np.isfinite(lo) or np.isfinite(hi):
+        ref = lo if np.isfinite(lo) else hi
+    else:
+        return np.array([lo, hi])
+    k = np.round((angle - ref) / (2 * np.pi))
+    return np.array([lo, hi]) + 2 * np.pi * k
 
 
 def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, angles0, g=9.81,
@@ -257,7 +297,11 @@ def settle_chain(lengths, masses, anchor_a, anchor_b, *, com=None, limits=None, 
                     frictionloss=None if frictionloss is None else np.asarray(frictionloss, float).reshape(n + 1))
 
     # 1) joint-space inertia at the start configuration -> mass-proportional damping
-    build_kw["end_limits"] = None if end_limits is None else np.asarray(end_limits, float).reshape(2, 2)
+    if end_limits is not None:
+        q0 = _qpos_from_angles(theta0)
+        e = np.asarray(end_limits, float).reshape(2, 2)
+        end_limits = np.array([_in_turn(e[0], q0[0]), _in_turn(e[1], q0.sum())])
+    build_kw["end_limits"] = end_limits
     m0 = mujoco.MjModel.from_xml_string(build_mjcf(lengths, masses, a, b, com, limits, g, **build_kw))
     d0 = mujoco.MjData(m0)
     d0.qpos[:] = _qpos_from_angles(theta0)

@@ -31,12 +31,14 @@ from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
 from rodcad.catalog.printed import mass_table
 from rodcad.design.asprinted import robust_option
+from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.model import Constraints, FixedRod
 from rodcad.design.printed import (
     PrintedFamily,
     PrintedPlan,
     ShellError,
     count_for,
+    freest,
     plan_printed,
 )
 from rodcad.errors import DesignLimit, InputError, Problem
@@ -471,6 +473,9 @@ def _plan_printed(curve: np.ndarray, c: Constraints, arrays: CatalogArrays, pf: 
         else:
             lp = plan_printed(curve, arrays.catalog, pf, preferred_length=c.preferred_length, stops_allowed=not free,
                               same_shell=same, **ends)
+            if c.preferred_length is None and not same:  # longer rods where they keep more joints free
+                lp = freest(curve, arrays.catalog, pf, lp, tolerance=DEFAULT_TOLERANCE, stops_allowed=not free,
+                            same_shell=same, **ends)
     except ShellError as err:
         raise InputError([problem("constraints.same_shell", f"{who}{err}")]) from None
     except ValueError as err:  # the rods cannot be laid on this target: a limit, not the file's mistake

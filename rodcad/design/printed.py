@@ -35,8 +35,8 @@ from rodcad.design.decide import Allowed, decide
 from rodcad.design.laying import HI, LO, LOCK, PrintedFamily, STOP_SNAP_DEG
 from rodcad.design.shell import TRIES, ShellError, most_faithful, one_shell
 
-__all__ = ["PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for", "fused_pieces", "plan_printed",
-           "rods_of"]
+__all__ = ["FREE_SHARE", "FREER_FIT", "LONGER", "PrintedFamily", "PrintedPlan", "STOP_SNAP_DEG", "ShellError", "count_for",
+           "free_share", "freest", "fused_pieces", "plan_printed", "returns", "rods_of"]
 
 @dataclass
 class PrintedPlan:
@@ -328,6 +328,109 @@ def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int,
         raise ShellError(f"{rods} rods of one length do not lay on this target with every corner a joint; change "
                          "the rod count, or drop same_shell")
     return None
+
+
+#: A plan whose stops and fused pieces leave fewer than this share of its joints free is laid
+#: again on longer rods (:func:`freest`).
+FREE_SHARE = 0.5
+
+#: ... and a plan on longer rods is kept only where its rods follow the curve within this share
+#: of the tolerance (the rest left for the chain as built and as printed).
+FREER_FIT = 0.75
+
+#: The longer rods :func:`freest` tries, as multiples of the first plan's mean length.
+LONGER = (1.25, 1.5, 1.75, 2.0, 2.5)
+
+#: A longer plan's chain, released this far off its shape (rad, every hinge, closed onto B)
+#: from :data:`RELEASES` seeded starts without friction, must come back within
+#: :data:`RETURN_TOL` of the target's size (:func:`returns`).
+RELEASE = 0.05
+RELEASES = 2
+RETURN_TOL = 1e-3
+
+
+def free_share(p: PrintedPlan) -> float:
+    """The share of a plan's joints that hang freely (no stop, not fused)."""
+    n = len(p.rods) - 1
+    if n < 1:
+        return 1.0
+    held = set(p.stops) | {j for a, b in p.fused for j in range(a, b)}
+    return 1.0 - len(held) / n
+
+
+def returns(p: PrintedPlan, size: float) -> bool:
+    """Whether the plan's checked chain, released :data:`RELEASE` rad off its shape without
+    friction and let settle in MuJoCo (:func:`rodcad.design.tapping.tap_chain`, no taps), comes
+    back to its shape from every one of :data:`RELEASES` seeded starts: the static check
+    (solver, multi-start) finds the design stable and alone; this asks the dynamics the same
+    question from nearby, as a chain let go by a hand."""
+    from rodcad.design.tapping import tap_chain
+
+    if p.verified is None or p.verified[1].equilibrium is None:
+        return False
+    masses, v = p.verified
+    pr = p.problem
+    for seed in range(RELEASES):
+        try:
+            t = tap_chain(pr.lengths, masses, pr.target[0], pr.target[-1], design_angles=v.equilibrium.angles,
+                          capacity=np.zeros(len(pr.lengths) + 1), com=pr.com, limits=pr.limits,
+                          end_limits=pr.end_limits, g=pr.g, release=RELEASE, n_taps=0, seed=seed)
+        except (ValueError, FloatingPointError):
+            return False
+        if not t.converged or float(t.deviation[0]) > RETURN_TOL * size:
+            return False
+    return True
+
+
+def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: PrintedPlan, *, tolerance: float,
+           **kw) -> PrintedPlan:
+    """The plan on the longest rods that follow the curve (``plan``) or, where it leaves fewer
+    than :data:`FREE_SHARE` of its joints free, one on longer rods that keeps more free (the
+    physics' advice: keep as many joints free as the shape allows; a hanging chain, not a
+    sculpture).
+
+    Longer rods: :data:`LONGER` times the plan's mean length (within the family's range), tried
+    from the shortest; the first that keeps :data:`FREE_SHARE` free is taken (the most faithful
+    of those), else the one that keeps most free. A longer plan counts only where the solver
+    accepted it (on target, stable, nothing lower), its rods' centrelines follow the curve within
+    :data:`FREER_FIT` x ``tolerance`` of the target's size, and its chain comes back to its
+    shape when released near it (:func:`returns`). ``kw`` as :func:`plan_printed`'s."""
+    from rodcad.design.fit import curve_fit
+    from rodcad.design.shell import curve_size
+
+    share = free_share(plan)
+    if share >= FREE_SHARE or len(plan.rods) < 3:
+        return plan
+    mean = float(np.mean(plan.problem.lengths))
+    top = float(pf.family.ranges.length[1])
+    size = curve_size(curve)
+    best, best_share, best_len = plan, share, mean
+    seen = {len(plan.rods)}
+    for length in sorted({min(top, f * mean) for f in LONGER}):
+        if length <= 1.05 * mean:
+            continue
+        try:
+            p = plan_printed(curve, catalog, pf, preferred_length=length, **kw)
+        except ValueError:
+            continue
+        if len(p.rods) in seen:  # the same rods as a length already tried
+            continue
+        seen.add(len(p.rods))
+        v = p.verified[1] if p.verified is not None else None
+        if v is None or not v.on_target or v.lower or p.unmet or free_share(p) <= best_share + 1e-9:
+            continue
+        if curve_fit(curve, p.discretization.points, [r.curvature for r in p.rods]) > FREER_FIT * tolerance:
+            continue
+        if not returns(p, size):
+            continue
+        best, best_share, best_len = p, free_share(p), float(np.mean(p.problem.lengths))
+        if best_share >= FREE_SHARE:
+            break
+    if best is not plan:
+        best.notes.append(f"rods of about {best_len:.0f} mm keep {100 * best_share:.0f} % of the joints free (the "
+                          f"longest rods that follow the curve, {mean:.0f} mm, {100 * share:.0f} %): a hanging chain, "
+                          "not a rigid one")
+    return best
 
 
 def rods_of(plans: Sequence) -> list[RodType]:

@@ -108,7 +108,8 @@ def finish_figure(fig, ax, lc, anchors: np.ndarray, title: str, paths) -> None:
     ax.autoscale_view()
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
-    ax.legend(loc="best", fontsize=8)
+    # below the axes, not over the drawing (loc="best" laid it over the heart's tip)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=8, frameon=False)
     ax.grid(True, lw=0.3, alpha=0.5)
     fit_title(fig, ax, title)
     for path in paths:

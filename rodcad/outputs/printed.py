@@ -140,7 +140,8 @@ def draw_bands(ax, ap: AsPrinted, points: np.ndarray, size: float, rest: np.ndar
     the design magnified alike."""
     from matplotlib.patches import Circle
 
-    bands = [(ap.friction, "C1", f"pin friction band ({_friction_label(ap)})"),
+    basis = "top of each pin's friction range" if ap.hardware else f"coefficient {ap.mu:g}"
+    bands = [(ap.friction, "C1", f"pin friction band ({basis})"),
              (ap.mass_band, "C4", f"mass band (+-{100 * ap.mass_tolerance:g} %, 95 %)")]
     largest = max([float(np.max(b.per_joint)) for b, _, _ in bands if b is not None], default=0.0)
     scale = 1.0

@@ -23,6 +23,7 @@ from rodcad.fabrication.layout import (
     silo_top_points,
     sphere_layout,
     symmetric_images,
+    memo_key,
     tall_silo,
     void_volume,
 )
@@ -41,7 +42,9 @@ __all__ = [
     "RADIUS_FACTOR",
     "SOLID_TOL",
     "SOLVE_TOL",
+    "SOCKET_CLEARANCE",
     "THROWS",
+    "solid_clearance",
     "cavity_pool",
     "cavity_radii",
     "CavityPool",
@@ -148,6 +151,9 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
     return CavityPool(images, cmin, intra, rng.permutation(len(images)))
 
 
+assert np.array_equal(UP, [0.0, 1.0, 0.0])  # silo_distance takes the height along y
+
+
 def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float,
                   height: float | Sequence[float] | None = None) -> np.ndarray:
     """Distance (mm) from points to the nearest silo socket (0 inside one) whose roof is
@@ -156,11 +162,12 @@ def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float,
     if len(centers) == 0:
         return np.full(len(pts), math.inf)
     top = radius if height is None else np.asarray(height, dtype=float)
-    d = pts[:, None, :] - np.asarray(centers)[None, :, :]  # (n, k, 3)
-    h = d @ UP
-    radial = np.linalg.norm(d - h[..., None] * UP, axis=-1)
-    ball = np.maximum(np.linalg.norm(d, axis=-1) - radius, 0.0)
-    cyl = np.hypot(np.maximum(radial - radius, 0.0), np.maximum(np.maximum(-h, h - top), 0.0))
+    c = np.asarray(centers, dtype=float)
+    # UP is the y axis: the height along it and the radial distance from the socket's axis
+    dx, h, dz = (pts[:, k, None] - c[None, :, k] for k in range(3))  # (n, k) each
+    radial2 = dx * dx + dz * dz
+    ball = np.maximum(np.sqrt(radial2 + h * h) - radius, 0.0)
+    cyl = np.hypot(np.maximum(np.sqrt(radial2) - radius, 0.0), np.maximum(np.maximum(-h, h - top), 0.0))
     return np.minimum(ball, cyl).min(axis=1)
 
 
@@ -185,24 +192,46 @@ def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray
     return THROWS[key]
 
 
+#: Each pool candidate's distance from a set of ball sockets (:func:`_socket_clearance`).
+SOCKET_CLEARANCE: dict[tuple, np.ndarray] = {}
+
+
+def _socket_clearance(pool: CavityPool, sockets: np.ndarray, socket_r: float,
+                      socket_h: float | tuple[float, ...] | None) -> np.ndarray:
+    """Every candidate's (all its images') distance from the sockets: the same for every
+    cavity radius the pool is thrown with (memoised)."""
+    key = (id(pool), np.asarray(sockets, dtype=float).tobytes(), socket_r, socket_h)
+    hit = SOCKET_CLEARANCE.get(key)
+    if hit is None:
+        flat, starts = pool.flat
+        hit = np.minimum.reduceat(silo_distance(flat, sockets, socket_r, socket_h), starts)
+        if len(SOCKET_CLEARANCE) > 1024:
+            SOCKET_CLEARANCE.clear()
+        SOCKET_CLEARANCE[key] = hit
+    return hit
+
+
 def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float,
            socket_h: float | tuple[float, ...] | None) -> list[np.ndarray]:
     need = radius + wall
     spacing = 2 * radius + wall
     ok = (pool.clearance >= need) & (pool.intra >= spacing - 1e-9)
     if len(sockets) and len(pool.images):  # clear of the ball sockets, all candidates at once
-        flat, starts = pool.flat
-        ok &= np.minimum.reduceat(silo_distance(flat, sockets, socket_r, socket_h), starts) >= need
+        ok &= _socket_clearance(pool, sockets, socket_r, socket_h) >= need
     accepted: list[np.ndarray] = []
-    placed = np.zeros((0, 3))
+    placed = np.empty((sum(len(im) for im in pool.images), 3))
+    n = 0
     for i in pool.order:
         if not ok[i]:
             continue
         im = pool.images[i]
-        if len(placed) and np.min(np.linalg.norm(im[:, None, :] - placed[None], axis=-1)) < spacing:
-            continue
+        if n:
+            d = im[:, None, :] - placed[None, :n]
+            if np.sqrt(np.einsum("ijk,ijk->ij", d, d).min()) < spacing:
+                continue
         accepted.append(im)
-        placed = np.concatenate([placed, im])
+        placed[n:n + len(im)] = im
+        n += len(im)
     return accepted
 
 
@@ -265,7 +294,7 @@ def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
     ``skip(radius)`` is true are passed over."""
     solid = type_solid(rod)
     com = mass_properties(solid).center
-    clr = RodClearance(rod.geometry)
+    clr = solid_clearance(rod)
 
     def clearance(p: np.ndarray) -> np.ndarray:
         return np.minimum(clr(p), silo_distance(p, sockets, socket_r, socket_h))
@@ -275,6 +304,34 @@ def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
     for rd in radii:
         if not skip(rd):
             yield rd, sphere_layout(clearance, clr.bounds, com, rd, rod.material.min_wall, void="capped")
+
+
+class _MemoClearance:
+    """A :class:`RodClearance` that remembers its answers by point set: the lattices of
+    :func:`lattice_layouts` are the same for every ball option of a rod (only the sockets'
+    part of the clearance changes)."""
+
+    def __init__(self, clearance: RodClearance) -> None:
+        self._f = clearance
+        self.bounds = clearance.bounds
+        self._memo: dict[tuple, np.ndarray] = {}
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        key = memo_key(points)
+        hit = self._memo.get(key)
+        if hit is None:
+            hit = np.asarray(self._f(points))
+            hit.setflags(write=False)
+            if len(self._memo) > 1024:
+                self._memo.clear()
+            self._memo[key] = hit
+        return hit
+
+
+@lru_cache(maxsize=16)
+def solid_clearance(rod: RodType) -> _MemoClearance:
+    """The rod type's solid clearance (:class:`RodClearance`), memoised by point set."""
+    return _MemoClearance(RodClearance(rod.geometry))
 
 
 @lru_cache(maxsize=64)

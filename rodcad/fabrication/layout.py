@@ -22,6 +22,7 @@ __all__ = [
     "UP",
     "VOIDS",
     "ball_offset",
+    "memo_key",
     "Clearance",
     "lattice_sites",
     "max_ball_layout",
@@ -250,6 +251,23 @@ def lattice_sites(bounds: tuple[Sequence[float], Sequence[float]], center: Seque
     """
     if kind not in LATTICES:
         raise ValueError(f"unknown lattice {kind!r} (expected one of {', '.join(LATTICES)})")
+    key = (tuple(map(float, bounds[0])), tuple(map(float, bounds[1])), tuple(map(float, center)), float(pitch),
+           tuple(map(float, offset)), kind)
+    hit = _SITES.get(key)
+    if hit is None:
+        hit = _lattice_sites(bounds, center, pitch, offset, kind)
+        hit.setflags(write=False)
+        if len(_SITES) > 4096:
+            _SITES.clear()
+        _SITES[key] = hit
+    return hit
+
+
+#: :func:`lattice_sites` by its arguments (every ball option of a rod asks for the same).
+_SITES: dict[tuple, np.ndarray] = {}
+
+
+def _lattice_sites(bounds, center, pitch: float, offset, kind: str) -> np.ndarray:
     lo = np.asarray(bounds[0], dtype=float)
     hi = np.asarray(bounds[1], dtype=float)
     c = np.asarray(center, dtype=float)
@@ -289,6 +307,40 @@ def symmetric_images(points: np.ndarray, center: Sequence[float], symmetry: str)
     return [(points - c) * np.asarray(f) + c for f in _flips(symmetry)]
 
 
+def memo_key(points: np.ndarray, *rest) -> tuple:
+    """A memo key for a point array (its shape and a digest of its bytes) and some scalars."""
+    import hashlib
+
+    pts = np.ascontiguousarray(points, dtype=float)
+    return (pts.shape, hashlib.blake2b(pts.tobytes(), digest_size=16).digest(), *rest)
+
+
+#: Image maps of :func:`symmetric_subset` by point set (the same lattice is asked about for
+#: every ball option of a rod: only which points are feasible changes).
+_IMAGE_MAPS: dict[tuple, np.ndarray] = {}
+
+
+def _image_map(points: np.ndarray, center: Sequence[float], symmetry: str, tol: float) -> np.ndarray:
+    """(flips, n) index of each point's image under each flip of ``symmetry`` among
+    ``points`` (within ``tol``), or -1 where it has none; memoised by point set."""
+    from scipy.spatial import cKDTree
+
+    c = np.asarray(center, dtype=float)
+    key = memo_key(points, tuple(c.tolist()), symmetry, tol)
+    hit = _IMAGE_MAPS.get(key)
+    if hit is not None:
+        return hit
+    flips = np.asarray(_flips(symmetry), dtype=float)
+    images = ((points - c)[None, :, :] * flips[:, None, :] + c).reshape(-1, 3)  # all flips, one query
+    dist, near = cKDTree(points).query(images, distance_upper_bound=tol)
+    out = np.where(np.isfinite(dist), near, -1).reshape(len(flips), len(points))
+    out.setflags(write=False)
+    if len(_IMAGE_MAPS) > 2048:
+        _IMAGE_MAPS.clear()
+    _IMAGE_MAPS[key] = out
+    return out
+
+
 def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[float], symmetry: str,
                      tol: float = 1e-6) -> np.ndarray:
     """Mask of the feasible points whose every image under ``symmetry`` is a
@@ -301,21 +353,14 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
         symmetry: one of :data:`SYMMETRIES`.
         tol: distance within which an image matches a point (mm).
     """
-    from scipy.spatial import cKDTree
-
     feasible = np.asarray(feasible, dtype=bool)
     if len(points) == 0:
         return np.zeros(0, dtype=bool)
-    flips = np.asarray(_flips(symmetry), dtype=float)
     keep = feasible.copy()
-    idx = np.flatnonzero(keep)  # an infeasible point is never kept: only the others' images are looked up
-    if not len(idx):
+    if not keep.any():
         return keep
-    c = np.asarray(center, dtype=float)
-    images = ((points[idx] - c)[None, :, :] * flips[:, None, :] + c).reshape(-1, 3)  # all flips, one query
-    dist, near = cKDTree(points).query(images, distance_upper_bound=tol)
-    found = np.isfinite(dist)
-    keep[idx] = (found & feasible[np.where(found, near, 0)]).reshape(len(flips), len(idx)).all(axis=0)
+    near = _image_map(np.asarray(points, dtype=float), center, symmetry, tol)
+    keep &= ((near >= 0) & feasible[np.maximum(near, 0)]).all(axis=0)
     return keep
 
 

@@ -20,6 +20,10 @@ and 300 rods, the 20-rod one a user's polyline): one solve, and the multi-start
 (find_equilibria, default n_starts); targets: the 300-rod heart (both end rods held, 297
 joints on stops) solved under 1 s, the 30-rod heart's multi-start under 2 s. Only the public API is used, so the same script times other versions.
 
+The plain case (issue 34): the free chain against a plain numpy reaction Newton written in this
+script (:func:`plain_newton`), timed on the same chains in the same run; target N = 1000 at most
+0.5x.
+
 Run:  python benchmarks/bench_equilibrium.py [--repeat 7] [--compressed 400] [--anchor-stops 1]
 """
 
@@ -149,6 +153,61 @@ def compressed(k: int) -> None:
           + f";  needed SLSQP: {paths.get('slsqp', 0)} of {k};  not solved (success and stable): {failed}")
 
 
+def plain_newton(lengths, masses, com, a, b, g=9.81, tol=1e-12, max_iter=100):
+    """A plain numpy reaction Newton for the free chain (the yardstick of issue 34): the
+    anchor's reaction F0 = (Fx, Fy) as the unknown; each rod's angle from its moment balance
+    under the force its far pin carries, theta = atan2(P, -Q) (the stable branch); Newton
+    with the analytic 2 x 2 Jacobian and a backtracking line search on the closure residual,
+    from the two-bar guess (the whole weight, half of it up)."""
+    l = np.asarray(lengths, float)
+    m = np.asarray(masses, float)
+    ca, cb = np.asarray(com, float).T
+    goal = np.asarray(b, float) - np.asarray(a, float)
+    W = g * np.cumsum(m)  # the weight left of pin i + 1
+    mga, mgb = g * m * ca, g * m * cb
+    scale = l.sum()
+
+    def residual(F):
+        P = -l * (F[1] - W) - mga
+        Q = l * F[0] + mgb
+        th = np.arctan2(P, -Q)
+        return np.array([l @ np.cos(th), l @ np.sin(th)]) - goal, th, P, Q
+
+    F = np.array([-W[-1], 0.5 * W[-1]])
+    r, th, P, Q = residual(F)
+    for it in range(max_iter):
+        if np.hypot(*r) <= tol * scale:
+            return th, it
+        rho2 = P * P + Q * Q
+        s, c = np.sin(th), np.cos(th)
+        dx, dy = P * l / rho2, Q * l / rho2
+        J = np.array([[-(l * s) @ dx, -(l * s) @ dy], [(l * c) @ dx, (l * c) @ dy]])
+        step = np.linalg.solve(J, -r)
+        t = 1.0
+        while True:
+            r2, th2, P2, Q2 = residual(F + t * step)
+            if np.hypot(*r2) < np.hypot(*r) or t < 1e-8:
+                break
+            t *= 0.5
+        F, r, th, P, Q = F + t * step, r2, th2, P2, Q2
+    raise RuntimeError("the plain Newton did not converge")
+
+
+def against_plain(repeat: int) -> None:
+    """The free chain: rodcad's solver against the plain reaction Newton, same chains, same
+    run (target, issue 34: N = 1000 at most 0.5x)."""
+    print("\nfree chain against a plain numpy reaction Newton (same chains, same run):")
+    print(f"{'N':>6} {'plain ms':>9} {'nit':>4} {'rodcad ms':>10} {'ratio':>6} {'path':>6} {'max angle diff':>15} {'target':>8}")
+    for n in (10, 100, 1000, 10000):
+        l, m, c, a, b = chain(n)
+        tp, (th, it) = timed(lambda: plain_newton(l, m, c, a, b), max(repeat, 50))
+        to, r = timed(lambda: solve_equilibrium(l, m, a, b, com=c), max(repeat, 50))
+        diff = float(np.abs(np.angle(np.exp(1j * (th - r.angles)))).max())
+        target = "<= 0.5" if n == 1000 else ""
+        print(f"{n:>6} {1e3 * tp:>9.3f} {it:>4} {1e3 * to:>10.3f} {to / tp:>6.2f} {r.info['path']:>6} {diff:>15.1e} "
+              f"{target:>8}")
+
+
 def timed(fn, repeat: int) -> tuple[float, object]:
     times, res = [], None
     for _ in range(repeat):
@@ -189,6 +248,7 @@ def main() -> None:
         ratio = free_times[hi_n] / free_times[lo_n]
         nlogn = hi_n * np.log(hi_n) / (lo_n * np.log(lo_n))
         print(f"  {lo_n:>5} -> {hi_n:<6} x{ratio:6.2f}   (N log N: x{nlogn:5.2f})")
+    against_plain(args.repeat)
     if args.anchor_stops:
         anchor_stops(args.repeat)
     if args.compressed:

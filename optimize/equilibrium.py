@@ -60,6 +60,7 @@ from optimize.chain import (
 )
 from optimize.dual import dual_newton, initial_reaction, solve_set
 from optimize.endlimits import limit_turn, near
+from optimize.free import solve_free
 from optimize.penalty import solve_penalty
 
 __all__ = ["Chain", "EquilibriumResult", "solve_equilibrium", "kkt_residual", "MESSAGES"]
@@ -500,6 +501,11 @@ def solve_equilibrium(
         return _taut(chain)
     if model == "penalty":
         return solve_penalty(chain, penalty_weight, collision_weight)
+    if (active0 is None and end_active0 is None and theta0 is None and not chain.end_limited.any()
+            and not np.isfinite(chain.limits).any()):
+        res = solve_free(chain)  # every joint and anchor free: the closed-form fast path
+        if res is not None and res.success:
+            return res
     if max_iter is None:
         max_iter = 10 + 4 * chain.n
     return _solve_exact(chain, active0, end_active0, max_iter, nlp_fallback, theta0)

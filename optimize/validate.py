@@ -17,13 +17,13 @@ def as_positive_vector(name: str, value, n: int | None = None) -> np.ndarray:
         raise ValueError(f"{name} must not be empty")
     if n is not None and arr.size != n:
         raise ValueError(f"{name} has {arr.size} entries but the chain has {n} rods")
+    if arr.min() > 0 and arr.max() < np.inf:  # the common case, in two passes (NaN fails both)
+        return arr
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         raise ValueError(f"{name}[{bad[0]}] is not finite ({arr[bad[0]]})")
     bad = np.flatnonzero(arr <= 0)
-    if bad.size:
-        raise ValueError(f"{name}[{bad[0]}] must be positive, got {arr[bad[0]]}")
-    return arr
+    raise ValueError(f"{name}[{bad[0]}] must be positive, got {arr[bad[0]]}")
 
 
 def as_point(name: str, value) -> np.ndarray:
@@ -68,6 +68,8 @@ def as_joints(name: str, value) -> np.ndarray:
 
 def all_finite(name: str, arr: np.ndarray) -> np.ndarray:
     """``arr`` if every entry is finite; else a ValueError naming the first that is not."""
+    if np.isfinite(arr).all():
+        return arr
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         i, j = bad[0]

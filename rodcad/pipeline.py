@@ -31,7 +31,7 @@ from optimize import (
     shape_distance,
     solve_equilibrium,
 )
-from optimize.discretize import MAX_RODS
+from optimize.chain.discretize import MAX_RODS
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
 from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl

@@ -71,7 +71,7 @@ def _settles_back(r, rng) -> float:
     0.01 rad off the designed shape: how far (over the size) it settles from it."""
     from mujoco_chain import settle_chain
 
-    from optimize.endlimits import limit_turn
+    from optimize.chain.endlimits import limit_turn
 
     p = r.plan.problem
     a, b = r.design.anchors

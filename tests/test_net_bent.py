@@ -1,7 +1,7 @@
 """Bent net rods (issue 27): a rod printed along an arc between its ball ends.
 
 A rod on ball joints turns freely about its chord, so its off-axis centre of mass hangs as low
-as it can (optimize.netmodel): the bow hangs in the vertical plane through the chord, below it.
+as it can (optimize.net.model): the bow hangs in the vertical plane through the chord, below it.
 Checked here: the closed-form masses and centres of mass against the B-rep; the inverse design
 of a bent net exact at a target some masses reach (the solver confirms it); MuJoCo, with each
 rod's centre of mass off its axis and free to roll, rests on the designed shape; the solids,

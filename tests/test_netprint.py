@@ -254,7 +254,7 @@ def test_an_as_built_net_the_solver_stops_short_on_is_read_there_or_said_to_be_r
 
     real = optimize.solve_net
 
-    def stalled(*args, **kw):  # the as-built call only (the design's solver is optimize.net's)
+    def stalled(*args, **kw):  # the as-built call only (the design's solver is optimize.net.solve's)
         res = real(*args, **kw)
         return dataclasses.replace(res, success=False, stable=False, status=1, kkt_residual=0.1 * AS_BUILT_KKT,
                                    message="Iteration limit reached before the KKT conditions held.")

@@ -38,9 +38,9 @@ def assign_types(
         type_cost: optional (T,) small preference cost per type (default: catalog order).
         need_stop: optional (N-1,) boolean: these joints must rest on a stop on their
             sagging side even though they bend convexly (the masses alone cannot hold the
-            bend, see :func:`optimize.stops.needed_stops`). Their cost is the distance
+            bend, see :func:`optimize.chain.stops.needed_stops`). Their cost is the distance
             |hi - bend| from the nearest stop; the caller then moves the joints so they
-            bend exactly at the chosen stops (:func:`optimize.discretize.refit`).
+            bend exactly at the chosen stops (:func:`optimize.chain.discretize.refit`).
 
     Returns:
         (types (N,), limits (N-1, 2) of the chosen pairs, cost). The cost is 0 when every

@@ -3,7 +3,7 @@
 For a fixed active set (joints held at a limit) each rigid group G turns along its
 load ``W_G = P_G lambda - Q_G`` (branch +1, the minimiser of the Lagrangian in the
 group's angle) or against it (branch -1: the piece pushes, e.g. an arch held up by
-its stops). The convex dual Newton of :mod:`optimize.equilibrium` handles branch +1
+its stops). The convex dual Newton of :mod:`optimize.chain.equilibrium` handles branch +1
 only; this module handles the rest:
 
 * :func:`descend`: a primal active-set Newton method over (side, branch) that reaches a
@@ -13,7 +13,7 @@ only; this module handles the rest:
   by :func:`polish_point`.
 
 Anchor stops (bounds on the end rods' angles) are stops like the joints': the active set
-here is the (N+1,) array of :class:`optimize.chain.ActiveSet`, a held anchor stop fixes its
+here is the (N+1,) array of :class:`optimize.chain.model.ActiveSet`, a held anchor stop fixes its
 group's angle (no Newton step moves it), a free end rod's angle blocks a step at its bound,
 and a fixture moment of the wrong sign lets it go.
 """
@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.chain import ActiveSet, Chain, Groups, fixture_moments, multipliers, violations
-from optimize.dual import rigid_reaction
-from optimize.endlimits import limit_turn, near, reach
+from optimize.chain.model import ActiveSet, Chain, Groups, fixture_moments, multipliers, violations
+from optimize.chain.dual import rigid_reaction
+from optimize.chain.endlimits import limit_turn, near, reach
 
 __all__ = ["branch_newton", "descend", "polish_nlp", "polish_point"]
 
@@ -311,7 +311,7 @@ def descend(chain: Chain, theta0: np.ndarray, max_iter: int = 300):
 
     Returns:
         (theta, lam, act, iterations) with act the (N+1,) active set
-        (:class:`optimize.chain.ActiveSet`), or None when it finds no KKT point.
+        (:class:`optimize.chain.model.ActiveSet`), or None when it finds no KKT point.
     """
     lo, hi, fused = _extended(chain)
     theta = _feasible_start(chain, theta0)
@@ -388,7 +388,7 @@ def descend(chain: Chain, theta0: np.ndarray, max_iter: int = 300):
         with np.errstate(divide="ignore", invalid="ignore"):
             room = np.where(rate > 0, (hi - pos) / rate, np.where(rate < 0, (lo - pos) / rate, np.inf))
             # an end angle may not pass half a turn from its limit's middle: there the
-            # convention of optimize.endlimits.near puts it on the other side of the stop
+            # convention of optimize.chain.endlimits.near puts it on the other side of the stop
             wrap = np.where(rate[[0, -1]] > 0, (mid + np.pi - pos[[0, -1]]) / rate[[0, -1]],
                             np.where(rate[[0, -1]] < 0, (mid - np.pi - pos[[0, -1]]) / rate[[0, -1]], np.inf))
         room = np.where(act == 0, np.maximum(room, 0.0), np.inf)

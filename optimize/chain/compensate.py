@@ -1,8 +1,8 @@
 """Compensation for pin play: the rods to print so the loaded chain hangs on its design.
 
 Under load every pin bears on the far side of both holes it passes through
-(:mod:`optimize.pinplay`): pin j sits ``c_j / 2`` from each of its hole centres, along the
-force ``F_j`` it carries (:func:`optimize.pins.joint_forces`). So for the pins to sit on the
+(:mod:`optimize.chain.pinplay`): pin j sits ``c_j / 2`` from each of its hole centres, along the
+force ``F_j`` it carries (:func:`optimize.chain.pins.joint_forces`). So for the pins to sit on the
 designed joints ``p_j``, with the design's forces (the same masses and centres of mass in the
 world, hence the same reaction and joint forces, every rod loaded along the same lines of
 action through the pins), rod i's holes go at::
@@ -22,7 +22,7 @@ do not. The rod's body axis (first hole -> second) turns from the chord by
 given in the hole frame; every stop, which acts between rod bodies, moves by the difference of
 the two bodies' turns, and an anchor stop by its rod's turn. Then every rod carries the
 design's forces along the design's lines of action and the stops the design's moments: the
-chain with play hangs exactly on the design (and :func:`optimize.pinplay.solve_pin_play`
+chain with play hangs exactly on the design (and :func:`optimize.chain.pinplay.solve_pin_play`
 finds it, to round-off). A fused joint has no pin and no play.
 """
 
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from optimize import validate as val
-from optimize.endlimits import as_end_limits
-from optimize.pins import joint_forces
+from optimize.chain.endlimits import as_end_limits
+from optimize.chain.pins import joint_forces
 
 __all__ = ["PinCompensation", "compensate_pin_play"]
 
@@ -78,7 +78,7 @@ def compensate_pin_play(points, masses, reaction, *, clearance, com=None, limits
         points: (N+1, 2) the designed equilibrium's joints (p_0 = A, p_N = B).
         masses: (N,) rod masses.
         reaction: (2,) the designed equilibrium's reaction (H, V) at B (it fixes every joint's
-            force, :func:`optimize.pins.joint_forces`).
+            force, :func:`optimize.chain.pins.joint_forces`).
         clearance: diametral pin clearance, a number or (N+1,) per pin (anchors included).
         com: (N, 2) the design's centres of mass (along, perp) in the pivot frame (origin
             p_i, x along p_i -> p_{i+1}); None = the chord midpoints.
@@ -86,11 +86,11 @@ def compensate_pin_play(points, masses, reaction, *, clearance, com=None, limits
         end_limits: (2, 2) the design's anchor stops on theta_0 and theta_{N-1}, or None.
         g: gravitational acceleration (the unit of the reaction).
         pinned: optional (N-1,) bool: joints with lo == hi that keep their pin (a two-sided
-            stop), as for :func:`optimize.pinplay.solve_pin_play`; the others are one piece.
+            stop), as for :func:`optimize.chain.pinplay.solve_pin_play`; the others are one piece.
 
     Returns:
         PinCompensation. Feeding its spacings, com, limits and end_limits to
-        :func:`optimize.pinplay.solve_pin_play` with the same clearance puts the pins on
+        :func:`optimize.chain.pinplay.solve_pin_play` with the same clearance puts the pins on
         ``points``.
 
     Raises:

@@ -1,6 +1,6 @@
 """One active set: the equilibrium with given joints and anchor stops held, by the convex dual.
 
-For an active set (:class:`optimize.chain.ActiveSet`) every rigid group that no fixture
+For an active set (:class:`optimize.chain.model.ActiveSet`) every rigid group that no fixture
 holds turns along its load ``W_G = P_G lambda - Q_G``; minimising the Lagrangian over
 those angles leaves the dual function of the closure multiplier lambda = (H, V)::
 
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from optimize.chain import ActiveSet, Chain, kkt_residual
+from optimize.chain.model import ActiveSet, Chain, kkt_residual
 
 __all__ = [
     "SetSolution",
@@ -193,7 +193,7 @@ def rigid_reaction(chain: Chain, theta: np.ndarray, act: np.ndarray) -> complex:
     side, ends = act[1:-1], act[[0, -1]]
     l, e = chain.lengths, np.exp(1j * theta)
     weight, length = chain.g * chain.total_mass, chain.total_length
-    # cum_j = a_j H + b_j V + c_j: the joint moments with no fixture (optimize.chain.multipliers)
+    # cum_j = a_j H + b_j V + c_j: the joint moments with no fixture (optimize.chain.model.multipliers)
     a = -np.cumsum(l * e.imag) * weight
     b = np.cumsum(l * e.real) * weight
     c = np.cumsum(l * (np.conj(chain.sigma) * e).imag)

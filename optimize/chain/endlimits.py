@@ -2,7 +2,7 @@
 
 A fixture that stops the first rod bounds theta_0; one that stops the last rod bounds
 theta_{N-1}. Each is a stop between a fixed "ground" and an end rod, and the solver treats
-it like a joint stop (:mod:`optimize.chain`, :mod:`optimize.dual`): in the active set an
+it like a joint stop (:mod:`optimize.chain.model`, :mod:`optimize.chain.dual`): in the active set an
 anchor stop is held at its lower bound (-1), its upper bound (+1) or free (0), alongside
 the joints. When it is held, the rigid group containing the end rod has a fixed angle; its
 chord is then a constant that moves the anchor in the dual problem, and the fixture's

@@ -29,14 +29,14 @@ The set of joints held at a limit is found by an active-set iteration (primal
 and dual violations exchanged all at once, then one at a time if that cycles).
 When that fails (a rigid group must push: its angle on the other branch of
 ``|P_G lambda - Q_G|``, or the exchange cycles) the active-set descent over
-(side, branch) of :mod:`optimize.branches` takes over, and SLSQP from several
+(side, branch) of :mod:`optimize.chain.branches` takes over, and SLSQP from several
 starts only after that. Either way the final point satisfies the KKT conditions
 exactly: closure to round-off, limits as hard inequalities, and joint moments of
 the right sign. ``info['path']`` says which ("exchange", "descent", "slsqp").
 
 Anchor stops (``end_limits``: bounds on theta_0 and theta_{N-1}) take part in the same
 active set as two more stops, between a fixed ground and an end rod: a held one fixes the
-angle of its group, whose chord then moves the anchor in the dual (:mod:`optimize.dual`),
+angle of its group, whose chord then moves the anchor in the dual (:mod:`optimize.chain.dual`),
 and the fixture's moment follows from that group's balance. Each active-set iteration
 costs O(N); there is no search over combinations of held ends.
 """
@@ -45,8 +45,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.branches import descend, polish_nlp
-from optimize.chain import (
+from optimize.chain.branches import descend, polish_nlp
+from optimize.chain.model import (
     MESSAGES,
     ActiveSet,
     Chain,
@@ -58,9 +58,9 @@ from optimize.chain import (
     sag_guess,
     violations,
 )
-from optimize.dual import dual_newton, initial_reaction, solve_set
-from optimize.endlimits import limit_turn, near
-from optimize.penalty import solve_penalty
+from optimize.chain.dual import dual_newton, initial_reaction, solve_set
+from optimize.chain.endlimits import limit_turn, near
+from optimize.chain.penalty import solve_penalty
 
 __all__ = ["Chain", "EquilibriumResult", "solve_equilibrium", "kkt_residual", "MESSAGES"]
 
@@ -263,7 +263,7 @@ def _solve_exact(chain: Chain, active0, end_active0, max_iter: int, nlp_fallback
 
 
 def _descend_from_starts(chain: Chain, hanging, lasts, alone: bool = False):
-    """The first stable KKT point :func:`optimize.branches.descend` reaches, or None.
+    """The first stable KKT point :func:`optimize.chain.branches.descend` reaches, or None.
 
     Starts: the chain hanging freely at its joints that are not fused (``hanging``:
     its active set and loads W from the dual solve, or None), the same shape turned upside
@@ -463,7 +463,7 @@ def solve_equilibrium(
             (-inf, inf) is a free anchor pin. None = both free. Exact model only; the
             moment each fixture carries is in ``info['end_moments']`` (positive pushes the
             angle up) and which bound holds in ``info['end_active']``
-            (:mod:`optimize.endlimits`).
+            (:mod:`optimize.chain.endlimits`).
         g: gravitational acceleration (> 0), along -y.
         model: "exact" (default; closure and limits as hard constraints) or
             "penalty" (the paper's Eq. 1-3, for comparison).

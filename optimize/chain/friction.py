@@ -40,9 +40,9 @@ import numpy as np
 from scipy.optimize import linprog
 
 from optimize.chain import Chain
-from optimize.endlimits import as_end_limits, limit_turn
-from optimize.equilibrium import EquilibriumResult, solve_equilibrium
-from optimize.pins import joint_forces
+from optimize.chain.endlimits import as_end_limits, limit_turn
+from optimize.chain.equilibrium import EquilibriumResult, solve_equilibrium
+from optimize.chain.pins import joint_forces
 
 __all__ = ["FrictionBand", "friction_band", "friction_capacity"]
 
@@ -92,7 +92,7 @@ class FrictionBand:
 
 def friction_capacity(reaction, masses, *, mu: float, pin_radius, g: float = 9.81) -> np.ndarray:
     """The friction moment each pin can hold, ``mu |F_j| r_j`` (N+1,), F_j its joint force
-    (:func:`optimize.pins.joint_forces`).
+    (:func:`optimize.chain.pins.joint_forces`).
 
     Args:
         reaction: (2,) the reaction (H, V) at B. masses: (N,).

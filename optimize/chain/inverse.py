@@ -10,9 +10,9 @@ centres of mass, joint limits, mass bounds) and return one :class:`InverseResult
   none exists, bounded linear least squares gives the best statics fit.
 - ``refine``: bounded nonlinear least squares on the joint positions through the
   simulator, in log-masses, with the Jacobian from implicit differentiation of
-  the equilibrium (:mod:`optimize.sensitivity`), started from ``exact``. Default.
+  the equilibrium (:mod:`optimize.chain.sensitivity`), started from ``exact``. Default.
 - ``guided-pso`` and ``pso``: the paper's improved particle swarm and plain PSO
-  (:mod:`optimize.pso`), on the same problem, as baselines.
+  (:mod:`optimize.chain.pso`), on the same problem, as baselines.
 """
 
 from __future__ import annotations
@@ -23,11 +23,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from optimize.chain import EquilibriumResult
+from optimize.chain.model import EquilibriumResult
 from optimize.distance import ShapeDistance, shape_distance
-from optimize.problem import InverseProblem
-from optimize.sensitivity import shape_jacobian
-from optimize.statics import exact_masses, statics_matrix, statics_residual
+from optimize.chain.problem import InverseProblem
+from optimize.chain.sensitivity import shape_jacobian
+from optimize.chain.statics import exact_masses, statics_matrix, statics_residual
 
 __all__ = ["InverseProblem", "InverseResult", "METHODS", "design", "finish_result", "statics_matrix"]
 
@@ -82,7 +82,7 @@ def finish_result(problem, method, masses, t0, nfev, history, statics, extra_msg
         nfev: simulator calls so far (the re-simulation here adds one).
         history: (nfev, seconds, best max/span) entries, stored as is.
         statics: the relative statics residual of the target under the masses
-            (:func:`optimize.statics.statics_residual`), stored as is.
+            (:func:`optimize.chain.statics.statics_residual`), stored as is.
         extra_msg: how the masses were found, the message's first part.
         info: method-specific details, stored as is (None: empty).
 
@@ -221,7 +221,7 @@ def design(
                               "bounded least squares through the simulator, started from " + how.split(":")[0],
                               {"reachable": reachable})
     # particle swarms: the paper's baseline, on masses within their bounds
-    from optimize.pso import pso
+    from optimize.chain.pso import pso
 
     best = {"err": np.inf}
 

@@ -9,14 +9,14 @@ angles in radians; forces in mass x the unit of ``g``, moments in force x length
 Holds the validated problem (:class:`Chain`), its rigid groups for an active set
 (:class:`Groups`), the result type of every model (:class:`EquilibriumResult`, with the
 status table :data:`MESSAGES`) and the statics checks the exact model
-(:mod:`optimize.equilibrium`) and the paper's penalty model (:mod:`optimize.penalty`)
+(:mod:`optimize.chain.equilibrium`) and the paper's penalty model (:mod:`optimize.chain.penalty`)
 both use: joint moments, the KKT residual, the second-order stability test and the
 symmetric sag starting guess.
 
-Anchor stops (bounds on theta_0 and theta_{N-1}, :mod:`optimize.endlimits`) are part of the
+Anchor stops (bounds on theta_0 and theta_{N-1}, :mod:`optimize.chain.endlimits`) are part of the
 same active set: an active set in chain order is an (N+1,) array, entry 0 the first rod's
 anchor stop, entries 1..N-1 the joints, entry N the last rod's anchor stop
-(:func:`optimize.endlimits.as_active`; the functions here also take the (N-1,) joints alone,
+(:func:`optimize.chain.endlimits.as_active`; the functions here also take the (N-1,) joints alone,
 both anchor stops free). :class:`ActiveSet` says which rigid groups a fixture holds.
 """
 
@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize import validate as val
-from optimize.endlimits import ANGLE_TOL as END_ANGLE_TOL
-from optimize.endlimits import as_active, as_end_limits, end_bound, near, no_end_limits
+from optimize.chain.endlimits import ANGLE_TOL as END_ANGLE_TOL
+from optimize.chain.endlimits import as_active, as_end_limits, end_bound, near, no_end_limits
 
 __all__ = [
     "ANGLE_TOL",
@@ -279,7 +279,7 @@ class ActiveSet:
 
     def closes_rigidly(self, chain: Chain) -> bool:
         """Is this a set with at most one free group whose groups close the chain exactly
-        (to 1e-9 of its length)? Its statics are then indeterminate (:mod:`optimize.dual`)."""
+        (to 1e-9 of its length)? Its statics are then indeterminate (:mod:`optimize.chain.dual`)."""
         if not self.consistent or self.n_free > 1:
             return False
         chord = float(self.groups.chords[self.free].sum())

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optimize.equilibrium import EquilibriumResult, solve_equilibrium
+from optimize.chain.equilibrium import EquilibriumResult, solve_equilibrium
 
 
 #: Random starts of chains up to this many rods that the exchange and the descent cannot

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
-from optimize.chain import (
+from optimize.chain.model import (
     MESSAGES,
     Chain,
     EquilibriumResult,

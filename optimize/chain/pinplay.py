@@ -20,7 +20,7 @@ exerts on the part left of it is ``F_j = lambda - i g S_j`` (complex numbers for
 vectors; ``lambda = H + iV`` the reaction at B, ``S_j`` the mass of rods j..N-1): it depends on
 the reaction only. So the chain with play is the chain of rod bodies with a massless link
 of length ``c_j`` (``c/2`` at the anchors) at every pin, turned along ``F_j``; in the dual of
-:mod:`optimize.equilibrium` each link is one more Fermat-Weber term::
+:mod:`optimize.chain.equilibrium` each link is one more Fermat-Weber term::
 
     Psi(lambda) = sum_G |P_G lambda - Q_G| + sum_j c_j |lambda - i g S_j| - Re(conj(B - A) lambda)
 
@@ -29,7 +29,7 @@ of length ``c_j`` (``c/2`` at the anchors) at every pin, turned along ``F_j``; i
 O(N) per iteration. Stops join rod bodies into rigid groups (the links between them keep
 turning with the force); an anchor stop holds a group at a fixed angle (a constant chord,
 no term). The active set of stops and anchor stops is found by exchange as in
-:mod:`optimize.equilibrium`; where that fails (a rigid piece that pushes), the equilibrium is
+:mod:`optimize.chain.equilibrium`; where that fails (a rigid piece that pushes), the equilibrium is
 the fixed point of solving the chain without play between anchors moved by the links
 (:func:`optimize.solve_equilibrium`, which handles every case), iterated to round-off.
 With ``c = 0`` everywhere this is :func:`optimize.solve_equilibrium`.
@@ -44,12 +44,12 @@ from __future__ import annotations
 import numpy as np
 
 from optimize import validate as val
-from optimize.branches import branch_newton
-from optimize.chain import ANGLE_TOL, MOMENT_TOL, Chain, Groups, stable_on_closure
-from optimize.endlimits import as_end_limits, limit_turn
-from optimize.dual import dual_newton, initial_reaction
-from optimize.equilibrium import solve_equilibrium
-from optimize.pins import PLAY_MESSAGES, PinPlayResult, joint_forces
+from optimize.chain.branches import branch_newton
+from optimize.chain.model import ANGLE_TOL, MOMENT_TOL, Chain, Groups, stable_on_closure
+from optimize.chain.endlimits import as_end_limits, limit_turn
+from optimize.chain.dual import dual_newton, initial_reaction
+from optimize.chain.equilibrium import solve_equilibrium
+from optimize.chain.pins import PLAY_MESSAGES, PinPlayResult, joint_forces
 
 __all__ = ["PinPlayResult", "PLAY_MESSAGES", "joint_forces", "solve_pin_play"]
 
@@ -117,7 +117,7 @@ class _Play:
 
         Each free group turns along its load (the convex dual) unless ``theta``, a previous
         configuration, has it pointing against the load (a piece that pushes): then the
-        closure is solved on those branches (:func:`optimize.branches.branch_newton`).
+        closure is solved on those branches (:func:`optimize.chain.branches.branch_newton`).
         """
         setup = self.setup(side, eside)
         if setup is None:

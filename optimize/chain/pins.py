@@ -1,5 +1,5 @@
 """Pins and what they carry: the force at every pin of a hanging chain, and the result type
-of the chain whose pins sit in their holes with play (:mod:`optimize.pinplay`).
+of the chain whose pins sit in their holes with play (:mod:`optimize.chain.pinplay`).
 
 Conventions (``shared/design/physics.md``): rods ``0..N-1``, pins (joints) ``0..N`` with pin 0
 at anchor A and pin N at anchor B, gravity along -y, lengths in the caller's unit, forces in

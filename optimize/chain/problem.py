@@ -1,8 +1,8 @@
 """The inverse-design problem: a target shape, the rods that must hang in it, and
 what fabrication allows (:class:`InverseProblem`).
 
-Shared by :mod:`optimize.statics` (the linear statics at the target) and
-:mod:`optimize.inverse` (the design methods). Lengths in the caller's length unit,
+Shared by :mod:`optimize.chain.statics` (the linear statics at the target) and
+:mod:`optimize.chain.inverse` (the design methods). Lengths in the caller's length unit,
 masses in its mass unit, angles in radians, ``g`` in length / time^2.
 """
 
@@ -13,14 +13,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from optimize import validate as val
-from optimize.chain import Chain, EquilibriumResult
-from optimize.endlimits import as_end_limits, limit_turn
-from optimize.equilibrium import solve_equilibrium
+from optimize.chain.model import Chain, EquilibriumResult
+from optimize.chain.endlimits import as_end_limits, limit_turn
+from optimize.chain.equilibrium import solve_equilibrium
 
 __all__ = ["DESIGNED_TOL", "InverseProblem"]
 
 #: A target bend (or end angle) within this many radians of a limit rests on it (as
-#: :data:`optimize.statics.LIMIT_TOL`).
+#: :data:`optimize.chain.statics.LIMIT_TOL`).
 DESIGNED_TOL = 1e-6
 
 

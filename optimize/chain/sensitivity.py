@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.chain import Chain, EquilibriumResult, Groups
+from optimize.chain.model import Chain, EquilibriumResult, Groups
 
 
 def shape_jacobian(chain: Chain, result: EquilibriumResult) -> np.ndarray:

@@ -3,7 +3,7 @@
 At the target configuration every rod angle is known, so each rod's moment balance
 is linear in the rod masses, the support reaction (H, V) at B and the moments at
 joints resting on a limit (:func:`statics_matrix`). The exact inverse design
-(:func:`exact_masses`), the stop planner (:mod:`optimize.stops`) and the residual
+(:func:`exact_masses`), the stop planner (:mod:`optimize.chain.stops`) and the residual
 reported for any design (:func:`statics_residual`) all work on that matrix, scaled by
 :func:`scaled_statics`. Units: the caller's length and mass units, angles in radians,
 forces in mass x the unit of ``g``, moments in force x length.
@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linprog, lsq_linear
 
-from optimize.endlimits import limit_turn
-from optimize.problem import InverseProblem
+from optimize.chain.endlimits import limit_turn
+from optimize.chain.problem import InverseProblem
 
 __all__ = [
     "LIMIT_TOL",

@@ -1,7 +1,7 @@
 """Where the masses cannot hold a sagging target, stops can.
 
 At the target, statics is linear in the masses, the reaction at B and the moments at
-joints resting on stops (:func:`optimize.statics.statics_matrix`). A sagging (convex)
+joints resting on stops (:func:`optimize.chain.statics.statics_matrix`). A sagging (convex)
 joint needs no moment when the masses are free, but fabrication bounds the masses: a
 semicircle's near-vertical ends need end rods many times heavier than any rod type can
 be. A stop on the joint's sagging side, placed exactly at the target bend, supplies a
@@ -17,8 +17,8 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import linprog
 
-from optimize.problem import InverseProblem
-from optimize.statics import moment_signs, scaled_statics, statics_matrix
+from optimize.chain.problem import InverseProblem
+from optimize.chain.statics import moment_signs, scaled_statics, statics_matrix
 
 __all__ = ["needed_stop_sides", "needed_stops"]
 
@@ -100,7 +100,7 @@ def needed_stop_sides(problem: InverseProblem, candidates, *, rel_tol: float = 1
         (joints, sides): sorted joint indices and, per joint, -1 for a stop on the sagging
         side (hi) or +1 on the other side (lo); empty arrays when the masses alone can hold
         the target; None when no set of stops can. An anchor stop is joint -1 (A) or N-1
-        (B), its side that of the anchor's bend (:func:`optimize.statics.extended_bends`):
+        (B), its side that of the anchor's bend (:func:`optimize.chain.statics.extended_bends`):
         at A, -1 keeps theta_0 from growing and +1 from shrinking; at B, -1 keeps
         theta_{N-1} from shrinking and +1 from growing.
     """

@@ -7,7 +7,7 @@ mass errors to joint displacements and the band it implies.
 Method
 ------
 The equilibrium is differentiated implicitly for its active set of stops and anchor stops
-(:func:`optimize.sensitivity.shape_jacobian`: exact, from the KKT conditions; a rod an anchor
+(:func:`optimize.chain.sensitivity.shape_jacobian`: exact, from the KKT conditions; a rod an anchor
 stop holds, and the rods stops lock to it, stay put). With relative errors ``e_k`` drawn
 independently from N(0, sigma^2), ``sigma = tol / 1.96`` (``tol`` the relative error that 95 %
 of the rods stay within), joint j moves by ``dp_j = sum_k (d p_j / d m_k) m_k e_k``. The band
@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize.chain import Chain
-from optimize.equilibrium import EquilibriumResult, solve_equilibrium
-from optimize.sensitivity import shape_jacobian
+from optimize.chain.equilibrium import EquilibriumResult, solve_equilibrium
+from optimize.chain.sensitivity import shape_jacobian
 
 __all__ = ["MassBand", "mass_band"]
 

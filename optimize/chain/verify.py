@@ -1,6 +1,6 @@
 """Is a design's target the shape the chain really hangs in?
 
-Statics at the target (:mod:`optimize.statics`) say the target *balances*: with these
+Statics at the target (:mod:`optimize.chain.statics`) say the target *balances*: with these
 masses and stops every rod is in equilibrium there. That is not enough: the balance can
 be unstable (a stop that only pushes one way under a load that can roll off it, a
 compressed run), and a stable one can have neighbours the chain may settle in instead
@@ -26,10 +26,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optimize.chain import EquilibriumResult
-from optimize.multistart import find_equilibria
-from optimize.problem import InverseProblem
-from optimize.statics import extended_bends
+from optimize.chain.model import EquilibriumResult
+from optimize.chain.multistart import find_equilibria
+from optimize.chain.problem import InverseProblem
+from optimize.chain.statics import extended_bends
 
 __all__ = ["Verdict", "extended_differences", "verify"]
 
@@ -99,7 +99,7 @@ def verify(problem: InverseProblem, masses, *, n_starts: int = 12, seed: int = 0
 
     Returns:
         The :class:`Verdict`. E.g. a free chain whose masses come from
-        :func:`optimize.statics.exact_masses` is on target and unique.
+        :func:`optimize.chain.statics.exact_masses` is on target and unique.
     """
     masses = np.asarray(masses, float)
     a, b = problem.anchors

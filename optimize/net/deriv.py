@@ -1,6 +1,6 @@
 """The net's energy, constraints and their derivatives, on fixed sparsity patterns.
 
-See :mod:`optimize.netmodel` for the model. Every rod couples only the unknowns of its two
+See :mod:`optimize.net.model` for the model. Every rod couples only the unknowns of its two
 nodes (``Net.loc``: positions, and rotation increments at node bodies), so the constraint
 Jacobian J (m x nvar), the Hessian of the Lagrangian H and the Newton matrix
 ``H + mu D + rho J'J`` are assembled from per-rod local blocks into patterns built once
@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from optimize.netmodel import Net, NetState, skew
+from optimize.net.model import Net, NetState, skew
 
 __all__ = [
     "Hess",

@@ -2,7 +2,7 @@
 
 :func:`design_net` runs the whole numerical design of a net (no CAD):
 
-1. :func:`optimize.netstatics.design_net_masses`: masses within bounds that balance the
+1. :func:`optimize.net.statics.design_net_masses`: masses within bounds that balance the
    target exactly (LP, then the central QP), or the best fit within them and why not;
 2. the exact equilibrium from the target (:func:`optimize.solve_net`): an exact design must
    come back to the target to round-off, stable;
@@ -25,11 +25,11 @@ import scipy.sparse as sp
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
-from optimize.net import NetResult, solve_net
-from optimize.netderiv import evaluate, gauge_rows, hessian
-from optimize.netmodel import Net, NetState
-from optimize.netsolve import RHO, newton_matrix, pd_factor
-from optimize.netstatics import NetMassDesign, design_net_masses
+from optimize.net.solve import NetResult, solve_net
+from optimize.net.deriv import evaluate, gauge_rows, hessian
+from optimize.net.model import Net, NetState
+from optimize.net.newton import RHO, newton_matrix, pd_factor
+from optimize.net.statics import NetMassDesign, design_net_masses
 
 __all__ = ["NetDesign", "design_net", "shape_jacobian"]
 

@@ -145,7 +145,7 @@ class Net:
         # unknowns' scale: 1 for positions, a length^2 for rotations (proximal terms)
         self.var_scale = np.ones(self.nvar)
         self.var_scale[3 * nf:] = self.mean_length ** 2
-        self.pattern = None  # the sparsity patterns, built by optimize.netderiv on first use
+        self.pattern = None  # the sparsity patterns, built by optimize.net.deriv on first use
 
     @classmethod
     def from_args(cls, node_positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None,

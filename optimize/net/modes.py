@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from optimize.netderiv import assemble, evaluate, gauge_rows, hessian
-from optimize.netmodel import Net, NetState
-from optimize.netsolve import multipliers
+from optimize.net.deriv import assemble, evaluate, gauge_rows, hessian
+from optimize.net.model import Net, NetState
+from optimize.net.newton import multipliers
 
 __all__ = ["NetModes", "net_modes"]
 

@@ -1,7 +1,7 @@
 """Newton's method on the KKT system of a hanging net: restoration, descent, stability.
 
 The equilibrium is a stable minimum of the potential energy U subject to every rod's
-length, ``c_e = |P_1 - P_0| - L_e = 0`` (:mod:`optimize.netmodel`). The iteration keeps
+length, ``c_e = |P_1 - P_0| - L_e = 0`` (:mod:`optimize.net.model`). The iteration keeps
 every iterate on the constraint manifold:
 
 1. *Restoration*: from the start, Levenberg-Marquardt steps on ``|c|^2`` (minimum-norm
@@ -25,7 +25,7 @@ every iterate on the constraint manifold:
    Debreu's lemma, ``H + rho J'J`` positive definite for a large ``rho``, read from the
    same pivots; exact symmetries (a part hung from one vertical line of anchors turns
    about it, a node body spins about the line of its pivots) are held fixed by one unknown
-   each (:func:`optimize.netderiv.gauge_rows`). A KKT point that is not stable is left
+   each (:func:`optimize.net.deriv.gauge_rows`). A KKT point that is not stable is left
    along its most negative curvature, and the descent resumes.
 
 Each iteration costs one or a few sparse factorizations of an ``nvar x nvar`` matrix with
@@ -40,8 +40,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from optimize.netderiv import Hess, NetEval, assemble, energy_change, evaluate, gauge_rows, hessian
-from optimize.netmodel import Net, NetState
+from optimize.net.deriv import Hess, NetEval, assemble, energy_change, evaluate, gauge_rows, hessian
+from optimize.net.model import Net, NetState
 
 __all__ = ["Factor", "Outcome", "descend", "factor", "is_stable", "kkt_residual", "multipliers", "newton_matrix",
            "pd_factor", "restore", "spd_lu"]

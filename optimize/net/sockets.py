@@ -3,7 +3,7 @@
 At a net's target each free hub (a rigid body with ball sockets at ``pivot_radius`` from its
 centre) must balance its rods' pulls and weight shares and its own weight, forces and
 moments. With the sockets fixed the balance is linear in the rods' tensions and masses
-(:mod:`optimize.netstatics`); turning the sockets on their sphere changes the rods'
+(:mod:`optimize.net.statics`); turning the sockets on their sphere changes the rods'
 directions, the weight shares' arms and the hub's centre of mass. The turns that balance a
 hub are not unique, and a turn chosen hub by hub (the least turn for given forces) may need
 masses outside what the rods can be built at. :func:`balance_sockets` solves the turns, the

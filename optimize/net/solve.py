@@ -3,8 +3,8 @@
 Rigid rods joined at nodes by spherical joints, gravity along -z (z up), some nodes
 anchored. Nodes are points or rigid node bodies (rings, hubs) whose pose the solver finds;
 rods may carry their centre of mass off their axis (they turn about it to hang it lowest).
-The model and its conventions are in :mod:`optimize.netmodel`, the method in
-:mod:`optimize.netsolve`. Units are the caller's (mm, g); forces are mass x the unit of
+The model and its conventions are in :mod:`optimize.net.model`, the method in
+:mod:`optimize.net.newton`. Units are the caller's (mm, g); forces are mass x the unit of
 ``g`` (g and m/s^2: millinewtons), moments force x length.
 
 Example:
@@ -23,9 +23,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from optimize.netderiv import evaluate, rod_frames
-from optimize.netmodel import Net, NetState
-from optimize.netsolve import CONVERGED, descend, is_stable, restore
+from optimize.net.deriv import evaluate, rod_frames
+from optimize.net.model import Net, NetState
+from optimize.net.newton import CONVERGED, descend, is_stable, restore
 
 __all__ = ["NET_MESSAGES", "NetResult", "net_sag_guess", "pivots_by_node", "pivots_from_nodes", "solve_net"]
 
@@ -62,7 +62,7 @@ class NetResult:
             node point (zero for point nodes).
         compressed: indices of rods in compression (tension below -1e-9 x the force scale).
         energy: potential energy (force x length), zero at z = 0.
-        kkt_residual: relative KKT residual (:func:`optimize.netsolve.kkt_residual`).
+        kkt_residual: relative KKT residual (:func:`optimize.net.newton.kkt_residual`).
         stable: the Hessian of the Lagrangian is positive definite on the tangent space of
             the constraints, modulo exact symmetries (a net on one vertical line of anchors
             turning about it, a node body spinning about the line of its pivots).
@@ -194,7 +194,7 @@ def _perturbed(net: Net, state: NetState, rng: np.random.Generator, scale: float
     out.x[free] += scale * net.mean_length * rng.standard_normal((int(free.sum()), 3))
     bodies = net.rot_idx >= 0
     if bodies.any():
-        from optimize.netmodel import rotation_exp
+        from optimize.net.model import rotation_exp
 
         out.R[bodies] = rotation_exp(scale * rng.standard_normal((int(bodies.sum()), 3))) @ out.R[bodies]
     return out

@@ -8,7 +8,7 @@ tensions T_e and masses m_e::
 
 with ``u_e(node)`` the unit vector from the node's pivot toward the rod's other pivot,
 ``f_e`` the share of the rod's weight its pivot at that node carries (the lever rule of
-:mod:`optimize.netmodel`: ``1 - t - q'`` and ``t + q'`` with ``t = along / L`` and ``q'`` the
+:mod:`optimize.net.model`: ``1 - t - q'`` and ``t + q'`` with ``t = along / L`` and ``q'`` the
 off-axis term), ``a_e`` the pivot's offset from a body's node point. An off-axis centre
 of mass needs no equation of its own: the rod turns about its axis until its centre of
 mass hangs in the vertical plane through the axis (the lever rule above already assumes
@@ -34,8 +34,8 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from optimize.boxqp import box_qp
-from optimize.netderiv import evaluate
-from optimize.netmodel import Net
+from optimize.net.deriv import evaluate
+from optimize.net.model import Net
 
 __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "statics_of"]
 

@@ -73,7 +73,7 @@ ANCHOR_STOP_MODES = ("auto", "none")
 FUSE_MODES = ("auto", "never", "none", "stops")
 
 
-#: Inverse-design methods (mirrors optimize.inverse.METHODS).
+#: Inverse-design methods (mirrors optimize.chain.inverse.METHODS).
 METHOD_NAMES = ("exact", "refine", "guided-pso", "pso")
 
 

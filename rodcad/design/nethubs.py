@@ -140,12 +140,12 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
 
 def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     """The plan with its free hubs' sockets turned and its rods' masses found together
-    (:func:`optimize.netsockets.balance_sockets`), from its sockets and the statics' best fit
+    (:func:`optimize.net.sockets.balance_sockets`), from its sockets and the statics' best fit
     there: where turning each hub by its least turn needs masses the rods cannot be built at,
     other turns may balance within them. Returns (the plan, the statics' residual there over
     the force scale); the plan as it was when the joint solve does not improve it."""
     from optimize import design_net_masses
-    from optimize.netsockets import balance_sockets
+    from optimize.net.sockets import balance_sockets
 
     t, hw = plan.target, plan.hardware
 
@@ -240,7 +240,7 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
 def _shares(masses: np.ndarray, g: float, u: np.ndarray, com, lengths: np.ndarray) -> np.ndarray:
     """(m, 2) each rod's weight at its two pivots: half each for a rod with its centre of mass
     on its axis at mid-length; a bent rod's off-axis centre of mass moves ``q = r s / (L
-    sqrt(1 - s^2))`` of it to the upper pivot (:mod:`optimize.netmodel`; ``s`` the chord's
+    sqrt(1 - s^2))`` of it to the upper pivot (:mod:`optimize.net.model`; ``s`` the chord's
     vertical direction cosine, ``r`` the centre of mass's distance from the chord)."""
     if com is None:
         return np.column_stack([0.5 * g * masses, 0.5 * g * masses])

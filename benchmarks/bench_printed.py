@@ -213,7 +213,7 @@ def speed(folder: Path, jobs: int, quick: bool) -> list[str]:
     from rodcad.design.loader import load_design
     from rodcad.design.masses import design_chain
     from rodcad.design.plan import plan_constrained
-    from rodcad.pipeline import _arrays, build  # the arrays the pipeline uses
+    from rodcad.pipeline.chain import _arrays, build  # the arrays the pipeline uses
     from rodcad.progress import Progress
 
     misses: list[str] = []

@@ -116,8 +116,8 @@ def test_a_self_stressed_net_whose_least_squares_tensions_push_is_stable_and_agr
     from optimize.net.model import Net
     from optimize.net.newton import multipliers
     from rodcad.design.loader import load_design
-    from rodcad.design.netcheck import design_net_plan
-    from rodcad.design.netplan import plan_net
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.plan import plan_net
 
     d = load_design("sector.yaml", text=SECTOR)
     c = design_net_plan(plan_net(d.net, d.catalog), seed=0)

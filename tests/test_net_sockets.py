@@ -13,8 +13,8 @@ from netgen import grid_net
 from optimize import design_net_masses, net_statics, solve_net
 from optimize.net.sockets import balance_sockets, socket_problem
 from rodcad.catalog.loader import load_catalog
-from rodcad.design.net import NetTarget
-from rodcad.design.netplan import mass_segments, plan_net
+from rodcad.design.net.target import NetTarget
+from rodcad.design.net.plan import mass_segments, plan_net
 
 ROOT = Path(__file__).resolve().parents[1]
 

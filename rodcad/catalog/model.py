@@ -383,7 +383,7 @@ class Catalog:
         printer: the printer it is sized for, if given.
         print_settings: the catalog's ``print`` block (layer height, perimeters, ...), the
             profile every mass assumes besides 100 % infill.
-        node: the hardware at a net's nodes (:class:`rodcad.catalog.node.NodeHardware`).
+        node: the hardware at a net's nodes (:class:`rodcad.catalog.net.node.NodeHardware`).
         pins: the joint hardware a chain's joints choose from (:class:`rodcad.catalog.pins.PinMenu`).
     """
 
@@ -394,7 +394,7 @@ class Catalog:
     families: tuple[Family, ...]
     printer: Printer | None = None
     print_settings: dict[str, Any] = field(default_factory=dict, compare=False)
-    node: Any = field(default=None, compare=False)  # rodcad.catalog.node.NodeHardware (nets)
+    node: Any = field(default=None, compare=False)  # rodcad.catalog.net.node.NodeHardware (nets)
     pins: Any = field(default=None, compare=False)  # rodcad.catalog.pins.PinMenu (chains' joints)
 
     @cached_property

@@ -111,8 +111,8 @@ def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progre
 
 
 def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
-    from rodcad.netpipeline import build_net, write_net_outputs
-    from rodcad.outputs.netreport import net_summary
+    from rodcad.pipeline.net import build_net, write_net_outputs
+    from rodcad.outputs.net.report import net_summary
 
     b = build_net(design, seed=args.seed, cad=not args.no_cad and design.cad, progress=progress)
     target = outdir if b.ok else _best_fit(outdir)

@@ -1,12 +1,12 @@
 """The pipeline of a net design: a design file with a ``net:`` block in, numbers, report and
 pictures out. It sequences the steps and owns none of them::
 
-    design.yaml + catalog -> load_design() (net: rodcad.design.net)   rodcad.design.loader
-    -> hardware, lengths, mass bounds, hub masses                      rodcad.design.netplan.plan_net
-    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.netplan.design_net_plan
-    -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net
-    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net*, rodcad.cad.net
-    -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.netprint
+    design.yaml + catalog -> load_design() (net: rodcad.design.net.target)   rodcad.design.loader
+    -> hardware, lengths, mass bounds, hub masses                      rodcad.design.net.plan.plan_net
+    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.plan.design_net_plan
+    -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net.solids
+    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net*, rodcad.cad.net.solids
+    -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.net.print_files
 """
 
 from __future__ import annotations
@@ -18,13 +18,13 @@ from typing import Any
 import numpy as np
 
 from rodcad.design.model import Design
-from rodcad.design.netcheck import NetCheck, design_net_plan
-from rodcad.design.netplan import plan_net
+from rodcad.design.net.check import NetCheck, design_net_plan
+from rodcad.design.net.plan import plan_net
 from rodcad.outdir import staged_output
 from rodcad.outputs.design_json import print_profile, write_json
-from rodcad.outputs.netjson import net_json
-from rodcad.outputs.netpreview import plot_net
-from rodcad.outputs.netreport import net_report
+from rodcad.outputs.net.design_json import net_json
+from rodcad.outputs.net.preview import plot_net
+from rodcad.outputs.net.report import net_report
 from rodcad.progress import Progress
 
 __all__ = ["NetBuild", "build_net", "write_net_outputs"]
@@ -44,7 +44,7 @@ class NetBuild:
     design: Design
     check: NetCheck
     seed: int
-    solids: Any = None  # rodcad.cad.net.NetSolids when the solids were built
+    solids: Any = None  # rodcad.cad.net.solids.NetSolids when the solids were built
 
     @property
     def ok(self) -> bool:
@@ -58,7 +58,7 @@ class NetBuild:
     @property
     def as_built_stalled(self) -> bool:
         """The as-built net's solver stopped short of round-off (see
-        :data:`rodcad.cad.net.AS_BUILT_KKT`): its error is read where it stopped."""
+        :data:`rodcad.cad.net.solids.AS_BUILT_KKT`): its error is read where it stopped."""
         return self.solids is not None and not self.solids.as_built.success
 
     def limit(self) -> str:
@@ -82,7 +82,7 @@ def build_net(design: Design, *, seed: int | None = None, cad: bool = False,
         check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance)
     solids = None
     if cad:
-        from rodcad.cad.net import build_net_solids
+        from rodcad.cad.net.solids import build_net_solids
 
         with progress.step("building the hubs and rods (B-rep) and the net as built") as st:
             solids = build_net_solids(check, progress=st)
@@ -97,9 +97,9 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
     with staged_output(Path(outdir)) as tmp:
         files = []
         if b.solids is not None:
-            from rodcad.cad.net import write_net_files
+            from rodcad.cad.net.solids import write_net_files
 
-            from rodcad.cad.netprint import write_net_print_files
+            from rodcad.cad.net.print_files import write_net_print_files
 
             with progress.step("writing and checking rods/*, hubs/* (STEP, STL) and assembly.step") as st:
                 files = write_net_files(b.check, b.solids, tmp, name=d.name, progress=st)

@@ -1,13 +1,13 @@
 """A bent net rod's solid: its round body along an arc between the balls at its pivots.
 
-The geometry is :mod:`rodcad.catalog.netbend`'s (numbers only; here the B-rep): in the rod's
+The geometry is :mod:`rodcad.catalog.net.bend`'s (numbers only; here the B-rep): in the rod's
 frame (x from its first pivot to its second, ``length`` apart) the body is the tube of the
 rod's radius about the arc through the body's ends on the chord, bowing toward -z, cut square
 to the arc (a torus segment: a disc revolved about the arc's axis); each end is a ball at its
 pivot and a neck along x from the ball into the body's tilted end face. Inside, the steel
 balls' spherical sockets sit on the arc in a row at mid-arc and the cavity is one or two tube
 segments of radius ``rod_diameter / 2 - min_wall`` beside them, as on a straight rod measured
-along the arc. Placed with its frame's z up (:func:`rodcad.cad.net.write_net_files`), the
+along the arc. Placed with its frame's z up (:func:`rodcad.cad.net.solids.write_net_files`), the
 rod bows down in the vertical plane through its chord: the pose it hangs in.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 from build123d import Axis, Face, Plane, Solid, Wire
 
 from rodcad.cad.solids import one_solid
-from rodcad.catalog.netbend import NetRodArc, ball_row
+from rodcad.catalog.net.bend import NetRodArc, ball_row
 
 __all__ = ["bent_rod_solid", "bent_socket_centres"]
 
@@ -45,10 +45,10 @@ def bent_rod_solid(hw, arc: NetRodArc, balls: int, cavity: float, name: str = "r
 
     Args:
         hw: the node hardware (ball, neck, rod diameter, walls, steel balls).
-        arc: the rod's arc (:func:`rodcad.catalog.netbend.rod_arc`).
+        arc: the rod's arc (:func:`rodcad.catalog.net.bend.rod_arc`).
         balls: steel balls in closed sockets in a row at mid-arc.
         cavity: the cavity's volume (mm^3), as
-            :meth:`rodcad.catalog.node.NodeHardware.rod_fill` of the arc's fill length gives it.
+            :meth:`rodcad.catalog.net.node.NodeHardware.rod_fill` of the arc's fill length gives it.
     """
     r, w = hw.rod_diameter / 2, hw.min_wall
     psi, L, Lf = arc.half_angle, arc.length, arc.fill_length

@@ -1,6 +1,6 @@
 """A hub that can be put together: printed as two halves split through its sockets' centres.
 
-A hub (:func:`rodcad.cad.net.hub_solid`) holds each rod's ball in a socket whose mouth is
+A hub (:func:`rodcad.cad.net.solids.hub_solid`) holds each rod's ball in a socket whose mouth is
 narrower than the ball, so a whole hub cannot take its balls. Cut through the plane that
 best fits its sockets' centres (least squares; with one or two sockets the plane through
 them and the hub's centre), each socket is open at the cut ``2 sqrt(rs^2 - d^2)`` across
@@ -141,7 +141,7 @@ def splittable_sockets(sockets: np.ndarray, pivots: np.ndarray, clearance: float
     of it (``rs`` the socket's radius, ``(ball + clearance) / 2``): sockets further off any
     plane (a node whose rods leave it far out of one plane) are widened, just enough (to at
     most :data:`MAX_CLEARANCE`), and each moved back against its rod's pull by half the new
-    clearance (:func:`rodcad.catalog.node.socket_centres`), so the loaded ball still sits on
+    clearance (:func:`rodcad.catalog.net.node.socket_centres`), so the loaded ball still sits on
     its pivot: the net hangs as designed, the ball only rattles more when the rod is slack.
 
     Args:

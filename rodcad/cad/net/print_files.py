@@ -8,12 +8,12 @@ Orientation. A rod lies along the bed's x axis on its round body (its axis ``rod
 / 2`` above the bed); its end balls (narrower than the body) and the underside of the body
 need support from the bed (``support_material`` on for the rod, on the build plate only, so
 none is printed inside its cavity or ball sockets). A hub half lies on its flat cut face
-(:mod:`rodcad.cad.nethub`); a hub left whole (its sockets off every plane) on support. A bent
-rod (:mod:`rodcad.cad.netbent`) is turned a quarter turn about its chord so that its arc lies
+(:mod:`rodcad.cad.net.hub`); a hub left whole (its sockets off every plane) on support. A bent
+rod (:mod:`rodcad.cad.net.bent`) is turned a quarter turn about its chord so that its arc lies
 flat on the bed (:data:`FLAT_ARC`), its steel balls' centres at its axis's height as on a straight rod.
 
 Steel balls. A rod's ball sockets are spheres on its axis (the mass model's,
-:meth:`rodcad.catalog.node.NodeHardware.rod_numbers`). A sphere only lets its ball in near
+:meth:`rodcad.catalog.net.node.NodeHardware.rod_numbers`). A sphere only lets its ball in near
 its widest section, so the print pauses before the layer sliced at the sockets' centres'
 height (the print then stands within half a layer of it, where the opening is
 ``2 sqrt(rs^2 - (h/2)^2)`` across, wider than the ball for a 0.2 mm layer); the ball lies in
@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rodcad.cad.net import ball_positions
-from rodcad.cad.netbent import bent_socket_centres
+from rodcad.cad.net.solids import ball_positions
+from rodcad.cad.net.bent import bent_socket_centres
 from rodcad.cad.printfile import write_print_files
 
 __all__ = ["NetPrintPart", "net_print_parts", "write_net_print_files"]
@@ -92,11 +92,11 @@ class NetPrintPart:
 def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]:
     """Every part of a built net to print: its rods (lying along x on their body) and its
     hub parts (``solids.hub_parts`` when the hubs are split, each on its flat face by its
-    own print matrix, :mod:`rodcad.cad.nethub`; a hub left whole on support).
+    own print matrix, :mod:`rodcad.cad.net.hub`; a hub left whole on support).
 
     Args:
-        check: the designed net (:class:`rodcad.design.netcheck.NetCheck`).
-        solids: its solids (:class:`rodcad.cad.net.NetSolids`).
+        check: the designed net (:class:`rodcad.design.net.check.NetCheck`).
+        solids: its solids (:class:`rodcad.cad.net.solids.NetSolids`).
         ball_name: the steel balls' name in pause messages.
     """
     plan = check.plan

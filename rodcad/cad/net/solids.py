@@ -1,5 +1,5 @@
 """The solids of a net: printed hubs with ball sockets, round rods with ball ends, cavities and
-steel-ball sockets, their files and the assembly (the geometry of rodcad.catalog.node).
+steel-ball sockets, their files and the assembly (the geometry of rodcad.catalog.net.node).
 
 Hub ``k`` (its own frame: origin the node point, axes the hub's at the target) is a sphere
 less, per rod, a socket sphere ``ball + clearance`` across at its printed centre (the pivot
@@ -23,8 +23,8 @@ import numpy as np
 from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
 
 from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl, import_step
-from rodcad.cad.netbent import bent_rod_solid, bent_socket_centres
-from rodcad.cad.nethub import HubSplit, split_hub, split_plane, splittable_sockets
+from rodcad.cad.net.bent import bent_rod_solid, bent_socket_centres
+from rodcad.cad.net.hub import HubSplit, split_hub, split_plane, splittable_sockets
 from rodcad.cad.solids import GeometryError, one_solid
 from rodcad.parallel import default_jobs, worker_pool
 
@@ -68,11 +68,11 @@ def hub_solid(hw, sockets: np.ndarray, name: str = "hub", *, pole=None) -> Solid
     """One hub: a sphere less a socket and an opening cone per rod.
 
     Args:
-        hw: the :class:`rodcad.catalog.node.NodeHardware` (a hub).
+        hw: the :class:`rodcad.catalog.net.node.NodeHardware` (a hub).
         sockets: (k, 3) the sockets' printed centres in the hub's frame (mm); each opens
             along its centre's direction from the hub's centre.
         pole: the sphere's polar axis (its parametrisation only; default z): the normal of
-            the plane the hub is cut along (:mod:`rodcad.cad.nethub`), so that the cut meets
+            the plane the hub is cut along (:mod:`rodcad.cad.net.hub`), so that the cut meets
             no pole and the seam crosses it (a cut through the poles leaves faces that
             do not mesh closed).
     """
@@ -122,7 +122,7 @@ def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod
         length: pivot to pivot (mm).
         balls: steel balls in closed sockets in a row at mid-length.
         cavity: the cavity's volume (mm^3): two equal coaxial cylinders beside the balls,
-            or one at mid-length (:meth:`rodcad.catalog.node.NodeHardware.rod_fill`).
+            or one at mid-length (:meth:`rodcad.catalog.net.node.NodeHardware.rod_fill`).
     """
     r, w = hw.rod_diameter / 2, hw.min_wall
     e = hw.end_offset
@@ -174,7 +174,7 @@ class NetSolids:
         error_mm, rel_size: its nodes and pivots against the design's simulated ones (NaN
             where the solver stopped with a KKT residual above :data:`AS_BUILT_KKT`).
         rod_balls: steel balls in each rod.
-        hub_splits: per hub, its printed parts (:class:`rodcad.cad.nethub.HubSplit`: two
+        hub_splits: per hub, its printed parts (:class:`rodcad.cad.net.hub.HubSplit`: two
             halves through its sockets' centres, where they take the balls).
         rod_com: (m, 3) each rod's centre of mass as built (rod frame, mm): a bent rod's measured
             on its solid (bowing toward -z), a straight rod's at mid-length.
@@ -201,7 +201,7 @@ class NetSolids:
 
 
 def build_net_solids(check, *, progress=None) -> NetSolids:
-    """Every hub and rod of a :class:`rodcad.design.netplan.NetCheck`, and the net re-solved
+    """Every hub and rod of a :class:`rodcad.design.net.check.NetCheck`, and the net re-solved
     with the solids' masses and centres of mass.
 
     Args:

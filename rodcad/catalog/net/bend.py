@@ -2,7 +2,7 @@
 
 A net rod may be printed bent (``net.bend`` of a design file): its round body follows a
 circular arc instead of the straight line between its ends. Everything else stays as on a
-straight rod (:mod:`rodcad.catalog.node`): the ball at each pivot and the neck along the
+straight rod (:mod:`rodcad.catalog.net.node`): the ball at each pivot and the neck along the
 rod's chord (the line between its pivots, which is the hub socket's axis at the target), so
 the hubs and their sockets do not change.
 
@@ -20,7 +20,7 @@ Masses. A torus segment's volume is its section times its centreline's length (P
 bent rod weighs what a straight rod of *fill length* ``L_f = arc length + 2 e`` weighs, and it
 is filled the same way along its arc: its steel balls in a row at mid-arc, its cavity (tubes of
 radius ``r - min_wall`` about the arc, cut square to it) beside them
-(:meth:`rodcad.catalog.node.NodeHardware.rod_fill` of ``L_f``). The straight rod's axial
+(:meth:`rodcad.catalog.net.node.NodeHardware.rod_fill` of ``L_f``). The straight rod's axial
 coordinate ``x`` becomes the arc length ``x - e`` from ``A0``.
 
 Centre of mass. By symmetry at mid-length; below the chord by the first moments of the parts
@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rodcad.catalog.model import MAX_ARC_HALF_ANGLE_DEG
-from rodcad.catalog.node import largest_clear_turn
+from rodcad.catalog.net.node import largest_clear_turn
 
 __all__ = ["MAX_BEND", "NetRodArc", "ball_row", "bent_rod_com", "bent_swing_deg", "rod_arc"]
 
@@ -142,7 +142,7 @@ def _tube(arc: NetRodArc, a: float, t0: float, t1: float) -> tuple[float, float]
 
 def bent_rod_com(hw, arc: NetRodArc, mass: float) -> tuple[np.ndarray, float]:
     """A bent rod's centre of mass for a designed ``mass`` (filled as
-    :meth:`rodcad.catalog.node.NodeHardware.rod_fill` fills a rod of ``arc.fill_length``).
+    :meth:`rodcad.catalog.net.node.NodeHardware.rod_fill` fills a rod of ``arc.fill_length``).
 
     Returns:
         ((along, depth, 0) mm: at mid-length, ``depth`` below the chord, the form

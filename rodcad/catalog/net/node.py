@@ -250,7 +250,7 @@ class NodeHardware:
         """The masses a rod of ``length`` can be built at: per steel-ball count ``k`` (0 up to
         what fits), (k, lightest g, heaviest g). The balls sit in a row at mid-length, the cavity
         (two equal coaxial cylinders beside the row, or one at mid-length without balls,
-        ``min_wall`` from everything) takes the plastic off, as :mod:`rodcad.cad.net` builds
+        ``min_wall`` from everything) takes the plastic off, as :mod:`rodcad.cad.net.solids` builds
         it. A short rod has little room beside its balls: its intervals leave gaps."""
         rn = self.rod_numbers(length)
         rho = self.density / 1000.0

@@ -1,7 +1,7 @@
 """A net's masses designed and checked: the mass design on the planned rods and hubs, the
 exact equilibrium's verdict and the fit.
 
-:func:`design_net_plan` turns the hubs' sockets (:mod:`rodcad.design.nethubs`), narrows the
+:func:`design_net_plan` turns the hubs' sockets (:mod:`rodcad.design.net.hubs`), narrows the
 rods' mass bounds to what they can be built at, designs the masses with
 :func:`optimize.design_net` (exact where the bounds allow, else the best fit within them,
 refined through the solver, with the reason), solves the designed net from the target with a
@@ -19,10 +19,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize import NetDesign, design_net, net_statics
-from rodcad.catalog.node import socket_centres
+from rodcad.catalog.net.node import socket_centres
 from rodcad.design.fit import DEFAULT_TOLERANCE
-from rodcad.design.nethubs import buildable_bounds, orient_sockets
-from rodcad.design.netplan import NetPlan, replan
+from rodcad.design.net.hubs import buildable_bounds, orient_sockets
+from rodcad.design.net.plan import NetPlan, replan
 
 __all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts", "settle_com"]
 
@@ -77,7 +77,7 @@ class NetCheck:
         node_error: (n,) each node's distance from its target (mm).
         tolerance: the figure aimed at (design's tolerance or the default 1 %).
         sockets: (m, 2, 3) where each rod's socket is printed (hub frame, mm): its pivot
-            moved ``clearance / 2`` against the rod's pull (rodcad.catalog.node).
+            moved ``clearance / 2`` against the rod's pull (rodcad.catalog.net.node).
         swing_deg: (m, 2) each rod's turn from its socket's axis at the equilibrium (deg).
         time_s: wall time of the design.
         notes: things the user should know.
@@ -163,7 +163,7 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     """Masses for the planned net, its exact equilibrium and its fit.
 
     Args:
-        plan: :func:`rodcad.design.netplan.plan_net`'s rods and hardware.
+        plan: :func:`rodcad.design.net.plan.plan_net`'s rods and hardware.
         g: gravitational acceleration (m/s^2).
         seed: the multi-start's seed.
         tolerance: largest acceptable error over the net's size (None: 1 %).

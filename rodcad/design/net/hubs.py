@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodcad.design.netplan import NetPlan, mass_segments, replan, rod_bounds
+from rodcad.design.net.plan import NetPlan, mass_segments, replan, rod_bounds
 
 __all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "JOINT_NFEV", "JOINT_PROGRESS", "JOINT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
 

@@ -1,6 +1,6 @@
 """Nets generated from a few numbers: a grid over a surface z(x, y), rings and spokes, the
 edges of an OBJ mesh. Numbers only (mm, z up); the design file's checks are in
-:mod:`rodcad.design.net`.
+:mod:`rodcad.design.net.target`.
 
 Every generator returns a :class:`NetLayout`: node positions, edges (one rod each) and the
 named node sets a design file's ``anchored`` keyword picks from (``corners``, ``boundary``,

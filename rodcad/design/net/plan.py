@@ -3,10 +3,10 @@
 :func:`plan_net` lays the catalog's node hardware on the target (a hub at every node, each
 rod's pivot ``pivot_radius`` from the hub's centre along the rod's target direction; a point
 node: the node itself), gives every rod its pivot-to-pivot length and its mass bounds
-(:meth:`rodcad.catalog.node.NodeHardware.rod_numbers`) and every node its hub's mass and
+(:meth:`rodcad.catalog.net.node.NodeHardware.rod_numbers`) and every node its hub's mass and
 centre of mass, and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) rods the catalog
 cannot print and nodes whose rods meet closer than the hub's sockets allow. :func:`replan`
-moves the pivots (the hubs' sockets, :mod:`rodcad.design.nethubs`) and updates the rest;
+moves the pivots (the hubs' sockets, :mod:`rodcad.design.net.hubs`) and updates the rest;
 :func:`mass_segments` are the masses a rod can be built at.
 """
 
@@ -16,9 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodcad.catalog.netbend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
-from rodcad.catalog.node import NetRodNumbers, NodeHardware
-from rodcad.design.net import NetTarget
+from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
+from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
+from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
 __all__ = ["NetPlan", "POINT_WIDTH", "fill_lengths", "length_range", "mass_segments", "plan_net", "replan", "rod_bounds"]
@@ -41,7 +41,7 @@ class NetPlan:
         length_range: (min, max) rod lengths the catalog prints (mm).
         degree: (n,) rods at each node.
         segment: (m,) which segment of buildable masses each rod's bounds are (:func:`mass_segments`),
-            or None: the whole range (see :func:`rodcad.design.nethubs.buildable_bounds`).
+            or None: the whole range (see :func:`rodcad.design.net.hubs.buildable_bounds`).
         com: (m, 3) each rod's centre of mass (along, below the chord, 0) (mm) the statics use
             (:meth:`rod_com` of the masses designed last; straight rods at mid-length).
     """
@@ -66,7 +66,7 @@ class NetPlan:
 
     @property
     def arcs(self) -> list[NetRodArc | None]:
-        """Each rod's arc (:mod:`rodcad.catalog.netbend`), None where it is straight."""
+        """Each rod's arc (:mod:`rodcad.catalog.net.bend`), None where it is straight."""
         return [rod_arc(self.hardware, float(L), float(b)) for L, b in zip(self.lengths, self.target.bends)]
 
     @property
@@ -81,14 +81,14 @@ class NetPlan:
     @property
     def swing_limits(self) -> np.ndarray:
         """(m,) how far each rod may turn in its sockets (deg): a bent rod's tilted end face
-        comes nearer the hub (:func:`rodcad.catalog.netbend.bent_swing_deg`)."""
+        comes nearer the hub (:func:`rodcad.catalog.net.bend.bent_swing_deg`)."""
         hw = self.hardware
         return np.array([hw.swing_deg if a is None else min(hw.swing_deg, bent_swing_deg(hw, a))
                          for a in self.arcs], float)
 
     def rod_com(self, masses) -> np.ndarray:
         """(m, 3) each rod's centre of mass at ``masses`` (g): (along, below the chord, 0) mm,
-        in closed form (:func:`rodcad.catalog.netbend.bent_rod_com`); straight: (L / 2, 0, 0)."""
+        in closed form (:func:`rodcad.catalog.net.bend.bent_rod_com`); straight: (L / 2, 0, 0)."""
         out = np.zeros((self.target.m, 3))
         out[:, 0] = self.lengths / 2
         for e, a in enumerate(self.arcs):
@@ -106,7 +106,7 @@ class NetPlan:
 
 
 def fill_lengths(hw, lengths, bends) -> np.ndarray:
-    """(m,) per rod, the straight length it weighs and is filled as (:mod:`rodcad.catalog.netbend`)."""
+    """(m,) per rod, the straight length it weighs and is filled as (:mod:`rodcad.catalog.net.bend`)."""
     out = np.asarray(lengths, float).copy()
     for e, (L, b) in enumerate(zip(lengths, bends)):
         a = rod_arc(hw, float(L), float(b))
@@ -206,7 +206,7 @@ POINT_WIDTH = 1e-6
 
 
 def mass_segments(hw, length: float) -> list[tuple[float, float]]:
-    """The masses a rod can be built at (:meth:`rodcad.catalog.node.NodeHardware.rod_intervals`)
+    """The masses a rod can be built at (:meth:`rodcad.catalog.net.node.NodeHardware.rod_intervals`)
     as disjoint segments, ascending; a single mass given :data:`POINT_WIDTH` below it."""
     segs: list[list[float]] = []
     for _, lo, hi in sorted(hw.rod_intervals(length), key=lambda x: x[1]):

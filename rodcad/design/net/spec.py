@@ -2,9 +2,9 @@
 
 A net is given explicitly (``nodes`` and ``edges``) or generated (``surface``, ``mesh`` or
 ``radial``); ``anchored`` lists node indices or names a generated set (see
-:mod:`rodcad.design.netgen`). The cross-checks that need the generated net (indices in
+:mod:`rodcad.design.net.layouts`). The cross-checks that need the generated net (indices in
 range, a part hanging from nothing, rods the catalog cannot print) are in
-:mod:`rodcad.design.net`.
+:mod:`rodcad.design.net.target`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any
 
 import yaml
 
-from rodcad.catalog.netbend import MAX_BEND
+from rodcad.catalog.net.bend import MAX_BEND
 from rodcad.yamlio import MISSING, TAG_NULL, Validator
 from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, OneOrList, Spec, Str
 

@@ -1,8 +1,8 @@
 """A design file's net: its ``net:`` block checked and turned into target nodes and rods.
 
-``net_target`` reads the block the schema passed (:func:`rodcad.design.netspec.net_spec`):
+``net_target`` reads the block the schema passed (:func:`rodcad.design.net.spec.net_spec`):
 explicit nodes and edges, or a net generated from a surface, an OBJ mesh or rings and spokes
-(:mod:`rodcad.design.netgen`), and the anchored nodes. Every problem is reported at its key
+(:mod:`rodcad.design.net.layouts`), and the anchored nodes. Every problem is reported at its key
 (``FILE:LINE:COL: net.surface.z: ...``; a problem inside an OBJ file at its own line), all
 of them at once.
 """
@@ -17,8 +17,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from rodcad.design.netgen import NetLayout, ObjError, grid_layout, mesh_layout, radial_layout, read_obj
-from rodcad.design.netspec import ANCHOR_SETS, MAX_NET_NODES
+from rodcad.design.net.layouts import NetLayout, ObjError, grid_layout, mesh_layout, radial_layout, read_obj
+from rodcad.design.net.spec import ANCHOR_SETS, MAX_NET_NODES
 from rodcad.design.targets import evaluate_expression
 
 __all__ = ["NetTarget", "net_target"]
@@ -45,7 +45,7 @@ class NetTarget:
         shape: (u, v) cells, (rings, spokes), or ().
         written: the block as written (for design.json and the report).
         rod_bends: (m,) each rod's bend (sagitta over chord of its body's arc, 0 straight;
-            :mod:`rodcad.catalog.netbend`), or None: every rod straight.
+            :mod:`rodcad.catalog.net.bend`), or None: every rod straight.
     """
 
     kind: str

@@ -28,7 +28,7 @@ def _v(a) -> list[float | None]:
 
 def rod_balls(check) -> np.ndarray:
     """(m,) the steel balls each rod holds at its designed mass (the fewest whose range holds
-    it: :meth:`rodcad.catalog.node.NodeHardware.rod_fill`)."""
+    it: :meth:`rodcad.catalog.net.node.NodeHardware.rod_fill`)."""
     hw = check.plan.hardware
     return np.array([hw.rod_fill(float(L), float(m))[0] for L, m in zip(check.plan.fill_lengths, check.masses)], int)
 

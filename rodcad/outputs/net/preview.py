@@ -10,7 +10,7 @@ __all__ = ["plot_net"]
 
 
 def plot_net(check, title: str, *paths: Path) -> None:
-    """Two orthographic views of a :class:`rodcad.design.netplan.NetCheck`, saved to every path.
+    """Two orthographic views of a :class:`rodcad.design.net.plan.NetCheck`, saved to every path.
 
     Left: from above (x, y); right: from the side (x, z). The target's rods are thin dashed
     grey lines between the target nodes; the simulated rods (pivot to pivot, a bent rod along its

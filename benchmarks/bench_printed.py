@@ -110,7 +110,7 @@ def exactness(n_chains: int, seed: int) -> list[str]:
         if same:
             err = float(np.abs(pts - eq.points).max() / span)
         else:  # another discretisation: distance of the designed joints to the given polyline
-            from optimize.chain.discretize import curve_distance
+            from optimize.chain.curves import curve_distance
             err = float(curve_distance(eq.points, pts) / span)
         mb = np.asarray(plan.problem.mass_bounds, float)
         ms = np.asarray(d.result.masses, float)

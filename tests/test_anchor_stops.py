@@ -96,7 +96,7 @@ def test_the_heart_hangs_from_its_cusp(heart):
     pts = r.equilibrium.points
     a, b = r.design.anchors
     assert r.equilibrium.success and r.equilibrium.stable
-    from optimize.chain.discretize import centerline
+    from optimize.chain.curves import centerline
 
     arcs = centerline(pts, np.array([r.design.catalog[nm].curvature for nm in r.type_names]))
     assert arcs[:, 1].max() > a[1] + 5.0  # lobes above the anchors (the rods, arcs over their joints)

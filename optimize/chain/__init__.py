@@ -5,7 +5,7 @@ equilibrium (:mod:`.equilibrium`, with :mod:`.dual`, :mod:`.branches`, the ancho
 conventions in :mod:`.endlimits` and the paper's penalty model in :mod:`.penalty`),
 multi-start (:mod:`.multistart`), statics at a target (:mod:`.problem`, :mod:`.statics`),
 inverse design (:mod:`.inverse`, :mod:`.pso`, :mod:`.sensitivity`), the target laid into
-rods (:mod:`.discretize`) and their stops (:mod:`.assign`, :mod:`.stops`,
+rods (:mod:`.discretize`, :mod:`.curves`) and their stops (:mod:`.assign`, :mod:`.stops`,
 :mod:`.verify`), and the chain as printed: pins in their holes (:mod:`.pins`,
 :mod:`.pinplay`, :mod:`.compensate`), pin friction (:mod:`.friction`) and mass tolerance
 (:mod:`.tolerance`). Never imports :mod:`optimize.net`; what both kinds use sits at the top

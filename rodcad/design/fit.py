@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.chain.discretize import centerline, curve_distance
+from optimize.chain.curves import centerline, curve_distance
 from optimize.chain.endlimits import limit_turn
 from rodcad.design.shell import curve_size
 

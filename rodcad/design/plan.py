@@ -271,7 +271,7 @@ def _make_plan(curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
 def _fit_error(plan: ChainPlan) -> tuple[float, object]:
     """Hausdorff distance (mm) between the target curve and the chain hanging with the
     masses ``refine`` chooses for the plan, and that result."""
-    from optimize.chain.discretize import curve_distance
+    from optimize.chain.curves import curve_distance
 
     r = design(plan.problem, "refine")
     return curve_distance(plan.curve, r.equilibrium.points), r

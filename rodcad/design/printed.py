@@ -29,7 +29,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from optimize import InverseProblem
-from optimize.chain.discretize import discretize, fit_curvatures
+from optimize.chain.discretize import discretize
+from optimize.chain.curves import fit_curvatures
 from rodcad.catalog.model import Catalog, RodType, max_curvature
 from rodcad.design.decide import Allowed, decide
 from rodcad.design.laying import HI, LO, LOCK, PrintedFamily, STOP_SNAP_DEG
@@ -265,7 +266,7 @@ def fused_pieces(joints: Sequence[int], points: np.ndarray, curvature: np.ndarra
         (pieces, too_big): the pieces that fit, and the runs left on stops because even two
         rods of them do not fit.
     """
-    from optimize.chain.discretize import centerline
+    from optimize.chain.curves import centerline
 
     runs: list[list[int]] = []
     for j in joints:
@@ -305,7 +306,7 @@ def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int,
               same_shell: bool = False, **kw):
     """A plan with exactly ``rods`` rods, or None: the preferred length is set so that the
     curve takes that many (then nudged); ``kw`` as :func:`plan_printed`'s."""
-    from optimize.chain.discretize import resample
+    from optimize.chain.curves import resample
 
     c = resample(np.asarray(curve, float), 2000)
     total = float(np.sum(np.hypot(*np.diff(c, axis=0).T)))

@@ -1,19 +1,21 @@
-"""The pipeline: a design file in, designed, checked and fabricated chains out.
-
-It sequences the steps and owns none of them. A single chain and every chain of a
-chandelier take the same path::
+"""The pipeline of a chain: a design file with a ``target`` in, a designed, checked and
+fabricated chain out. It sequences the steps and owns none of them::
 
     design.yaml + catalog -> load_design()                      rodcad.design.loader
     -> joint limits and mass ranges from the rods             rodcad.design.plan.catalog_arrays
-    -> per chain: plan (every constraint), masses (buildable  rodcad.design.chains.design_chains
-       intervals with CAD), one equilibrium + multi-start check
-    -> a chandelier's frame                                   rodcad.design.frame, rodcad.cad.chandelier
+    -> plan (every constraint), masses (buildable intervals   rodcad.design.chains.design_chains
+       with CAD), one equilibrium + multi-start check
+    -> joint hardware and the masses designed with it         rodcad.design.hung, rodcad.design.asprinted
     -> cavities, sockets, exact B-rep of every rod            rodcad.cad.rods.fabricate_chain
     -> fused runs of rods as one solid each                   rodcad.cad.pieces.fuse_pieces
-    -> as-built re-simulation per chain                       as_built()
+    -> as-built re-simulation                                 as_built()
+    -> the anchor fixture                                     build_fixture_for(), rodcad.cad.fixture
     -> as printed: pins in holes (compensated), bands          rodcad.design.asprinted
-    -> design.json, report.md, previews, STEP/STL             rodcad.outputs, write_outputs()
+    -> tapped in MuJoCo                                       rodcad.design.tapping
+    -> design.json, report.md, previews, STEP/STL, print.3mf  rodcad.outputs, write_outputs()
 
+Every chain of a chandelier takes the same steps (:mod:`rodcad.pipeline.chandelier`, through
+:func:`arrays_step`, :func:`intervals_step`, :func:`fabricate_step` and :func:`as_built`).
 Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 """
 
@@ -32,9 +34,8 @@ from optimize import (
     solve_equilibrium,
 )
 from optimize.chain.discretize import MAX_RODS
-from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
-from rodcad.cad.export import AssemblyPart, export_assembly, export_step, export_stl
+from rodcad.cad.export import AssemblyPart, export_step, export_stl
 from rodcad.cad.printfile import PrintProfile, write_print_files
 from rodcad.cad.rods import (
     ChainFabrication,
@@ -46,34 +47,30 @@ from rodcad.cad.chainfiles import write_assembly, write_rod_files
 from rodcad.design.asprinted import anchor_holes, chain_hardware, plan_holes, printed_chain
 from rodcad.design.hung import design_hung, hung_com
 from rodcad.design.chains import ChainSpec, design_chains
-from rodcad.design.chandelier import design_chandelier
-from rodcad.design.frame import frame_outline, plan_frame
 from rodcad.design.masses import check_equilibrium
 from rodcad.catalog.model import RodType
 from rodcad.design.model import Design
 from rodcad.design.plan import CatalogArrays, catalog_arrays
-from rodcad.design.printed import rods_of
 from rodcad.design.shell import curve_size
 from rodcad.errors import InputError
 from rodcad.fabrication.intervals import chain_intervals
-from rodcad.outdir import staged_output
-from rodcad.outputs.design_json import chandelier_json, design_json, print_profile, write_json
+from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
-from rodcad.outputs.preview3d import preview_3d
-from rodcad.outputs.report import chandelier_markdown, report_markdown
+from rodcad.outputs.report import report_markdown
+from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
-from rodcad.results import AsBuilt, BuildResult, ChandelierBuild
+from rodcad.results import AsBuilt, BuildResult
 
 __all__ = [
     "N_STARTS",
+    "TAPS",
+    "arrays_step",
     "as_built",
-    "AsBuilt",
     "build",
-    "build_chandelier",
-    "BuildResult",
-    "ChandelierBuild",
+    "build_fixture_for",
+    "fabricate_step",
+    "intervals_step",
     "simulate",
-    "write_chandelier_outputs",
     "write_outputs",
 ]
 
@@ -81,15 +78,15 @@ __all__ = [
 N_STARTS = 12
 
 
-# --------------------------------------------------------------------------- shared steps
+# --------------------------------------------------------------------------- steps a chandelier's chains share
 
 
-def _arrays(design: Design, jobs: int | None, progress: Progress) -> CatalogArrays:
+def arrays_step(design: Design, jobs: int | None, progress: Progress) -> CatalogArrays:
     with progress.step("joint limits and mass ranges of the catalog's rods") as st:
         return catalog_arrays(design.catalog, jobs=jobs, progress=st.count)
 
 
-def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
+def intervals_step(design: Design, jobs: int | None, progress: Progress):
     """The achievable mass intervals of the planned types (CAD on)."""
     def intervals(types: Sequence[RodType]) -> dict[str, list[tuple[float, float]]]:
         with progress.step(f"masses each of {len(types)} rod types can really be built at"):
@@ -97,7 +94,7 @@ def _intervals_fn(design: Design, jobs: int | None, progress: Progress):
     return intervals
 
 
-def _fabricate(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]], *, jobs: int | None,
+def fabricate_step(design: Design, chains: Sequence[tuple[Sequence[str], np.ndarray]], *, jobs: int | None,
                progress: Progress, label: str, fused: Sequence[tuple[int, int]] = (), holes=None, sizes=None
                ) -> tuple[list[ChainFabrication], list[str]]:
     """Every rod of every chain built in one go (identical rods once); split per chain. The
@@ -136,7 +133,7 @@ def as_built(rods: Sequence[FabricatedRod], lengths: np.ndarray, limits: np.ndar
     return AsBuilt(masses, com, eq, shape_distance(target, eq.points))
 
 
-# --------------------------------------------------------------------------- one chain
+# --------------------------------------------------------------------------- a chain
 
 
 def build(design: Design, *, method: str | None = None, seed: int | None = None, cad: bool | None = None,
@@ -162,9 +159,9 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     method = method or design.method
     seed = design.seed if seed is None else seed
     cad = design.cad if cad is None else cad
-    arrays = _arrays(design, jobs, progress)
+    arrays = arrays_step(design, jobs, progress)
     spec = ChainSpec("", np.asarray(design.anchors, float), design.target_curve)
-    ivfn = _intervals_fn(design, jobs, progress) if cad else None
+    ivfn = intervals_step(design, jobs, progress) if cad else None
     (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
                              n_starts=N_STARTS, g=design.g, progress=progress, intervals=ivfn)
     cd = chain.design
@@ -198,7 +195,7 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
             f"come in whole numbers): max error {100 * snap.error_before:.3g} % -> "
             f"{100 * snap.error_after:.3g} % of the span")
     if cad:
-        (fab,), problems = _fabricate(design, [(result.type_names, result.printed_masses)], jobs=jobs,
+        (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
                                       progress=progress,
                                       label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
                                       fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
@@ -284,7 +281,7 @@ def simulate(design: Design, *, progress: Progress | None = None) -> BuildResult
     if len(design.chain) > MAX_RODS:
         raise InputError([design.problem("chain", f"{len(design.chain)} rods; rodcad simulates chains of up to "
                                          f"{MAX_RODS} rods")])
-    arrays = _arrays(design, None, progress)
+    arrays = arrays_step(design, None, progress)
     names = [r.type for r in design.chain]
     lim = arrays.limits_of(names)
     bad = [j for j in range(len(names) - 1) if not lim[j, 0] <= lim[j, 1]]
@@ -362,9 +359,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     Returns:
         The data written to design.json.
     """
-    progress = progress or Progress(quiet=True)
-    outdir = Path(outdir)
-    with staged_output(outdir) as tmp:
+    with staged(outdir, progress) as (tmp, progress):
         if result.fabrication is not None:
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
                 write_rod_files(result.fabrication, tmp)
@@ -386,102 +381,6 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                                   profile=print_profile(result.design.catalog))
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
-            write_json(tmp / "design.json", data)
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
-            (tmp / "report.md").write_text(report_markdown(result, data), encoding="utf-8")
-    return data
-
-
-# --------------------------------------------------------------------------- chandeliers
-
-
-def build_chandelier(design: Design, *, method: str | None = None, seed: int | None = None,
-                     cad: bool | None = None, jobs: int | None = None,
-                     progress: Progress | None = None) -> ChandelierBuild:
-    """Design every chain of a chandelier (the path of a single chain, chain by chain), lay
-    out its frame and (optionally) build it all."""
-    progress = progress or Progress(quiet=True)
-    t0 = time.perf_counter()
-    method = method or design.method
-    seed = design.seed if seed is None else seed
-    cad = design.cad if cad is None else cad
-    spec = design.chandelier
-    c = design.constraints
-    if c.anchor_stops == "auto" or c.end_limits is not None:
-        key = "constraints.anchor_stops" if c.anchor_stops == "auto" else "constraints.anchor_limits_deg"
-        raise InputError([design.problem(key, "a chandelier's chains hang from the frame's lugs, bare pins: anchor "
-                                         "stops are for a single chain's printed fixture")])
-    arrays = _arrays(design, jobs, progress)
-    try:
-        # the frame's lugs are bare pins, and the chains are built rod by rod: neither anchor
-        # stops nor (unless asked for) fused pieces
-        chains_c = dataclasses.replace(c, anchor_stops="none", fuse=c.fuse if c.fuse is not None else "never")
-        res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
-                                seed=seed, jobs=jobs or 1, arrays=arrays, constraints=chains_c,
-                                problem=design.problem, n_starts=N_STARTS, g=design.g, progress=progress,
-                                intervals=_intervals_fn(design, jobs, progress) if cad else None)
-    except ValueError as err:
-        raise InputError([design.problem("chandelier", str(err))]) from None
-    made = rods_of([ch.design.plan for ch in res.chains])
-    if made:  # rods printed to order: the catalog now knows them by name
-        design = dataclasses.replace(design, catalog=design.catalog.with_types(made))
-    extra = {}
-    if spec.frame_kind == "bars":
-        # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order
-        extra["vertices"] = spec.vertices or [
-            list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
-    frame_plan = plan_frame(spec.frame_kind, design.placements, design.catalog, res.chains, **spec.frame,
-                            **extra)
-    out = ChandelierBuild(design, res, frame_plan)
-    for ch in res.chains:
-        if not ch.equilibrium.stable:
-            out.notes.append(f"{ch.name}: the designed shape is not a stable equilibrium")
-        if not ch.design.unique:
-            out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
-    if cad and any(ch.design.plan.fused for ch in res.chains):
-        raise InputError([design.problem("constraints.fuse", "a chandelier's chains are built rod by rod: fused "
-                                         "pieces are built for a single chain only; use 'never'")])
-    if cad:
-        with progress.step("frame solid and clearance checks"):
-            out.frame = build_frame(frame_plan, design.catalog, res.chains)
-        out.notes += [f"frame: {p}" for p in out.frame[1].problems]
-        out.fabrications, problems = _fabricate(design, [(ch.type_names, ch.masses) for ch in res.chains],
-                                                jobs=jobs, progress=progress,
-                                                label=f"building {res.bom.n_rods} rods")
-        out.notes += problems
-        with progress.step("as-built check of every chain"):
-            out.as_built = [as_built(fab.rods, ch.design.plan.problem.lengths, ch.design.plan.problem.limits,
-                                     np.array(ch.placement.plane_anchors()), ch.target, design.g)
-                            for ch, fab in zip(res.chains, out.fabrications)]
-    out.time_s = time.perf_counter() - t0
-    return out
-
-
-def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
-                             progress: Progress | None = None) -> dict[str, Any]:
-    """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
-    and <chain>/rods/*.step|stl|3mf and <chain>/print.3mf; staged like :func:`write_outputs`, whose return it shares."""
-    progress = progress or Progress(quiet=True)
-    with staged_output(outdir) as tmp:
-        if b.frame is not None:
-            with progress.step("writing and checking the rods' STEP/STL files"):
-                for ch, fab in zip(b.result.chains, b.fabrications):
-                    write_rod_files(fab, tmp / ch.name)
-            with progress.step("writing each chain's print.3mf (PrusaSlicer project) and rods/*.3mf"):
-                for ch, fab in zip(b.result.chains, b.fabrications):
-                    write_print_files(fab.rods, tmp / ch.name, printer=b.design.catalog.printer,
-                                      profile=print_profile(b.design.catalog))
-            with progress.step("writing frame.step, frame.stl and assembly.step"):
-                frame = b.frame[0]
-                export_step(frame, tmp / "frame.step", name="frame")
-                export_stl(frame, tmp / "frame.stl")
-                nodes = chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
-                                         rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
-                export_assembly(tmp / "assembly.step", nodes, b.design.name)
-        with progress.step("writing design.json, report.md, preview.png"):
-            data = chandelier_json(b)
-            write_json(tmp / "design.json", data)
-            preview_3d(tmp / "preview.png", b.result.chains, frame_outline(b.frame_plan),
-                       title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
-            (tmp / "report.md").write_text(chandelier_markdown(b, data), encoding="utf-8")
+            write_design(tmp, data, report_markdown(result, data))
     return data

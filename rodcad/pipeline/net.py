@@ -1,11 +1,11 @@
-"""The pipeline of a net design: a design file with a ``net:`` block in, numbers, report and
+"""The pipeline of a net: a design file with a ``net:`` block in, numbers, report and
 pictures out. It sequences the steps and owns none of them::
 
-    design.yaml + catalog -> load_design() (net: rodcad.design.net.target)   rodcad.design.loader
+    design.yaml + catalog -> load_design() (net: rodcad.design.net.target)  rodcad.design.loader
     -> hardware, lengths, mass bounds, hub masses                      rodcad.design.net.plan.plan_net
-    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.plan.design_net_plan
+    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.check.design_net_plan
     -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net.solids
-    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net*, rodcad.cad.net.solids
+    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.solids
     -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.net.print_files
 """
 
@@ -20,11 +20,11 @@ import numpy as np
 from rodcad.design.model import Design
 from rodcad.design.net.check import NetCheck, design_net_plan
 from rodcad.design.net.plan import plan_net
-from rodcad.outdir import staged_output
-from rodcad.outputs.design_json import print_profile, write_json
+from rodcad.outputs.design_json import print_profile
 from rodcad.outputs.net.design_json import net_json
 from rodcad.outputs.net.preview import plot_net
 from rodcad.outputs.net.report import net_report
+from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 
 __all__ = ["NetBuild", "build_net", "write_net_outputs"]
@@ -92,9 +92,8 @@ def build_net(design: Design, *, seed: int | None = None, cad: bool = False,
 def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
     """Write design.json, report.md and preview.png to ``outdir`` (staged: a failed run
     leaves it as it was). Returns the data written to design.json."""
-    progress = progress or Progress(quiet=True)
     d = b.design
-    with staged_output(Path(outdir)) as tmp:
+    with staged(outdir, progress) as (tmp, progress):
         files = []
         if b.solids is not None:
             from rodcad.cad.net.solids import write_net_files
@@ -151,8 +150,7 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                                               for k, h in enumerate(s.hub_splits)
                                               if h.clearance is not None and h.clearance > d.catalog.node.clearance},
                        "files": files}
-    write_json(tmp / "design.json", data)
     plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "
              "its target", tmp / "preview.png")
-    (tmp / "report.md").write_text(net_report(b.check, data, title=d.name), encoding="utf-8")
+    write_design(tmp, data, net_report(b.check, data, title=d.name))
     return data

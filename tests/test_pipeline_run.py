@@ -18,18 +18,10 @@ ROOT = Path(__file__).resolve().parents[1]
 V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
          "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
 
-CHANDELIER = """\
-design: 1
-name: two
-catalog: pla-pinned
-chandelier:
-  pattern: explicit
-  chains:
-    - anchors: [[0, 0, 0], [150, 0, 0]]
-      target: {form: arc, sag: 50}
-    - anchors: [[0, 50, 0], [0, 200, 20]]
-      target: {form: catenary, length: 220}
-"""
+#: Two chains on a frame, one of them a catenary they can reach exactly.
+CHANDELIER = ("design: 1\nname: two\ncatalog: pla-pinned\nchandelier: {pattern: explicit, chains: [\n"
+              "  {anchors: [[0, 0, 0], [150, 0, 0]], target: {form: arc, sag: 50}},\n"
+              "  {anchors: [[0, 50, 0], [0, 200, 20]], target: {form: catenary, length: 220}}]}\n")
 
 
 def _written(run: pipeline.Run) -> dict:

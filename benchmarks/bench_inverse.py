@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize import design
-from optimize.discretize import curve_distance
+from optimize.chain.curves import curve_distance
 from rodcad.catalog.loader import load_catalog
 from rodcad.design.plan import catalog_arrays, plan_chain
 from rodcad.design.targets import make_target

@@ -4,12 +4,12 @@ bent, and of the same nets straight, printing a table; with ``--cad`` also the s
 Cases (the default catalog's hubs): the lampshade and a 13 x 13 grid hung from its border,
 straight and with every rod bent 0.12 (``net.bend``); the strip of tests/test_net_bent.py bent
 0.08 and 0.12 (short rods whose buildable masses have gaps: the best fit where they do not
-reach). Each is timed from the design (rodcad.design.netplan and netcheck: hubs and rods laid
+reach). Each is timed from the design (rodcad.design.net.plan and rodcad.design.net.check: hubs and rods laid
 on the target, sockets turned, bounds narrowed to buildable masses, for a bent net the masses
 and centres of mass iterated to a fixed point, optimize.design_net, the exact equilibrium from
 the target and the multi-start). Columns: the design's error over the net's size, the largest
 centre of mass off a chord (mm), the rounds of the fixed point. With ``--cad``: the bowed
-lampshade's solids (rodcad.cad.net.build_net_solids) and the net re-solved with the solids'
+lampshade's solids (rodcad.cad.net.solids.build_net_solids) and the net re-solved with the solids'
 masses and centres of mass.
 
 Usage: python benchmarks/bench_net_bent.py [--repeat 1] [--cad]
@@ -74,7 +74,7 @@ def main(argv=None) -> int:
         if name == "lampshade, bend 0.12":
             bowed = c
     if args.cad and bowed is not None:
-        from rodcad.cad.net import build_net_solids
+        from rodcad.cad.net.solids import build_net_solids
 
         t0 = time.perf_counter()
         s = build_net_solids(bowed)

@@ -4,7 +4,7 @@ hub hardware, from the loaded design to the checked equilibrium, printing a tabl
 Cases: a 13 x 13 grid (196 nodes) on a paraboloid, 40 mm cells, anchored along its border
 (exact) and at its corners (no masses balance it: the best fit, refined); a 200-node radial
 net (8 rings of 25 spokes, a steep funnel hung from its outer ring); the three examples. Each is
-timed from the design (rodcad.design.netplan: hubs and rods laid on the target, sockets
+timed from the design (rodcad.design.net.plan: hubs and rods laid on the target, sockets
 turned so the hubs balance, masses by optimize.design_net, the exact equilibrium from the
 target and the multi-start: 8 starts up to 50 nodes, 400 / n beyond, 2 for these 200-node nets); ``rodcad build --no-cad`` adds about 2.5 s of imports
 (the catalog loader pulls in the CAD kernel) and 1 s for the files.
@@ -27,8 +27,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from rodcad.design.loader import load_design  # noqa: E402
-from rodcad.design.netcheck import design_net_plan  # noqa: E402
-from rodcad.design.netplan import plan_net  # noqa: E402
+from rodcad.design.net.check import design_net_plan  # noqa: E402
+from rodcad.design.net.plan import plan_net  # noqa: E402
 
 GRID = """design: 1
 name: grid-{anchored}

@@ -44,7 +44,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from rodcad.design.netgen import grid_layout, radial_layout  # noqa: E402
+from rodcad.design.net.layouts import grid_layout, radial_layout  # noqa: E402
 
 #: pivot-to-pivot rod lengths of the default catalog (mm) and the hubs' pivot radius (mm)
 ROD = (20.0, 60.0)
@@ -251,13 +251,13 @@ def _explicit(name: str, x: np.ndarray, edges: np.ndarray, anch: np.ndarray) -> 
 
 
 def hung_case(rng, name: str, *, hw) -> Case:
-    """A random jittered grid of the default catalog's hubs (rodcad.design.netplan: each hub's
+    """A random jittered grid of the default catalog's hubs (rodcad.design.net.plan: each hub's
     mass, centre of mass and pivots) hung with rod masses drawn inside the masses each rod can
     be built at: its hanging shape (the hubs turned as they balance), as explicit nodes and
     edges. The hubs' sockets printed as they hang and those masses reach it exactly."""
     from optimize import solve_net
     from rodcad.design.loader import load_design
-    from rodcad.design.netplan import mass_segments, plan_net
+    from rodcad.design.net.plan import mass_segments, plan_net
 
     for _ in range(100):
         u, v = int(rng.integers(2, 7)), int(rng.integers(2, 7))

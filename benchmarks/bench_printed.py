@@ -110,7 +110,7 @@ def exactness(n_chains: int, seed: int) -> list[str]:
         if same:
             err = float(np.abs(pts - eq.points).max() / span)
         else:  # another discretisation: distance of the designed joints to the given polyline
-            from optimize.discretize import curve_distance
+            from optimize.chain.curves import curve_distance
             err = float(curve_distance(eq.points, pts) / span)
         mb = np.asarray(plan.problem.mass_bounds, float)
         ms = np.asarray(d.result.masses, float)
@@ -213,7 +213,7 @@ def speed(folder: Path, jobs: int, quick: bool) -> list[str]:
     from rodcad.design.loader import load_design
     from rodcad.design.masses import design_chain
     from rodcad.design.plan import plan_constrained
-    from rodcad.pipeline import _arrays, build  # the arrays the pipeline uses
+    from rodcad.pipeline.chain import arrays_step, build  # the arrays the pipeline uses
     from rodcad.progress import Progress
 
     misses: list[str] = []
@@ -232,7 +232,7 @@ def speed(folder: Path, jobs: int, quick: bool) -> list[str]:
     try:
         designs = [load_design(_write_design(folder, f"long30-{x}", LONG_30.format(length=x)))
                    for x in LONG_30_LENGTHS]
-        arrays = _arrays(designs[0], None, Progress(quiet=True))
+        arrays = arrays_step(designs[0], None, Progress(quiet=True))
         cold = [plan_and_masses(d) for d in designs]
         runs = [c[0] for c in cold]
         med = statistics.median(runs)

@@ -11,7 +11,7 @@ Eq. 5 is called a "weighted sum" in the paper but no weights are given; every jo
 has weight 1 here, exactly as the equation is printed. ``D`` tells *which way* the
 simulated shape is off: a chain that sags too low has ``D`` pointing up (target minus
 simulated), one that sags too little has ``D`` pointing down, though both may have the
-same ``D~`` (the paper's Fig. 3b). The guided PSO (:mod:`optimize.pso`) uses it.
+same ``D~`` (the paper's Fig. 3b). The guided PSO (:mod:`optimize.chain.pso`) uses it.
 
 numpy only; never imports rodcad or build123d.
 """

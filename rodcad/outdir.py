@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["MARKER", "OutputFolderError", "check_output_folder", "staged_output", "write_atomic"]
+__all__ = ["MARKER", "OutputFolderError", "best_fit_folder", "check_output_folder", "staged_output", "write_atomic"]
 
 #: The file every output folder carries, so a later run knows it may replace the folder.
 MARKER = ".rodcad-output"
@@ -167,3 +167,9 @@ def write_atomic(path: str | os.PathLike[str], text: str, *, mode: int | None = 
         except OSError:
             pass
         raise
+
+
+def best_fit_folder(outdir: Path) -> Path:
+    """OUTDIR.best-fit, beside OUTDIR (where a design that misses its tolerance goes)."""
+    return outdir.resolve().with_name(outdir.resolve().name + ".best-fit") if not outdir.name else \
+        outdir.with_name(outdir.name + ".best-fit")

@@ -10,7 +10,7 @@ candidate counts when its free end rods lie within their bounds, each fixture's 
 chain's solution is a stable KKT point. Exponential in the chain's length: small chains only.
 
 Conventions as ``shared/design/physics.md``; an end angle is compared with its bound on the
-turn nearest the bound's middle, within half a turn (``optimize.endlimits.limit_turn``).
+turn nearest the bound's middle, within half a turn (``optimize.chain.endlimits.limit_turn``).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ equality constraint (site on site). Point masses at point nodes are merged into 
 body that carries the node in the tree (statically the same). MuJoCo then simulates the
 net with damping until it rests, and the rest state is read from the bodies.
 
-Conventions as in ``optimize.netmodel``: z up, gravity along -z; rod e joins nodes
+Conventions as in ``optimize.net.model``: z up, gravity along -z; rod e joins nodes
 edges[e] = (i, j); its centre of mass (along, perp, w) is in a frame with origin at the
 pivot at node i and x toward node j; pivots[e, k] are the rod's pivots in the frame of
 the node body at its end k (zero for point nodes).

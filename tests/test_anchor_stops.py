@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from optimize import solve_equilibrium
-from optimize.endlimits import limit_turn
-from optimize.inverse import InverseProblem
-from optimize.statics import exact_masses, statics_matrix
-from optimize.stops import needed_stop_sides
+from optimize.chain.endlimits import limit_turn
+from optimize.chain.inverse import InverseProblem
+from optimize.chain.statics import exact_masses, statics_matrix
+from optimize.chain.stops import needed_stop_sides
 from rodcad import pipeline
 from rodcad.cli import main
 from rodcad.design.loader import load_design
@@ -96,7 +96,7 @@ def test_the_heart_hangs_from_its_cusp(heart):
     pts = r.equilibrium.points
     a, b = r.design.anchors
     assert r.equilibrium.success and r.equilibrium.stable
-    from optimize.discretize import centerline
+    from optimize.chain.curves import centerline
 
     arcs = centerline(pts, np.array([r.design.catalog[nm].curvature for nm in r.type_names]))
     assert arcs[:, 1].max() > a[1] + 5.0  # lobes above the anchors (the rods, arcs over their joints)

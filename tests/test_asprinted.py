@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from optimize import solve_equilibrium
-from optimize.problem import InverseProblem
+from optimize.chain.problem import InverseProblem
 from pinhole_model import hang_built, step_holes
 from rodcad.catalog.loader import load_catalog
 from rodcad.catalog.pins import PinMenu, family_pin

@@ -129,7 +129,7 @@ def test_failed_run_leaves_outdir_as_it_was(tmp_path, monkeypatch, capsys):
     def boom(*a, **k):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr("rodcad.pipeline.plot_chain", boom)
+    monkeypatch.setattr("rodcad.pipeline.chain.plot_chain", boom)
     assert main(["build", str(ex), "-o", str(out), "--no-cad", "-q"]) == 1  # one line, no traceback
     assert "internal error (RuntimeError: disk full)" in capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == before

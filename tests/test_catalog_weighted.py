@@ -213,7 +213,7 @@ def test_heart_tip_bends_freely_and_is_a_bounded_best_fit(cat, arrays):
 
 def _hang_error(plan, result) -> float:
     """Hausdorff distance (mm) between the target curve and the hanging chain."""
-    from optimize.discretize import curve_distance
+    from optimize.chain.curves import curve_distance
 
     return curve_distance(plan.curve, result.equilibrium.points)
 

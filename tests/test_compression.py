@@ -2,7 +2,7 @@
 
 When a rigid group has to push (its angle points against its load, the other branch of
 |P_G lambda - Q_G|), the dual exchange cannot reach the equilibrium; the solver then
-descends over joint sides and group branches (:func:`optimize.branches.descend`) and
+descends over joint sides and group branches (:func:`optimize.chain.branches.descend`) and
 makes the point exact. These tests check the result against statics (KKT conditions,
 rod-by-rod balance), the second-order test, and that SLSQP was not needed. Agreement
 with MuJoCo is in ``test_equilibrium_mujoco.py``.
@@ -18,8 +18,8 @@ import pytest
 from test_equilibrium import balance_residual
 
 from optimize import solve_equilibrium
-from optimize.branches import descend
-from optimize.chain import Chain, Groups, is_stable, kkt_residual, sag_guess, violations
+from optimize.chain.branches import descend
+from optimize.chain.model import Chain, Groups, is_stable, kkt_residual, sag_guess, violations
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from bench_equilibrium import compressed_chain  # noqa: E402  (the benchmark's random chains)

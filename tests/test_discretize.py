@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from optimize.discretize import discretize
+from optimize.chain.discretize import discretize
 
 
 def _polyline(legs):
@@ -47,7 +47,7 @@ def test_vertices_at_rod_multiples_are_joints_under_round_off(legs, seed):
 
 def test_centerline_of_curved_rods_is_their_arc():
     """A rod of curvature k bulges to the right of p_i -> p_{i+1} by the sagitta of its arc."""
-    from optimize.discretize import centerline, curve_distance
+    from optimize.chain.curves import centerline, curve_distance
 
     pts = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, -30.0]])
     cl = centerline(pts, [0.02, -0.01])
@@ -98,7 +98,7 @@ def test_curved_rods_follow_the_curve(form, params, before, after):
     """Rods printed to order with the curvature of the curve between their joints: the
     centrelines follow smooth curves (the sagitta of straight chords is gone) and stay
     straight along straight sides."""
-    from optimize.discretize import centerline, curve_distance, fit_curvatures
+    from optimize.chain.curves import centerline, curve_distance, fit_curvatures
     from rodcad.design.targets import make_target
 
     curve = make_target(form, (0, 0), (200, 0), **params)
@@ -115,7 +115,7 @@ def test_curved_rods_follow_the_curve(form, params, before, after):
 def test_centerline_of_joints_further_apart_than_the_arc_allows_is_a_half_circle():
     """Pins in their holes can put a rod bent to a half circle's joints a little further apart
     than its diameter: the centreline is then the half circle on their chord, finite."""
-    from optimize.discretize import centerline
+    from optimize.chain.curves import centerline
 
     c = 20.0 + 0.2  # the joints 0.2 mm further apart than a rod of radius 10 mm allows
     cl = centerline(np.array([[0.0, 0.0], [c, 0.0]]), [0.1])

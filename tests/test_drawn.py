@@ -72,7 +72,7 @@ def _settles_back(r, rng) -> float:
     settles from it."""
     from mujoco_chain import closed_start, settle_chain
 
-    from optimize.endlimits import limit_turn
+    from optimize.chain.endlimits import limit_turn
 
     p = r.plan.problem
     a, b = r.design.anchors

@@ -20,7 +20,7 @@ from endlimits_reference import held_end_candidates
 from test_equilibrium import com_points, cross, rod_forces
 
 from optimize import find_equilibria, solve_equilibrium
-from optimize.endlimits import limit_turn
+from optimize.chain.endlimits import limit_turn
 
 G = 9.81
 

@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from optimize import find_equilibria, solve_equilibrium
-from optimize.chain import Chain, is_stable
+from optimize.chain.model import Chain, is_stable
 
 G = 9.81
 
@@ -293,7 +293,7 @@ def test_inverted_free_chain_is_unstable():
     # reversed in H; it satisfies stationarity but is a maximum
     up = -r.angles
     lam_up = complex(-lam.real, lam.imag)
-    from optimize.equilibrium import kkt_residual
+    from optimize.chain.equilibrium import kkt_residual
 
     assert kkt_residual(chain, up, lam_up, side) < 1e-9
     assert not is_stable(chain, up, lam_up, side)

@@ -1,4 +1,4 @@
-"""The free chain's fast path (optimize.free) against the general exact solver: every joint
+"""The free chain's fast path (optimize.chain.free) against the general exact solver: every joint
 and anchor pin free, seeded random chains of every shape the general solver takes (anchors
 level, sloped, B left of A, nearly one above the other, nearly taut; offset centres of mass),
 the same equilibrium to round-off; and it is the path a free chain takes."""
@@ -10,8 +10,8 @@ import pytest
 
 from optimize import solve_equilibrium
 from optimize.chain import Chain
-from optimize.equilibrium import _check_reach, _solve_exact
-from optimize.free import catenary_reaction, solve_free
+from optimize.chain.equilibrium import _check_reach, _solve_exact
+from optimize.chain.free import catenary_reaction, solve_free
 
 
 def _random_chain(rng, n):

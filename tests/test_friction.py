@@ -1,4 +1,4 @@
-"""The friction band (optimize.friction) against MuJoCo with dry friction at the pins, and
+"""The friction band (optimize.chain.friction) against MuJoCo with dry friction at the pins, and
 against the linearised model it computes exactly."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from scipy.optimize import minimize
 
 from mujoco_chain import settle_chain
 from optimize import friction_band, friction_capacity, joint_forces, solve_equilibrium
-from optimize.endlimits import limit_turn
+from optimize.chain.endlimits import limit_turn
 from test_pinplay import load_example, random_chain
 
 
@@ -106,7 +106,7 @@ def linear_rest(fb_lin, m):
 
 
 def linearised(ch, st):
-    """The linearised statics written out independently of optimize.friction."""
+    """The linearised statics written out independently of optimize.chain.friction."""
     l, m, g = ch["l"], ch["m"], 9.81
     theta, n = st.angles, l.size
     after = np.cumsum(m[::-1])[::-1] - m
@@ -193,7 +193,7 @@ def test_capacity_is_mu_force_radius():
 def test_band_past_its_work_budget_is_an_upper_bound(case, monkeypatch):
     """With no polygon searches allowed, every cell's joints take the bound of the cell's map
     over the whole box: never below the exact band, and flagged as not tight."""
-    import optimize.friction as F
+    import optimize.chain.friction as F
 
     kind, what = case
     ch = load_example(what) if kind == "example" else random_chain(what[1], what[0])

@@ -245,7 +245,7 @@ def _rested_inside(r, label):
     from the same start: every rest within the band rodcad reports, per joint, plus MuJoCo's
     settling error and the band's second-order term."""
     from mujoco_chain import settle_chain
-    from optimize.endlimits import limit_turn
+    from optimize.chain.endlimits import limit_turn
 
     t = r.tapping
     fb = r.as_printed.friction

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from optimize import solve_equilibrium
-from optimize.assign import assign_types, joint_mismatch
-from optimize.discretize import discretize
-from optimize.inverse import InverseProblem, design, statics_matrix
+from optimize.chain.assign import assign_types, joint_mismatch
+from optimize.chain.discretize import discretize
+from optimize.chain.inverse import InverseProblem, design, statics_matrix
 
 
 def reachable_problem(seed=0, n=12, com_perp=0.0):

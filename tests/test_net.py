@@ -12,9 +12,9 @@ import pytest
 from netgen import grid_net, jitter, radial_net, random_grid, random_masses
 
 from optimize import net_modes, solve_net
-from optimize.net import pivots_by_node, pivots_from_nodes
-from optimize.netderiv import assemble, evaluate, hessian, rod_frames
-from optimize.netmodel import Net, rotation_exp
+from optimize.net.solve import pivots_by_node, pivots_from_nodes
+from optimize.net.deriv import assemble, evaluate, hessian, rod_frames
+from optimize.net.model import Net, rotation_exp
 
 G = 9.81
 

@@ -1,7 +1,7 @@
 """Bent net rods (issue 27): a rod printed along an arc between its ball ends.
 
 A rod on ball joints turns freely about its chord, so its off-axis centre of mass hangs as low
-as it can (optimize.netmodel): the bow hangs in the vertical plane through the chord, below it.
+as it can (optimize.net.model): the bow hangs in the vertical plane through the chord, below it.
 Checked here: the closed-form masses and centres of mass against the B-rep; the inverse design
 of a bent net exact at a target some masses reach (the solver confirms it); MuJoCo, with each
 rod's centre of mass off its axis and free to roll, rests on the designed shape; the solids,
@@ -22,12 +22,12 @@ from netgen import random_grid
 
 from optimize import solve_net
 from rodcad.catalog.loader import catalog_from_text, load_catalog
-from rodcad.catalog.netbend import MAX_BEND, bent_rod_com, rod_arc
+from rodcad.catalog.net.bend import MAX_BEND, bent_rod_com, rod_arc
 from rodcad.cli import main
 from rodcad.design.loader import load_design
-from rodcad.design.net import NetTarget
-from rodcad.design.netcheck import design_net_plan
-from rodcad.design.netplan import fill_lengths, plan_net
+from rodcad.design.net.target import NetTarget
+from rodcad.design.net.check import design_net_plan
+from rodcad.design.net.plan import fill_lengths, plan_net
 from rodcad.errors import DesignLimit
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,7 +53,7 @@ def test_a_bent_rods_closed_form_mass_and_centre_of_mass_are_its_solids(hub_cata
     arc: the B-rep's volume and centre of mass (exact to the kernel's round-off)."""
     from build123d import CenterOf
 
-    from rodcad.cad.netbent import bent_rod_solid, bent_socket_centres
+    from rodcad.cad.net.bent import bent_rod_solid, bent_socket_centres
 
     hw = hub_catalog.node
     arc = rod_arc(hw, 70.0, bend)

@@ -15,9 +15,9 @@ from optimize import solve_net
 from rodcad.catalog.loader import catalog_from_text, load_catalog
 from rodcad.cli import main
 from rodcad.design.loader import load_design
-from rodcad.design.net import NetTarget
-from rodcad.design.netcheck import design_net_plan
-from rodcad.design.netplan import plan_net
+from rodcad.design.net.target import NetTarget
+from rodcad.design.net.check import design_net_plan
+from rodcad.design.net.plan import plan_net
 from rodcad.errors import DesignLimit
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -252,7 +252,7 @@ V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0
 
 #: V_NET built with its solids by the session's BuildStore, by the worker pool even for its 8
 #: parts (one part per worker): tests/test_netprint.py reads the same build.
-V_BUILD = {"text": V_NET, "patches": (("rodcad.cad.net", "PARTS_PER_WORKER", 1),)}
+V_BUILD = {"text": V_NET, "patches": (("rodcad.cad.net.solids", "PARTS_PER_WORKER", 1),)}
 
 
 def test_a_net_with_its_solids_hangs_as_designed(build_store):
@@ -283,7 +283,7 @@ def _hung_hub_grid(nx: int, ny: int):
     """A grid of the default catalog's hubs (55 mm cells on a bowl, held at its corners, the
     rods between anchored corners left out) hung by the solver with each rod's mid-range
     buildable mass: (catalog, the flat target, its plan, the hung result)."""
-    from rodcad.design.netplan import mass_segments
+    from rodcad.design.net.plan import mass_segments
 
     cat = load_catalog(ROOT / "catalogs" / "pla-parametric.yaml")
     w, h = 55.0 * nx, 55.0 * ny
@@ -358,8 +358,8 @@ def test_a_hub_printed_whole_writes_to_step_as_built(tmp_path):
     file re-imports as one valid solid of the volume built (a hung 5 x 3 grid's hub once came
     back one socket fuller: 6753 mm^3 for 6268, an internal error on `rodcad build`)."""
     from rodcad.cad.export import export_step, import_step
-    from rodcad.cad.net import whole_hub
-    from rodcad.cad.nethub import split_hub
+    from rodcad.cad.net.solids import whole_hub
+    from rodcad.cad.net.hub import split_hub
 
     hw = load_catalog(ROOT / "catalogs" / "pla-parametric.yaml").node
     socks = np.array([[7.22208193, 0.14052287, 1.37038984], [-0.27785853, 7.27633137, 1.00520772],

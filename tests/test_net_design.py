@@ -12,9 +12,9 @@ import pytest
 import yaml
 
 from rodcad.catalog.loader import catalog_from_text
-from rodcad.catalog.node import DEFAULT_NODE, NodeHardware, socket_centres
+from rodcad.catalog.net.node import DEFAULT_NODE, NodeHardware, socket_centres
 from rodcad.design.loader import load_design
-from rodcad.design.netgen import read_obj
+from rodcad.design.net.layouts import read_obj
 from rodcad.design.spec import design_schema
 from rodcad.errors import InputError
 

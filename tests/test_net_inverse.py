@@ -16,7 +16,7 @@ from scipy.optimize import minimize
 
 from optimize import design_net, design_net_masses, net_statics, shape_jacobian, solve_net
 from optimize.boxqp import box_qp
-from optimize.netmodel import Net
+from optimize.net.model import Net
 
 
 def _hung(seed, anchored="corners", node_mass=0.5, **kw):

@@ -111,13 +111,13 @@ def test_a_self_stressed_net_whose_least_squares_tensions_push_is_stable_and_agr
     self-stress: its statics leave tensions open. The least-squares tensions push in some
     rods, and read at them the Hessian of the Lagrangian is indefinite ("not stable": the
     design failed); tensions that pull in every rod hold the same equilibrium
-    (optimize.net.tensile_multipliers), and it is stable: MuJoCo's rest agrees."""
-    from optimize.netderiv import evaluate
-    from optimize.netmodel import Net
-    from optimize.netsolve import multipliers
+    (optimize.net.solve.tensile_multipliers), and it is stable: MuJoCo's rest agrees."""
+    from optimize.net.deriv import evaluate
+    from optimize.net.model import Net
+    from optimize.net.newton import multipliers
     from rodcad.design.loader import load_design
-    from rodcad.design.netcheck import design_net_plan
-    from rodcad.design.netplan import plan_net
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.plan import plan_net
 
     d = load_design("sector.yaml", text=SECTOR)
     c = design_net_plan(plan_net(d.net, d.catalog), seed=0)

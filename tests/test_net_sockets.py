@@ -1,4 +1,4 @@
-"""Hub sockets and rod masses balanced together (optimize.netsockets): a grid of hubs hung with
+"""Hub sockets and rod masses balanced together (optimize.net.sockets): a grid of hubs hung with
 masses it can be built at is balanced from the sockets on the lines between its node points,
 checked by the linear statics (optimize.net_statics); sockets that already balance stay."""
 
@@ -11,10 +11,10 @@ import pytest
 from netgen import grid_net
 
 from optimize import design_net_masses, net_statics, solve_net
-from optimize.netsockets import balance_sockets, socket_problem
+from optimize.net.sockets import balance_sockets, socket_problem
 from rodcad.catalog.loader import load_catalog
-from rodcad.design.net import NetTarget
-from rodcad.design.netplan import mass_segments, plan_net
+from rodcad.design.net.target import NetTarget
+from rodcad.design.net.plan import mass_segments, plan_net
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -110,7 +110,7 @@ def test_prusaslicer_slices_one_rod_file_alone_at_its_designed_plastic_with_its_
     # layer's height: no z lift) may pass over one until its top is printed over
     import numpy as np
 
-    from rodcad.cad.net import ball_positions
+    from rodcad.cad.net.solids import ball_positions
 
     assert "; avoid_crossing_perimeters = 1" in gcode
     v = np.array(model_vertices(out / "rods" / f"{stem}.3mf")[stem])
@@ -140,7 +140,7 @@ def _hub(directions, tilt: float):
     alternately +-``tilt`` rad), its sockets' centres, and the hardware."""
     import numpy as np
 
-    from rodcad.cad.net import hub_solid
+    from rodcad.cad.net.solids import hub_solid
 
     hw = load_catalog("pla-parametric").node
     d = np.array([[math.cos(a) * math.cos(t), math.sin(a) * math.cos(t), math.sin(t)]
@@ -151,8 +151,8 @@ def _hub(directions, tilt: float):
 
 def _volume(shape) -> float:
     """Volume of a boolean's result (None, a shape or a list of shapes), mm^3, integrated to
-    1e-9 (:func:`rodcad.cad.nethub.precise_volume`)."""
-    from rodcad.cad.nethub import precise_volume
+    1e-9 (:func:`rodcad.cad.net.hub.precise_volume`)."""
+    from rodcad.cad.net.hub import precise_volume
 
     if shape is None:
         return 0.0
@@ -167,7 +167,7 @@ def test_a_hub_splits_into_two_valid_halves_that_make_it_up_and_take_every_ball(
     import numpy as np
     from build123d import Plane, Solid
 
-    from rodcad.cad.nethub import precise_volume, split_hub
+    from rodcad.cad.net.hub import precise_volume, split_hub
 
     hub, socks, hw = _hub(directions, 0.05)
     sp = split_hub(hub, socks, hw, "hub-000")
@@ -193,7 +193,7 @@ def test_a_hub_splits_into_two_valid_halves_that_make_it_up_and_take_every_ball(
 
 
 def test_a_hub_whose_sockets_lie_far_off_any_plane_is_left_whole_with_the_reason():
-    from rodcad.cad.nethub import split_hub
+    from rodcad.cad.net.hub import split_hub
 
     hub, socks, hw = _hub((0.0, math.pi / 2, math.pi, 3 * math.pi / 2), 0.3)  # 2.1 mm up and down
     sp = split_hub(hub, socks, hw, "hub-000")
@@ -209,8 +209,8 @@ def test_a_hub_whose_sockets_lie_a_little_off_a_plane_gets_wider_sockets_and_spl
     its pivot), and the hub splits into two valid halves that make it up."""
     import numpy as np
 
-    from rodcad.cad.net import hub_solid
-    from rodcad.cad.nethub import MARGIN, MAX_CLEARANCE, split_hub, split_plane, splittable_sockets
+    from rodcad.cad.net.solids import hub_solid
+    from rodcad.cad.net.hub import MARGIN, MAX_CLEARANCE, split_hub, split_plane, splittable_sockets
 
     _, socks, hw = _hub((0.0, math.pi / 2, math.pi, 3 * math.pi / 2), tilt)
     pivots = socks / np.linalg.norm(socks, axis=1, keepdims=True) * hw.pivot_radius  # pulled outward
@@ -248,13 +248,13 @@ def test_an_as_built_net_the_solver_stops_short_on_is_read_there_or_said_to_be_r
     import numpy as np
 
     import optimize
-    import rodcad.netpipeline as npl
-    from rodcad.cad.net import AS_BUILT_KKT
+    import rodcad.pipeline.net as npl
+    from rodcad.cad.net.solids import AS_BUILT_KKT
     from rodcad.design.loader import load_design
 
     real = optimize.solve_net
 
-    def stalled(*args, **kw):  # the as-built call only (the design's solver is optimize.net's)
+    def stalled(*args, **kw):  # the as-built call only (the design's solver is optimize.net.solve's)
         res = real(*args, **kw)
         return dataclasses.replace(res, success=False, stable=False, status=1, kkt_residual=0.1 * AS_BUILT_KKT,
                                    message="Iteration limit reached before the KKT conditions held.")

@@ -1,5 +1,5 @@
-"""Pins in their holes (optimize.pinplay) and the compensation for their play
-(optimize.compensate), against an independent model and against invariants.
+"""Pins in their holes (optimize.chain.pinplay) and the compensation for their play
+(optimize.chain.compensate), against an independent model and against invariants.
 
 The independent model (tests/pinhole_model.py) shares no code with optimize: every pin a
 free point, every hole a disc of radius c/2 its centre must stay inside, rods rigid, the
@@ -55,7 +55,7 @@ def reference(ch, spacings, com, lim, ends, c):
     start = st.points[:-1] + half[:-1, None] * np.column_stack([np.cos(theta), np.sin(theta)])
     windows = None
     if ends is not None:  # the anchor stops on the turn the start is on; one bound allows
-        windows = ends.copy()  # the half turn on its side (optimize.endlimits.limit_turn)
+        windows = ends.copy()  # the half turn on its side (optimize.chain.endlimits.limit_turn)
         for e, t in ((0, theta[0]), (1, theta[-1])):
             lo, hi = windows[e]
             if np.isinf(lo) and np.isinf(hi):

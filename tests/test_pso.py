@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from optimize.pso import (
+from optimize.chain.pso import (
     BETTER,
     MESSAGES,
     NEITHER,
@@ -368,7 +368,7 @@ def test_both_modes_converge_on_the_deviation_aware_toy(n):
 
 
 def test_modules_import_only_numpy_and_stdlib():
-    tree = ast.parse(Path(__file__).parents[1].joinpath("optimize", "pso.py").read_text())
+    tree = ast.parse(Path(__file__).parents[1].joinpath("optimize", "chain", "pso.py").read_text())
     names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
     names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
     assert names <= {"__future__", "math", "time", "dataclasses", "typing", "numpy"}, names

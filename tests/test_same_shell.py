@@ -61,7 +61,7 @@ def test_every_rod_gets_one_shell(arrays):
     chords = np.hypot(*np.diff(pts, axis=0).T)
     assert np.ptp(chords) < 1e-6 and np.allclose(pts[[0, -1]], curve[[0, -1]])
     # the one curvature: the mean of the fitted ones (not clipped here)
-    from optimize.discretize import fit_curvatures
+    from optimize.chain.curves import fit_curvatures
     assert plan.rods[0].geometry.curvature == pytest.approx(float(np.mean(fit_curvatures(curve, pts))), abs=1e-9)
     assert any("one shell" in n and "only inside" in n for n in plan.notes), plan.notes
 

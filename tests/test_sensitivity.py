@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from optimize import solve_equilibrium
-from optimize.equilibrium import Chain
-from optimize.sensitivity import shape_jacobian
+from optimize.chain.equilibrium import Chain
+from optimize.chain.sensitivity import shape_jacobian
 
 
 def fd_jacobian(l, m, a, b, com, lim, h=1e-6, end_limits=None):

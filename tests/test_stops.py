@@ -1,6 +1,6 @@
 """Stops where the masses cannot hold a target: which joints need them
-(:func:`optimize.stops.needed_stops`), moving the joints onto the stop angles
-(:func:`optimize.discretize.refit`), choosing the types (``assign_types(need_stop=)``),
+(:func:`optimize.chain.stops.needed_stops`), moving the joints onto the stop angles
+(:func:`optimize.chain.discretize.refit`), choosing the types (``assign_types(need_stop=)``),
 and the resulting design checked against MuJoCo."""
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from optimize import InverseProblem, design, solve_equilibrium
-from optimize.assign import assign_types
-from optimize.discretize import discretize, refit
-from optimize.statics import exact_masses
-from optimize.stops import needed_stops
+from optimize.chain.assign import assign_types
+from optimize.chain.discretize import discretize, refit
+from optimize.chain.statics import exact_masses
+from optimize.chain.stops import needed_stops
 
 A, B = np.array([0.0, 0.0]), np.array([200.0, 0.0])
 FREE = np.radians([-110.0, 110.0])

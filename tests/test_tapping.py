@@ -26,7 +26,7 @@ import pytest
 
 from optimize import friction_band, friction_capacity, solve_equilibrium
 from optimize.chain import Chain
-from optimize.endlimits import limit_turn
+from optimize.chain.endlimits import limit_turn
 from rodcad.design.tapping import band_scale, tap_chain
 from test_pinplay import load_example, random_chain
 

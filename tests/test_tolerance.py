@@ -1,4 +1,4 @@
-"""The mass tolerance band (optimize.tolerance) against a Monte Carlo of the nonlinear solver."""
+"""The mass tolerance band (optimize.chain.tolerance) against a Monte Carlo of the nonlinear solver."""
 
 from __future__ import annotations
 

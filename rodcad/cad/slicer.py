@@ -173,7 +173,7 @@ def slicer_config(profile: Mapping[str, Any] | PrintProfile | None = None, print
 
     ``pauses``: the project pauses to insert parts (steel balls, shot). Its travel moves then
     stay over the printed layer (``avoid_crossing_perimeters``): a net rod's steel ball stands
-    up to 2.9 mm above the layer it went in at (:mod:`rodcad.cad.netprint`), and straight
+    up to 2.9 mm above the layer it went in at (:mod:`rodcad.cad.net.print_files`), and straight
     travel at the layer's height (no z lift) crossed the balls a hundred times before their
     tops were covered (a 2-ball rod sliced by PrusaSlicer 2.5); over the layer, never."""
     p = PrintProfile.from_mapping(profile)

@@ -240,7 +240,7 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
                             f"{format_number(nozzle)} mm nozzle: the layers would not bond")
     node = None
     if types and v.ok("node", schema_failed):
-        from rodcad.catalog.node import node_hardware
+        from rodcad.catalog.net.node import node_hardware
 
         node = node_hardware(data.get("node") or {}, types[0], v)
     pins = None

@@ -296,8 +296,8 @@ def _partial(spec: Any) -> Any:
 
 def node_spec() -> Obj:
     """Spec of a catalog's ``node`` block: the hardware at a net's nodes (see
-    :mod:`rodcad.catalog.node`; unset keys take :data:`rodcad.catalog.node.DEFAULT_NODE`)."""
-    from rodcad.catalog.node import DEFAULT_NODE, NODE_KINDS
+    :mod:`rodcad.catalog.net.node`; unset keys take :data:`rodcad.catalog.net.node.DEFAULT_NODE`)."""
+    from rodcad.catalog.net.node import DEFAULT_NODE, NODE_KINDS
 
     d = DEFAULT_NODE
     mm = dict(exclusive_minimum=0, maximum=200, unit="mm")

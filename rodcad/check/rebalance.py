@@ -1,7 +1,7 @@
 """``rodcad check --rebalance``: keep the edited rods as they are, re-design the others'
 masses so the chain hangs on its target again, and build them.
 
-At the target the statics are linear in the masses (:mod:`optimize.statics`), so this is
+At the target the statics are linear in the masses (:mod:`optimize.chain.statics`), so this is
 the build's inverse design again (:func:`rodcad.design.masses.design_buildable`: the
 design's method, then every mass moved onto one its rod can really be built at), on the
 same target joints, lengths and joint limits, with:
@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize import METHODS, EquilibriumResult, InverseProblem, shape_distance
-from optimize.discretize import Discretization
+from optimize.chain.discretize import Discretization
 from optimize.distance import ShapeDistance
 from rodcad.cad.rods import FabricatedRod, fabricate_chain
 from rodcad.check.recheck import CheckResult, simulate, with_hardware

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from optimize import shape_distance
-from optimize.discretize import centerline
+from optimize.chain.curves import centerline
 from rodcad.design.asprinted import hole_frame
 from rodcad.cad.export import export_assembly
 from rodcad.cad.printfile import write_print_files

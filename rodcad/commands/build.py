@@ -20,7 +20,7 @@ from pathlib import Path
 from rodcad.design.loader import load_design
 from rodcad.design.model import METHOD_NAMES
 from rodcad.errors import InputError, Problem
-from rodcad.outdir import OutputFolderError, check_output_folder
+from rodcad.outdir import OutputFolderError, best_fit_folder, check_output_folder
 from rodcad.progress import Progress
 
 __all__ = ["register", "run"]
@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     design = load_design(args.design)
     outdir = Path(args.outdir) if args.outdir else Path("outputs") / design.name
     problems = []
-    for folder in (outdir, _best_fit(outdir)):  # before any work: never replace what rodcad did not write
+    for folder in (outdir, best_fit_folder(outdir)):  # before any work: never replace what rodcad did not write
         try:
             check_output_folder(folder)
         except (OutputFolderError, ValueError) as err:
@@ -60,47 +60,33 @@ def run(args: argparse.Namespace) -> int:
     if args.seed is not None and args.seed < 0:
         print("rodcad: --seed must be 0 or more", file=sys.stderr)
         return 2
-    if design.chandelier is not None:
-        return _chandelier(design, outdir, args, progress)
-    if design.net is not None:
-        return _net(design, outdir, args, progress)
     from rodcad import pipeline
+
+    written = pipeline.run(design, outdir, cad=False if args.no_cad else None, method=args.method,
+                           seed=args.seed, jobs=args.jobs, progress=progress)
+    return _REPORTS[written.kind](written, design, outdir)
+
+
+def _chain(written, design, outdir: Path) -> int:
     from rodcad.outputs.report import summary_text
 
-    result = pipeline.build(design, method=args.method, seed=args.seed,
-                            cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
-    code = 0
-    target = outdir
-    if not result.ok:
-        target = _best_fit(outdir)
-        code = 1
-    pipeline.write_outputs(result, target, progress=progress)
+    result, target = written.result, written.outdir
     print(summary_text(result, target))
     if not result.meets_tolerance:
         print(f"rodcad: {design.name} {result.limit()}; {outdir} left as it was, the best fit is in {target}",
               file=sys.stderr)
-    elif code:
+    elif not written.ok:
         print("rodcad: the anchor fixture is not fit to print: " + "; ".join(result.fixture_problems)
               + f"; {outdir} left as it was, the design and its fixture are in {target}", file=sys.stderr)
-    return code
+    return 0 if written.ok else 1
 
 
-def _best_fit(outdir: Path) -> Path:
-    """OUTDIR.best-fit, beside OUTDIR (where a design that misses its tolerance goes)."""
-    return outdir.resolve().with_name(outdir.resolve().name + ".best-fit") if not outdir.name else \
-        outdir.with_name(outdir.name + ".best-fit")
-
-
-def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
-    from rodcad import pipeline
+def _chandelier(written, design, outdir: Path) -> int:
     from rodcad.outputs.report import chandelier_summary
 
-    b = pipeline.build_chandelier(design, method=args.method, seed=args.seed,
-                                  cad=False if args.no_cad else None, jobs=args.jobs, progress=progress)
-    target = outdir if b.meets_tolerance else _best_fit(outdir)
-    pipeline.write_chandelier_outputs(b, target, progress=progress)
+    b, target = written.result, written.outdir
     print(chandelier_summary(b, target))
-    if target != outdir:
+    if not written.ok:
         tol = design.tolerance if design.tolerance is not None else 0.01
         off = [f"{ch.name} hangs {100 * f:.3g} % of its size off its curve" for ch, f in zip(b.result.chains, b.fits)
                if f > tol]
@@ -110,13 +96,10 @@ def _chandelier(design, outdir: Path, args: argparse.Namespace, progress: Progre
     return 0
 
 
-def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> int:
-    from rodcad.netpipeline import build_net, write_net_outputs
-    from rodcad.outputs.netreport import net_summary
+def _net(written, design, outdir: Path) -> int:
+    from rodcad.outputs.net.report import net_summary
 
-    b = build_net(design, seed=args.seed, cad=not args.no_cad and design.cad, progress=progress)
-    target = outdir if b.ok else _best_fit(outdir)
-    write_net_outputs(b, target, progress=progress)
+    b, target = written.result, written.outdir
     print(net_summary(b.check, target))
     unsolved = b.solids is not None and math.isnan(b.solids.rel_size)  # rodcad's solver, not the design
     if b.solids is not None and not unsolved:
@@ -140,3 +123,7 @@ def _net(design, outdir: Path, args: argparse.Namespace, progress: Progress) -> 
               f"design and its solids are in {target}", file=sys.stderr)
         return 1
     return 0
+
+
+#: What the command prints and returns after :func:`rodcad.pipeline.run`, per kind.
+_REPORTS = {"chain": _chain, "chandelier": _chandelier, "net": _net}

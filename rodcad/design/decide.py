@@ -17,9 +17,9 @@ of:
 
 The loop: (1) the forced choices (straight, concave and too-sharp bends); (2) the fewest
 further stops and anchor stops that let the masses balance the target within their ranges
-(a linear program, :func:`optimize.stops.needed_stop_sides`); (3) the masses
-(:func:`optimize.statics.exact_masses`); (4) the verdict of the solver
-(:func:`optimize.verify.verify`): the equilibrium reached from the designed state must be
+(a linear program, :func:`optimize.chain.stops.needed_stop_sides`); (3) the masses
+(:func:`optimize.chain.statics.exact_masses`); (4) the verdict of the solver
+(:func:`optimize.chain.verify.verify`): the equilibrium reached from the designed state must be
 the target and stable, and no other stable shape the multi-start finds may lie lower; (5)
 where it fails, the joints where the chain goes instead are held both ways (two-sided
 stops, or fused where no stop can be printed) and the loop starts again. Each round holds
@@ -35,10 +35,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optimize.inverse import design
-from optimize.statics import exact_masses
-from optimize.stops import needed_stop_sides
-from optimize.verify import Verdict, verify
+from optimize.chain.inverse import design
+from optimize.chain.statics import exact_masses
+from optimize.chain.stops import needed_stop_sides
+from optimize.chain.verify import Verdict, verify
 from rodcad.catalog.model import Catalog
 from rodcad.design.asprinted import Robust, joint_bands, narrower, too_wide
 from rodcad.design.laying import (HI, LO, LOCK, Laid, PrintedFamily, end_limits_for, free_limits, graduate,

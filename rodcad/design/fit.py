@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.discretize import centerline, curve_distance
-from optimize.endlimits import limit_turn
+from optimize.chain.curves import centerline, curve_distance
+from optimize.chain.endlimits import limit_turn
 from rodcad.design.shell import curve_size
 
 __all__ = ["DEFAULT_TOLERANCE", "curve_fit", "fit_limit"]

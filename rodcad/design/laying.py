@@ -110,8 +110,8 @@ HI, LO, LOCK = -1, 1, 0
 
 def end_limits_for(points: np.ndarray, ends: dict[int, int], given: np.ndarray | None = None) -> np.ndarray | None:
     """Bounds on the end rods' angles (rad) for anchor stops at their target angles: ``ends``
-    maps 0 (A) / 1 (B) to the side of :func:`optimize.stops.needed_stop_sides` (HI or LO,
-    in the anchor's bend, :func:`optimize.statics.extended_bends`); ``given`` (2, 2): the
+    maps 0 (A) / 1 (B) to the side of :func:`optimize.chain.stops.needed_stop_sides` (HI or LO,
+    in the anchor's bend, :func:`optimize.chain.statics.extended_bends`); ``given`` (2, 2): the
     design's own bounds, kept where no stop is added."""
     out = np.full((2, 2), [-np.inf, np.inf]) if given is None else np.array(given, float)
     d = np.diff(points, axis=0)

@@ -95,7 +95,7 @@ def load_design(path: str | Path, *, text: str | None = None) -> Design:
                 v.report_at(key, f"a net design takes no {key!r}: its nodes, rods and anchored nodes are "
                             "in the 'net' block")
         if v.ok("net", schema_ok):
-            from rodcad.design.net import net_target
+            from rodcad.design.net.target import net_target
 
             net = net_target(data["net"], v, path.parent)
         anchors = np.array([[0.0, 0.0], [1.0, 0.0]])  # unused for a net

@@ -272,8 +272,8 @@ def design_buildable(
     """
     import time
 
-    from optimize.inverse import finish_result
-    from optimize.statics import statics_residual
+    from optimize.chain.inverse import finish_result
+    from optimize.chain.statics import statics_residual
 
     if strategy not in SNAP_STRATEGIES:
         raise ValueError(f"strategy must be one of {', '.join(SNAP_STRATEGIES)}; got {strategy!r}")

@@ -73,7 +73,7 @@ ANCHOR_STOP_MODES = ("auto", "none")
 FUSE_MODES = ("auto", "never", "none", "stops")
 
 
-#: Inverse-design methods (mirrors optimize.inverse.METHODS).
+#: Inverse-design methods (mirrors optimize.chain.inverse.METHODS).
 METHOD_NAMES = ("exact", "refine", "guided-pso", "pso")
 
 
@@ -225,7 +225,7 @@ class Design:
     chandelier: ChandelierSpec | None = None
     placements: list[Any] | None = None
     chain_targets: list[dict[str, Any]] | None = None
-    net: Any = None  # rodcad.design.net.NetTarget for a net design (three or more rods at a joint)
+    net: Any = None  # rodcad.design.net.target.NetTarget for a net design (three or more rods at a joint)
 
     @property
     def span(self) -> float:

@@ -24,8 +24,8 @@ from functools import cached_property
 import numpy as np
 
 from optimize import InverseProblem, design
-from optimize.assign import assign_types, joint_mismatch
-from optimize.discretize import Discretization, discretize
+from optimize.chain.assign import assign_types, joint_mismatch
+from optimize.chain.discretize import Discretization, discretize
 from rodcad.catalog.limits import all_pair_limits
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, RodType
@@ -59,7 +59,7 @@ class ChainPlan:
             the joints where the target bend is possible with the chosen pair (0 = all met).
         notes: what the plan could not do, in words.
         joint_mismatch: (N-1,) per joint mismatch in radians (see
-            :func:`optimize.assign.joint_mismatch`); inf where the chosen pair cannot hold
+            :func:`optimize.chain.assign.joint_mismatch`); inf where the chosen pair cannot hold
             the target bend at all.
         unmet_joints: joints whose target bend no allowed pair of types can hold (a straight
             or concave bend with no stop there, or a bend beyond every limit).
@@ -70,7 +70,7 @@ class ChainPlan:
         rods: the rods made to order (rods printed to order), in chain order; empty for a
             catalog's fixed menu.
         fused: rods printed as one rigid piece, (first, last) rod indices.
-        verified: (masses, :class:`optimize.verify.Verdict`) the planner checked for this
+        verified: (masses, :class:`optimize.chain.verify.Verdict`) the planner checked for this
             very problem, or None.
     """
 
@@ -273,7 +273,7 @@ def _make_plan(curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
 def _fit_error(plan: ChainPlan) -> tuple[float, object]:
     """Hausdorff distance (mm) between the target curve and the chain hanging with the
     masses ``refine`` chooses for the plan, and that result."""
-    from optimize.discretize import curve_distance
+    from optimize.chain.curves import curve_distance
 
     r = design(plan.problem, "refine")
     return curve_distance(plan.curve, r.equilibrium.points), r
@@ -283,19 +283,19 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
                        rounds: int = 2) -> ChainPlan:
     """Where fabrication bounds keep the masses from holding a sagging target, rest joints
     on stops at their (positive) bends and move the joints onto the stop angles
-    (:func:`optimize.discretize.refit`); keep the result when the chain then hangs
+    (:func:`optimize.chain.discretize.refit`); keep the result when the chain then hangs
     closer to the curve than the plan without them.
 
     A joint is a candidate when some allowed pair of types stops within
     :data:`STOP_REACH` of its bend. Each round tries three sets of stops: the
-    fewest that let the masses hold the target (:func:`optimize.stops.needed_stops`),
+    fewest that let the masses hold the target (:func:`optimize.chain.stops.needed_stops`),
     every candidate, and the near-straight candidates (bending less than the reach) that
     a pair can hold straight, held straight; the best is scored by the Hausdorff distance
     between the curve and the chain hanging with the masses ``refine`` gives it.
     """
-    from optimize.discretize import refit
-    from optimize.statics import exact_masses
-    from optimize.stops import needed_stops
+    from optimize.chain.discretize import refit
+    from optimize.chain.statics import exact_masses
+    from optimize.chain.stops import needed_stops
 
     if exact_masses(plan.problem)[2]:
         return plan  # the masses alone hold the target

@@ -10,7 +10,7 @@ ends and (next, :mod:`rodcad.design.masses`) mass.
       -> stops                   concave and straight bends need a stop; where the masses
                                  cannot hold a sagging bend within their ranges, the fewest
                                  stops that let them (a linear program,
-                                 :func:`optimize.stops.needed_stops`), each printed at the
+                                 :func:`optimize.chain.stops.needed_stops`), each printed at the
                                  bend it holds: two flush ends whose chamfers add up to it
       -> the inverse problem     centres of mass, mass ranges and joint limits of these
                                  very rods (:mod:`rodcad.catalog.printed`, no B-rep search)
@@ -29,7 +29,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from optimize import InverseProblem
-from optimize.discretize import discretize, fit_curvatures
+from optimize.chain.discretize import discretize
+from optimize.chain.curves import fit_curvatures
 from rodcad.catalog.model import Catalog, RodType, max_curvature
 from rodcad.design.decide import Allowed, decide
 from rodcad.design.laying import HI, LO, LOCK, PrintedFamily, STOP_SNAP_DEG
@@ -54,7 +55,7 @@ class PrintedPlan:
         fused: rods printed as one rigid piece, as (first, last) rod indices: the joints
             between them are fused (a limits row with lo == hi at the bend).
         verified: (masses, verdict) the planner checked with the solver
-            (:func:`optimize.verify.verify`), or None: the mass design reuses the verdict
+            (:func:`optimize.chain.verify.verify`), or None: the mass design reuses the verdict
             when it chooses the same masses for the same problem.
     """
 
@@ -265,7 +266,7 @@ def fused_pieces(joints: Sequence[int], points: np.ndarray, curvature: np.ndarra
         (pieces, too_big): the pieces that fit, and the runs left on stops because even two
         rods of them do not fit.
     """
-    from optimize.discretize import centerline
+    from optimize.chain.curves import centerline
 
     runs: list[list[int]] = []
     for j in joints:
@@ -305,7 +306,7 @@ def count_for(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, rods: int,
               same_shell: bool = False, **kw):
     """A plan with exactly ``rods`` rods, or None: the preferred length is set so that the
     curve takes that many (then nudged); ``kw`` as :func:`plan_printed`'s."""
-    from optimize.discretize import resample
+    from optimize.chain.curves import resample
 
     c = resample(np.asarray(curve, float), 2000)
     total = float(np.sum(np.hypot(*np.diff(c, axis=0).T)))

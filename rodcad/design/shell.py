@@ -16,7 +16,8 @@ import math
 
 import numpy as np
 
-from optimize.discretize import centerline, curve_distance, discretize, find_corners, fit_curvatures
+from optimize.chain.discretize import discretize, find_corners
+from optimize.chain.curves import centerline, curve_distance, fit_curvatures
 from rodcad.catalog.model import max_curvature
 
 __all__ = ["CORNER_TOL", "FOLLOW_REL", "TRIES", "ShellError", "curve_size", "most_faithful", "one_shell"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from rodcad.design.model import ANCHOR_STOP_MODES, DEFAULT_CATALOG, FUSE_MODES, DESIGN_FORMAT, JOINT_MODES, METHOD_NAMES
-from rodcad.design.netspec import net_spec
+from rodcad.design.net.spec import net_spec
 from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, Str
 
 #: Longest design, catalog or family name (it names folders and files).

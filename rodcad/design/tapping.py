@@ -69,7 +69,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from optimize.chain import Chain
-from optimize.endlimits import limit_turn
+from optimize.chain.endlimits import limit_turn
 
 __all__ = ["BandScale", "STRENGTH", "TapResult", "band_scale", "slowest_mode", "tap_chain"]
 

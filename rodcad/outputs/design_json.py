@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from optimize.discretize import centerline, curve_distance
+from optimize.chain.curves import centerline, curve_distance
 from rodcad import __version__
 from rodcad.catalog.massrange import mass_info
 from rodcad.catalog.model import Catalog, EndShape, RodType

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from optimize.discretize import centerline, curve_distance
+from optimize.chain.curves import centerline, curve_distance
 from rodcad.outputs.printed import draw_bands
 
 __all__ = ['draw_rods', 'finish_figure', 'fit_title', 'plot_chain']

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from optimize.discretize import centerline, curve_distance
+from optimize.chain.curves import centerline, curve_distance
 from rodcad.design.asprinted import AsPrinted, hole_frame
 from rodcad.design.shell import curve_size
 

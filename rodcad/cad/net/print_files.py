@@ -1,0 +1,142 @@
+"""A net's print files: every part a user prints (rods and hub parts) in PrusaSlicer
+projects, through the chains' code (:mod:`rodcad.cad.printfile`): print.3mf (print-2.3mf,
+... when one bed is not enough: plates split by the printer's bed only), rods/rod-NNN.3mf
+and hubs/<part>.3mf, each with the catalog's print profile (100 % infill) and a pause
+(M601, its message naming the rods) at every layer where steel balls go into a rod.
+
+Orientation. A rod lies along the bed's x axis on its round body (its axis ``rod_diameter
+/ 2`` above the bed); its end balls (narrower than the body) and the underside of the body
+need support from the bed (``support_material`` on for the rod, on the build plate only, so
+none is printed inside its cavity or ball sockets). A hub half lies on its flat cut face
+(:mod:`rodcad.cad.net.hub`); a hub left whole (its sockets off every plane) on support. A bent
+rod (:mod:`rodcad.cad.net.bent`) is turned a quarter turn about its chord so that its arc lies
+flat on the bed (:data:`FLAT_ARC`), its steel balls' centres at its axis's height as on a straight rod.
+
+Steel balls. A rod's ball sockets are spheres on its axis (the mass model's,
+:meth:`rodcad.catalog.net.node.NodeHardware.rod_numbers`). A sphere only lets its ball in near
+its widest section, so the print pauses before the layer sliced at the sockets' centres'
+height (the print then stands within half a layer of it, where the opening is
+``2 sqrt(rs^2 - (h/2)^2)`` across, wider than the ball for a 0.2 mm layer); the ball lies in
+the lower half and the upper half of the socket prints over it, the ball carrying the
+overhang. At the pause the ball stands up to ``d - rs`` (about 2.9 mm) above the print: the
+projects keep travel over the printed layer (``avoid_crossing_perimeters``,
+:func:`rodcad.cad.slicer.slicer_config`), never across a ball, and in the next layers the
+nozzle prints each socket's wall within about ``clearance / 2`` of the ball's side: a ball
+seated off-centre can be touched; the rod's socket is round because
+a flat-roofed silo (the chains' socket) does not fit inside a 9 mm round rod with its walls.
+
+Units: mm, g.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from rodcad.cad.net.solids import ball_positions
+from rodcad.cad.net.bent import bent_socket_centres
+from rodcad.cad.printfile import write_print_files
+
+__all__ = ["NetPrintPart", "net_print_parts", "write_net_print_files"]
+
+#: A bent rod's print matrix: a quarter turn about x, its arc (in the rod frame's xz plane,
+#: bowing toward -z) into the bed's plane, its balls' centres at its axis's height.
+FLAT_ARC = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+#: What a rod asks of PrusaSlicer besides support (per object).
+ROD_SETTINGS = {"support_material_buildplate_only": "1"}
+
+
+@dataclass
+class NetPrintPart:
+    """One printed part of a net as :mod:`rodcad.cad.printfile` takes it (the attributes a
+    :class:`rodcad.cad.rods.FabricatedRod` has that plates and pauses read).
+
+    Attributes:
+        index: its place on the plates' order (rods first, then hub parts).
+        solid: the part in its own frame (build123d ``Solid``).
+        plastic_volume: the solid's volume (mm^3).
+        print_matrix: 4x4 placing the solid on the bed (mm).
+        file_stem: 'rod-003', 'hub-002-a', ...
+        print_folder: 'rods' or 'hubs' (its own project's folder).
+        print_tag: its tag in pause messages ('003' for rod 3).
+        socket_roofs: the heights (after ``print_matrix``) to pause just before, one per
+            steel ball: the sockets' centres (mm).
+        ball_count, ball_diameter, ball_name: its steel balls.
+        print_note: how it prints ('' without support).
+        print_settings: PrusaSlicer per-object settings.
+    """
+
+    index: int
+    solid: object
+    plastic_volume: float
+    print_matrix: np.ndarray
+    file_stem: str
+    print_folder: str
+    print_tag: str = ""
+    socket_roofs: tuple = ()
+    ball_count: int = 0
+    ball_diameter: float | None = None
+    ball_name: str = ""
+    print_note: str = ""
+    print_settings: dict = field(default_factory=dict)
+    socket_centers: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    socket_radius: float = 0.0
+    socket_height: float = 0.0
+    pause_zs: tuple = ()
+    fill_mass: float = 0.0
+
+
+def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]:
+    """Every part of a built net to print: its rods (lying along x on their body) and its
+    hub parts (``solids.hub_parts`` when the hubs are split, each on its flat face by its
+    own print matrix, :mod:`rodcad.cad.net.hub`; a hub left whole on support).
+
+    Args:
+        check: the designed net (:class:`rodcad.design.net.check.NetCheck`).
+        solids: its solids (:class:`rodcad.cad.net.solids.NetSolids`).
+        ball_name: the steel balls' name in pause messages.
+    """
+    plan = check.plan
+    hw = plan.hardware
+    parts = []
+    arcs = plan.arcs
+    for e, s in enumerate(solids.rods):
+        k = int(solids.rod_balls[e]) if solids.rod_balls else 0
+        if arcs[e] is None:
+            centres = np.column_stack([ball_positions(hw, float(plan.lengths[e]), k), np.zeros((k, 2))])
+            matrix, note = np.eye(4), "lies on its round body along x"
+        else:  # turned about x so that its arc lies in the bed's plane (the bow toward +y)
+            centres = bent_socket_centres(hw, arcs[e], k)
+            matrix, note = FLAT_ARC.copy(), "lies on its round body, its arc flat on the bed"
+        parts.append(NetPrintPart(
+            e, s, float(s.volume), matrix, s.label, "rods", f"{e:03d}",
+            socket_roofs=tuple(0.0 for _ in range(k)), ball_count=k,
+            ball_diameter=float(hw.insert_diameter) if k else None, ball_name=ball_name if k else "",
+            print_note=f"{note}: support from the bed under the body and the end balls",
+            print_settings=dict(ROD_SETTINGS),
+            socket_centers=centres if k else np.zeros((0, 3)),
+            socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0))
+    hub_parts = solids.hub_parts if solids.hub_splits else [(s, np.eye(4), True) for s in solids.hubs]
+    for i, (s, matrix, needs_support) in enumerate(hub_parts):
+        parts.append(NetPrintPart(
+            len(solids.rods) + i, s, float(s.volume), np.asarray(matrix, float), s.label, "hubs",
+            print_note=("a sphere: support from the bed" if needs_support else ""),
+            print_settings=dict(ROD_SETTINGS) if needs_support else {}))
+    return parts
+
+
+def write_net_print_files(check, solids, outdir: str | Path, *, printer=None, profile=None,
+                          ball_name: str = "") -> list[str]:
+    """print.3mf (and print-2.3mf, ...), rods/rod-NNN.3mf and hubs/<part>.3mf of a built net
+    (:func:`rodcad.cad.printfile.write_print_files`).
+
+    Returns:
+        The files written, relative to ``outdir``.
+    """
+    outdir = Path(outdir)
+    parts = net_print_parts(check, solids, ball_name=ball_name)
+    paths = write_print_files(parts, outdir, printer=printer, profile=profile)
+    return [str(Path(p).relative_to(outdir)) for p in paths]

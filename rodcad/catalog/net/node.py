@@ -1,0 +1,355 @@
+"""Node hardware of a net and its rods, as numbers (no CAD): geometry, masses, free play.
+
+A net's node joins three or more rods, each free to turn in every direction. Two kinds:
+
+* ``hub`` (the default): a printed sphere (``diameter``) with one ball socket per rod. Each
+  rod ends in a ball (``ball``, printed with the rod) whose centre is the rod's pivot, at
+  ``pivot_radius`` from the hub's centre along the rod's target direction. The socket is a
+  sphere ``ball + clearance`` across; it opens outward in a cone of half-angle ``cone_deg``
+  with its apex at the ball's centre, narrow enough at the socket's surface to hold the
+  ball, wide enough for the rod's ``neck`` to swing. The hub is a rigid body whose pose the
+  solver finds (:func:`optimize.solve_net` with pivots), with its own mass and centre of
+  mass (:meth:`NodeHardware.hub_mass`).
+* ``point``: the rods pivot about one point (a jump ring or a small shackle treated as a
+  point), of ``mass`` g.
+
+Rods of a net are round (``rod_diameter``), printed to order: a cylindrical body between a
+neck and a ball at each end (hub), or a plain cylinder pivot to pivot (point). Their masses
+in closed form (:meth:`NodeHardware.rod_numbers`): solid; the lightest with one coaxial
+cavity leaving ``min_wall`` all round; the heaviest with the catalog's steel balls in a row
+of closed sockets along the axis. In between, fewer balls and a shorter cavity make any
+mass (rodcad's rods lighten and weigh down the same way).
+
+Free play: each socket is ``clearance`` wider than its ball. Under load the ball bears on
+the socket on the side the rod pulls it, its centre ``clearance / 2`` from the socket's
+centre along that force. rodcad prints each socket's centre that far back from the pivot
+against the design's pivot force (:func:`socket_centres`), so the loaded balls sit on the
+designed pivots exactly; a rod without load rattles by up to ``clearance / 2``.
+
+Volumes: spheres, cylinders and spherical caps in closed form; the socket's cone inside
+the hub sphere (apex off the hub's centre) by a 1D integral over the cone's polar angle
+(Gauss-Legendre, 48 points: round-off for this smooth integrand). Units: mm, g, g/cm^3.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "largest_clear_turn", "node_hardware",
+           "socket_centres"]
+
+#: Node kinds a catalog's ``node.kind`` may name.
+NODE_KINDS = ("hub", "point")
+
+#: What a catalog without a ``node:`` block gets (the shipped pla-parametric's values).
+DEFAULT_NODE = {"kind": "hub", "diameter": 24.0, "pivot_radius": 7.5, "ball": 6.0, "clearance": 0.3,
+                "cone_deg": 55.0, "neck": 3.0, "rod_diameter": 9.0, "gap": 3.0, "mass": 0.5,
+                "name": "printed hub with ball sockets"}
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
+
+
+
+def largest_clear_turn(clear) -> float:
+    """The largest turn ``phi`` in [0, 90] deg with ``clear(phi)`` (radians in; clear at
+    every smaller turn, as a face nearing a sphere is), by bisection to 1e-4 rad; 0 when
+    not clear at rest."""
+    if not clear(0.0):
+        return 0.0
+    lo, hi = 0.0, math.pi / 2
+    if clear(hi):
+        return 90.0
+    while hi - lo > 1e-4:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if clear(mid) else (lo, mid)
+    return math.degrees(lo)
+
+@dataclass(frozen=True)
+class NetRodNumbers:
+    """One net rod's numbers.
+
+    Attributes:
+        length: pivot to pivot (mm).
+        body_length: the round body between the two necks (mm).
+        solid_mass: the rod printed solid (g).
+        mass_range: (lightest with the cavity, heaviest with the steel balls) (g).
+        balls: steel balls the heaviest rod holds.
+    """
+
+    length: float
+    body_length: float
+    solid_mass: float
+    mass_range: tuple[float, float]
+    balls: int
+
+
+@dataclass(frozen=True)
+class NodeHardware:
+    """A catalog's node hardware (see the module docstring for the geometry).
+
+    Attributes:
+        kind: 'hub' or 'point'.
+        name: free text.
+        diameter: hub sphere diameter (mm).
+        pivot_radius: a rod's ball centre from the hub's centre (mm).
+        ball: diameter of the ball each rod ends in (mm).
+        clearance: socket diameter minus ball diameter (mm).
+        cone_deg: half-angle of each socket's opening cone (deg).
+        neck: diameter of the rod's neck between its ball and its body (mm).
+        rod_diameter: the net rods' body diameter (mm).
+        gap: between the hub's surface and a rod body's end face, along the rod (mm).
+        mass: a point node's mass (g).
+        density: the printing material's density (g/cm^3).
+        min_wall: the thinnest wall printed (mm).
+        insert_diameter, insert_density, insert_clearance: the steel balls that weigh rods
+            down (mm, g/cm^3, mm); diameter 0 for none.
+    """
+
+    kind: str
+    name: str
+    diameter: float
+    pivot_radius: float
+    ball: float
+    clearance: float
+    cone_deg: float
+    neck: float
+    rod_diameter: float
+    gap: float
+    mass: float
+    density: float
+    min_wall: float
+    insert_diameter: float = 0.0
+    insert_density: float = 0.0
+    insert_clearance: float = 0.0
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def is_hub(self) -> bool:
+        return self.kind == "hub"
+
+    @property
+    def radius(self) -> float:
+        """Hub radius (mm)."""
+        return self.diameter / 2
+
+    @property
+    def pivot(self) -> float:
+        """A rod's pivot from the node point (mm): ``pivot_radius`` for a hub, 0 for a point."""
+        return self.pivot_radius if self.is_hub else 0.0
+
+    @property
+    def socket_radius(self) -> float:
+        return (self.ball + self.clearance) / 2
+
+    @property
+    def swing_deg(self) -> float:
+        """How far a rod turns from its socket's axis, in every direction, before its neck
+        touches the cone (deg); 180 for a point node."""
+        if not self.is_hub:
+            return 180.0
+        neck = self.cone_deg - math.degrees(math.asin(min(1.0, (self.neck / 2) / self.socket_radius)))
+        return min(neck, self.body_swing_deg)
+
+    @property
+    def body_swing_deg(self) -> float:
+        """How far a rod turns about its pivot before its body's end face touches the hub
+        (deg, to 0.01 deg; 90 at most)."""
+        if not self.is_hub:
+            return 180.0
+        e, r = self.end_offset, self.rod_diameter / 2
+
+        def clear(phi: float) -> bool:
+            d = np.array([math.cos(phi), math.sin(phi)])
+            n = np.array([-math.sin(phi), math.cos(phi)])
+            p = np.array([self.pivot_radius, 0.0]) + e * d
+            return bool(min(np.linalg.norm(p + r * n), np.linalg.norm(p - r * n)) >= self.radius)
+
+        return largest_clear_turn(clear)
+
+    @property
+    def end_offset(self) -> float:
+        """From a rod's pivot to its body's end face (mm): out of the hub plus ``gap``."""
+        return (self.radius - self.pivot_radius + self.gap) if self.is_hub else 0.0
+
+    @property
+    def min_angle_deg(self) -> float:
+        """The least angle between two rods at a node: their sockets keep ``min_wall``
+        between them and their bodies do not touch (deg); 0 for a point node."""
+        if not self.is_hub:
+            return 0.0
+        sockets = 2 * math.asin(min(1.0, (2 * self.socket_radius + self.min_wall) / (2 * self.pivot_radius)))
+        d = self.pivot_radius + self.end_offset
+        bodies = 2 * math.atan2(self.rod_diameter / 2, d)
+        return math.degrees(max(sockets, bodies))
+
+    # ------------------------------------------------------------------ volumes
+    def _cone(self) -> tuple[float, float]:
+        """(volume, axial centroid from the hub centre) of one socket's opening cone between
+        the socket sphere and the hub's surface (mm^3, mm)."""
+        R, rp, rs = self.radius, self.pivot_radius, self.socket_radius
+        a = math.radians(self.cone_deg)
+        beta = 0.5 * a * (_GL_X + 1)
+        w = 0.5 * a * _GL_W
+        t = -rp * np.cos(beta) + np.sqrt(R**2 - (rp * np.sin(beta)) ** 2)
+        t = np.maximum(t, rs)
+        vol = 2 * math.pi * float(np.sum(w * (t**3 - rs**3) / 3 * np.sin(beta)))
+        mom = 2 * math.pi * float(np.sum(w * (t**4 - rs**4) / 4 * np.cos(beta) * np.sin(beta)))
+        return vol, rp + (mom / vol if vol > 0 else 0.0)
+
+    def hub_mass(self, directions: np.ndarray) -> tuple[float, np.ndarray]:
+        """A hub's mass and centre of mass for sockets along ``directions``.
+
+        Args:
+            directions: (k, 3) unit vectors from the hub's centre to each rod's pivot.
+
+        Returns:
+            (mass g, centre of mass (3,) from the hub's centre, same frame); a point node:
+            (``mass``, zeros).
+        """
+        if not self.is_hub:
+            return self.mass, np.zeros(3)
+        d = np.asarray(directions, float).reshape(-1, 3)
+        v_sock = 4 / 3 * math.pi * self.socket_radius**3
+        v_cone, c_cone = self._cone()
+        v = 4 / 3 * math.pi * self.radius**3 - d.shape[0] * (v_sock + v_cone)
+        moment = -(v_sock * self.pivot_radius + v_cone * c_cone) * d.sum(axis=0)
+        return self.density * v / 1000.0, moment / v
+
+    def rod_numbers(self, length: float) -> NetRodNumbers:
+        """A net rod's masses for a pivot-to-pivot ``length`` (mm); see the module."""
+        rho = self.density / 1000.0
+        r = self.rod_diameter / 2
+        if self.is_hub:
+            rb, s = self.ball / 2, self.neck / 2
+            e = self.end_offset
+            t0 = math.sqrt(max(rb**2 - s**2, 0.0))
+            h = rb - t0
+            cap = math.pi * h**2 * (3 * rb - h) / 3
+            v_end = 4 / 3 * math.pi * rb**3 + math.pi * s**2 * (e - t0) - cap
+            body = length - 2 * e
+        else:
+            v_end, body = 0.0, length
+        v = 2 * v_end + math.pi * r**2 * max(body, 0.0)
+        w = self.min_wall
+        cav_r, cav_l = r - w, body - 2 * w
+        cavity = math.pi * cav_r**2 * cav_l if cav_r > 0 and cav_l > 0 else 0.0
+        n = 0
+        add = 0.0
+        ds = self.insert_diameter + self.insert_clearance
+        if self.insert_diameter > 0 and 2 * r >= ds + 2 * w and body > ds + 2 * w:
+            n = int((body - w) // (ds + w))
+            add = n * (self.insert_density * math.pi / 6 * self.insert_diameter**3 - self.density * math.pi / 6 * ds**3)
+            add /= 1000.0
+        solid = rho * v
+        return NetRodNumbers(float(length), float(body), solid, (solid - rho * cavity, solid + max(add, 0.0)), n)
+
+    def rod_intervals(self, length: float) -> list[tuple[int, float, float]]:
+        """The masses a rod of ``length`` can be built at: per steel-ball count ``k`` (0 up to
+        what fits), (k, lightest g, heaviest g). The balls sit in a row at mid-length, the cavity
+        (two equal coaxial cylinders beside the row, or one at mid-length without balls,
+        ``min_wall`` from everything) takes the plastic off, as :mod:`rodcad.cad.net.solids` builds
+        it. A short rod has little room beside its balls: its intervals leave gaps."""
+        rn = self.rod_numbers(length)
+        rho = self.density / 1000.0
+        v = rn.solid_mass / rho
+        ds = self.insert_diameter + self.insert_clearance
+        vs = math.pi / 6 * ds ** 3
+        mb = self.insert_density * math.pi / 6 * self.insert_diameter ** 3 / 1000.0
+        rc, w, body = self.rod_diameter / 2 - self.min_wall, self.min_wall, rn.body_length
+        out = []
+        for k in range(rn.balls + 1):
+            row = k * ds + max(k - 1, 0) * w
+            room = 2 * max((body - row) / 2 - 2 * w, 0.0) if k else max(body - 2 * w, 0.0)
+            hi = rho * (v - k * vs) + k * mb
+            out.append((k, hi - rho * math.pi * max(rc, 0.0) ** 2 * room, hi))
+        return out
+
+    def rod_fill(self, length: float, mass: float) -> tuple[int, float, float]:
+        """How a rod of ``length`` is made to weigh ``mass`` (:meth:`rod_intervals`).
+
+        Returns:
+            (balls, cavity volume mm^3, the mass it comes to g): the fewest balls whose
+            interval holds ``mass``, else the interval that comes nearest.
+        """
+        rho = self.density / 1000.0
+        best = None
+        for k, lo, hi in self.rod_intervals(length):
+            got = min(max(mass, lo), hi)
+            if best is None or abs(got - mass) < best[0] - 1e-12:
+                best = (abs(got - mass), k, (hi - got) / rho, got)
+        assert best is not None
+        return best[1], best[2], best[3]
+
+    def shortest_rod(self) -> float:
+        """The shortest rod the hardware makes (mm): both ends and a body of two walls."""
+        return 2 * self.end_offset + 2 * self.min_wall
+
+    # ------------------------------------------------------------------ checks
+    def problems(self) -> list[tuple[str, str]]:
+        """(key, message) for hardware that cannot be printed or does not hold its rods."""
+        out: list[tuple[str, str]] = []
+        if not self.is_hub:
+            return out
+        R, rp, rs, w = self.radius, self.pivot_radius, self.socket_radius, self.min_wall
+        if rp + rs + w > R + 1e-9:
+            out.append(("pivot_radius", f"a socket ({2 * rs:g} mm across at {rp:g} mm from the centre) leaves less "
+                        f"than the {w:g} mm wall inside the {self.diameter:g} mm hub: make the hub larger or the "
+                        "pivot radius smaller"))
+        if rp - rs < w / 2:
+            out.append(("pivot_radius", f"the sockets ({2 * rs:g} mm across) reach the hub's centre: make the "
+                        "pivot radius larger"))
+        lip = rs * math.sin(math.radians(self.cone_deg))
+        if lip > self.ball / 2 - 0.1:
+            out.append(("cone_deg", f"the opening is {2 * lip:.3g} mm across where it meets the socket: it would let "
+                        f"the {self.ball:g} mm ball out (keep it 0.2 mm narrower: a smaller cone)"))
+        if self.neck >= self.ball:
+            out.append(("neck", f"the neck ({self.neck:g} mm) must be thinner than the ball ({self.ball:g} mm)"))
+        elif self.swing_deg < 5.0:
+            out.append(("cone_deg", f"the rods could turn only {self.swing_deg:.3g} deg in their sockets: widen the "
+                        "cone or thin the neck"))
+        if self.neck < 2 * w:
+            out.append(("neck", f"the neck ({self.neck:g} mm) is thinner than two walls ({2 * w:g} mm)"))
+        if self.rod_diameter < self.neck:
+            out.append(("rod_diameter", f"the rod ({self.rod_diameter:g} mm) is thinner than its neck"))
+        return out
+
+
+def socket_centres(pivots: np.ndarray, forces: np.ndarray, clearance: float) -> np.ndarray:
+    """Where to print each socket's centre so that the loaded ball sits on its pivot.
+
+    Args:
+        pivots: (k, 3) the designed pivots from the node point (hub frame, mm).
+        forces: (k, 3) the force each rod exerts on its ball at the design (hub frame).
+        clearance: socket diameter minus ball diameter (mm).
+
+    Returns:
+        (k, 3) socket centres: each pivot moved ``clearance / 2`` against its force (a
+        rod without force keeps its pivot).
+    """
+    f = np.asarray(forces, float)
+    norm = np.linalg.norm(f, axis=1, keepdims=True)
+    unit = np.divide(f, norm, out=np.zeros_like(f), where=norm > 0)
+    return np.asarray(pivots, float) - 0.5 * clearance * unit
+
+
+def node_hardware(block: dict, rod, v) -> NodeHardware | None:
+    """A catalog's ``node`` block (schema-checked; unset keys from :data:`DEFAULT_NODE`) as
+    hardware in the material of ``rod`` (a :class:`rodcad.catalog.model.RodType`), its
+    first ball kind weighing the net rods down; problems reported at ``node.<key>``."""
+    d = {**DEFAULT_NODE, **block}
+    balls = rod.balls
+    hw = NodeHardware(kind=d["kind"], name=d["name"], diameter=float(d["diameter"]),
+                      pivot_radius=float(d["pivot_radius"]), ball=float(d["ball"]), clearance=float(d["clearance"]),
+                      cone_deg=float(d["cone_deg"]), neck=float(d["neck"]), rod_diameter=float(d["rod_diameter"]),
+                      gap=float(d["gap"]), mass=float(d["mass"]), density=rod.material.density,
+                      min_wall=rod.material.min_wall, insert_diameter=balls.diameter if balls else 0.0,
+                      insert_density=balls.density if balls else 0.0,
+                      insert_clearance=balls.clearance if balls else 0.0)
+    bad = hw.problems()
+    for key, message in bad:
+        v.report_at(f"node.{key}" if key in block else "node", message if key in block else
+                    f"{key}: {message}", fallback="node")
+    return None if bad else hw

@@ -1,0 +1,346 @@
+"""A net's masses designed and checked: the mass design on the planned rods and hubs, the
+exact equilibrium's verdict and the fit.
+
+:func:`design_net_plan` turns the hubs' sockets (:mod:`rodcad.design.net.hubs`), narrows the
+rods' mass bounds to what they can be built at, designs the masses with
+:func:`optimize.design_net` (exact where the bounds allow, else the best fit within them,
+refined through the solver, with the reason), solves the designed net from the target with a
+multi-start, and measures the fit: the largest distance of a simulated node or pivot from its
+target over the net's size (straight rods: their centrelines are no farther apart than their
+ends).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optimize import NetDesign, design_net, net_statics
+from rodcad.catalog.net.node import socket_centres
+from rodcad.design.fit import DEFAULT_TOLERANCE
+from rodcad.design.net.hubs import buildable_bounds, orient_sockets
+from rodcad.design.net.plan import NetPlan, replan
+
+__all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts", "settle_com"]
+
+
+#: After the rods' bounds are narrowed to buildable masses, the sockets are turned again
+#: only where the first turning brought the statics this close (over the force scale).
+ORIENT_USEFUL = 1e-4
+
+#: The statics' masses are refined through the solver only where they hang further off
+#: their target than this share of its size.
+REFINE_ABOVE = 1e-6
+
+#: Above this many nodes, a net whose statics stay far from balancing (no masses balance
+#: it) keeps the statics' best fit without the refinement through the solver.
+FULL_REFINE_NODES = 100
+
+#: A rod whose force is within this share of the net's largest tension hangs slack: neither
+#: pulling nor pushing to speak of (a rigid rod takes it either way).
+SLACK = 1e-3
+
+#: A bent net's masses and centres of mass are consistent when the centres of mass move less
+#: than this share of the net's size in a round (:func:`settle_com`); at most COM_ROUNDS rounds.
+COM_TOL = 1e-12
+COM_ROUNDS = 30
+#: The designed masses' own centres of mass differ from those designed with by more than this
+#: share of the size (the refinement moved the masses): the net is solved again with them.
+COM_RECHECK = 1e-9
+
+#: Starts of the multi-start that looks for other stable shapes of a designed net (up to
+#: :data:`FULL_STARTS_NODES` nodes; fewer beyond, see :func:`net_starts`).
+NET_STARTS = 8
+FULL_STARTS_NODES = 50
+
+
+def net_starts(n: int) -> int:
+    """The multi-start's starts for a net of ``n`` nodes: 8 up to 50 nodes, then 400 / n (at
+    least 2). A start from a perturbed shape costs a restoration and tens of Newton steps (about
+    2 s for a 200-node net of hubs), so a 200-node design keeps within 10 s."""
+    return NET_STARTS if n <= FULL_STARTS_NODES else max(2, int(NET_STARTS * FULL_STARTS_NODES / n))
+
+
+@dataclass
+class NetCheck:
+    """A designed net, its exact equilibrium and how well it hangs on its target.
+
+    Attributes:
+        plan: the rods and hardware.
+        design: optimize's design (masses, statics verdict, equilibrium with alternatives).
+        masses: (m,) the designed rod masses (g).
+        error_mm: largest distance of a simulated node or pivot from its target (mm).
+        rel_size: that over the net's size.
+        node_error: (n,) each node's distance from its target (mm).
+        tolerance: the figure aimed at (design's tolerance or the default 1 %).
+        sockets: (m, 2, 3) where each rod's socket is printed (hub frame, mm): its pivot
+            moved ``clearance / 2`` against the rod's pull (rodcad.catalog.net.node).
+        swing_deg: (m, 2) each rod's turn from its socket's axis at the equilibrium (deg).
+        time_s: wall time of the design.
+        notes: things the user should know.
+        why: when no masses at all balance the target, where and why (else '').
+    """
+
+    plan: NetPlan
+    design: NetDesign
+    masses: np.ndarray
+    error_mm: float
+    rel_size: float
+    node_error: np.ndarray
+    tolerance: float
+    sockets: np.ndarray
+    swing_deg: np.ndarray
+    time_s: float
+    notes: list[str] = field(default_factory=list)
+    why: str = ""
+
+    @property
+    def equilibrium(self):
+        return self.design.equilibrium
+
+    @property
+    def compressed(self) -> np.ndarray:
+        """Rods that push at the equilibrium by more than :data:`SLACK` of the largest tension,
+        less those between two anchored nodes (their force is the anchors' business)."""
+        t = self.plan.target
+        T = self.equilibrium.tensions
+        if not np.all(np.isfinite(T)):
+            return np.zeros(0, int)
+        c = np.flatnonzero(T < -SLACK * float(np.max(np.abs(T), initial=0.0)))
+        return c[~t.anchored_mask[t.edges[c]].all(axis=1)] if c.size else c
+
+    @property
+    def slack(self) -> np.ndarray:
+        """Rods whose force is within :data:`SLACK` of the largest tension (they hang slack: a
+        rung across a strip, a designed zero)."""
+        T = self.equilibrium.tensions
+        if not np.all(np.isfinite(T)):
+            return np.zeros(0, int)
+        return np.flatnonzero(np.abs(T) <= SLACK * float(np.max(np.abs(T), initial=0.0)))
+
+    @property
+    def in_tension(self) -> bool:
+        return self.plan.target.compression or self.compressed.size == 0
+
+    @property
+    def meets_tolerance(self) -> bool:
+        return bool(self.equilibrium.success and self.equilibrium.stable and self.rel_size <= self.tolerance)
+
+    @property
+    def ok(self) -> bool:
+        """Hangs within the tolerance, stable, in tension (unless allowed), rods within their swing."""
+        return self.meets_tolerance and self.in_tension and bool(np.all(self.swing_deg <= self.plan.swing_limits[:, None]))
+
+    def limit(self) -> str:
+        """One line: what keeps the net off its target and what would reach it."""
+        pct = (f"hangs {100 * self.rel_size:.3g} % of its size off its target (tolerance "
+               f"{100 * self.tolerance:.3g} %)")
+        eq, st = self.equilibrium, self.design.statics
+        if not eq.success:
+            return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})"
+        if not eq.stable:
+            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one"
+        if not self.meets_tolerance and self.why:
+            return f"{pct}: {self.why}"
+        if not self.meets_tolerance:
+            how = " (refined through the solver)" if self.design.refined else ""
+            return f"{pct}: {st.message} The best fit within the rods' mass ranges{how} is the closest; a catalog " \
+                   "with a wider mass range, more anchored nodes or a target closer to a hanging shape would reach it"
+        if not self.in_tension:
+            c = self.compressed
+            return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
+                   "or anchor more nodes"
+        over = np.argwhere(self.swing_deg > self.plan.swing_limits[:, None])
+        return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
+               f"than the {self.plan.swing_limits[over[0][0]]:.3g} deg the hub allows"
+
+
+def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,
+                    n_starts: int | None = None) -> NetCheck:
+    """Masses for the planned net, its exact equilibrium and its fit.
+
+    Args:
+        plan: :func:`rodcad.design.net.plan.plan_net`'s rods and hardware.
+        g: gravitational acceleration (m/s^2).
+        seed: the multi-start's seed.
+        tolerance: largest acceptable error over the net's size (None: 1 %).
+        n_starts: the multi-start's starts (None: :func:`net_starts`).
+    """
+    t0 = time.perf_counter()
+    n_starts = net_starts(plan.target.n) if n_starts is None else int(n_starts)
+    lines = plan.pivots.copy()
+    plan, rounds, residual = orient_sockets(plan, g=g)
+    plan, snapped = buildable_bounds(plan, g)
+    if snapped and not residual > ORIENT_USEFUL:  # (where the forces themselves balance)
+        plan, more, _ = orient_sockets(plan, g=g)
+        rounds += more
+    turn = 0.0
+    if plan.hardware.is_hub:
+        cos = np.sum(lines * plan.pivots, axis=2) / plan.hardware.pivot_radius ** 2
+        turn = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
+    t = plan.target
+    com_rounds = 0
+    if plan.bent:
+        plan, com_rounds = settle_com(plan, g=g)
+    kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
+              allow_compression=t.compression, g=g, com=plan.statics_com)
+    # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
+    # a step (a dense bounded least squares on hundreds of masses), so the statics' best fit
+    # stays; otherwise the statics' masses, solved once from the target, are refined through
+    # the solver only where they hang measurably off (above REFINE_ABOVE of the size)
+    refine = not (t.n > FULL_REFINE_NODES and residual > ORIENT_USEFUL)
+    if not residual > ORIENT_USEFUL:  # (NaN for point nodes: probe)
+        probe = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=1, refine=False,
+                           **kw)
+        refine = not (probe.equilibrium.success and probe.equilibrium.stable and probe.rel_error <= REFINE_ABOVE)
+    design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
+                        refine=refine, **kw)
+    recheck = False
+    if plan.bent:
+        final = plan.rod_com(design.masses)
+        if np.max(np.abs(final - plan.com)) > COM_RECHECK * t.size:
+            # the refinement moved the masses, and with them the bent rods' centres of mass: the
+            # verdict is on the rods as they will be built
+            from optimize import solve_net
+
+            eq0 = design.equilibrium
+            res = solve_net(t.positions, t.edges, plan.lengths, design.masses, t.anchored, node_masses=plan.node_masses,
+                            node_com=plan.node_com, pivots=plan.pivots, com=final, g=g, n_starts=n_starts, seed=seed,
+                            node_rotations0=eq0.rotations if eq0.success else None)
+            design = dataclasses.replace(design, equilibrium=res)
+            plan = dataclasses.replace(plan, com=final)
+            recheck = True
+    eq = design.equilibrium
+    size = t.size
+    if eq.success:
+        node_err = np.linalg.norm(eq.positions - t.positions, axis=1)
+        end_err = np.linalg.norm(eq.ends - plan.target_ends, axis=2)
+        err = float(max(node_err.max(), end_err.max()))
+    else:
+        node_err = np.full(t.n, np.inf)
+        err = float("inf")
+    # sockets: each pivot moved against the force its rod pulls with, in the hub's frame
+    sockets = plan.pivots.copy()
+    swing = np.zeros((t.m, 2))
+    hw = plan.hardware
+    if eq.success and hw.is_hub:
+        for k in (0, 1):
+            node = t.edges[:, k]
+            R = eq.rotations[node]
+            f_body = np.einsum("mba,mb->ma", R, eq.rod_forces[:, k])
+            sockets[:, k] = socket_centres(plan.pivots[:, k], f_body, hw.clearance)
+            axis = np.einsum("mab,mb->ma", R, plan.pivots[:, k])
+            axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+            rod = eq.ends[:, 1 - k] - eq.ends[:, k]
+            rod /= np.linalg.norm(rod, axis=1, keepdims=True)
+            swing[:, k] = np.degrees(np.arccos(np.clip(np.sum(axis * rod, axis=1), -1, 1)))
+    tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
+    notes = [design.statics.message]
+    why = ""
+    if not design.statics.exact and np.all(~np.isfinite(design.statics.beyond)) and design.statics.residual > 1e-4:
+        why = _imbalance(plan, design, g, lines)
+        notes.append(why)
+    if snapped:
+        notes.append(f"{snapped} rod(s) would have weighed what neither their steel balls nor a cavity make (a short "
+                     "rod has little room beside its balls): their mass bounds were narrowed to the nearest range "
+                     "they can be built at and the masses designed again.")
+    if turn > 0:
+        notes.append(f"The hubs' sockets are turned up to {turn:.3g} deg off the lines between the node points "
+                     f"(printed so; {rounds} round(s)), so that every hub balances at the target: a socket on the "
+                     "line would put its rod's weight share off the hub's centre and turn it.")
+    if plan.bent:
+        bent = int(np.count_nonzero(t.bends > 0))
+        notes.append(f"{bent} rod(s) are printed bent; each hangs with its bow below its chord, in the vertical "
+                     "plane through it (a rod on ball joints turns freely about its chord, so its centre of mass "
+                     "hangs as low as it can), and its centre of mass off the chord enters the design "
+                     f"({com_rounds} round(s) of masses and centres of mass to a fixed point)"
+                     + ("; re-solved with the centres of mass of the refined masses." if recheck else "."))
+    if design.refined:
+        notes.append(f"The masses were refined through the solver from the statics' best fit "
+                     f"({design.info.get('fit_error', float('nan')):.4g} mm -> "
+                     f"{design.info.get('refined_error', float('nan')):.4g} mm).")
+    if eq.alternatives:
+        notes.append(f"The multi-start ({n_starts} starts) found {len(eq.alternatives)} other stable shape(s)"
+                     + (", one hanging lower than the design's: a push may move the net there." if eq.lower else
+                        ", none lower than the design's."))
+    if t.dropped:
+        notes.append(f"{t.dropped} rod(s) between two anchored nodes were left out (the anchors hold both ends).")
+    masses = np.asarray(design.masses, float)
+    return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
+                    swing, time.perf_counter() - t0, notes, why)
+
+
+def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> tuple[NetPlan, int]:
+    """A bent net's masses and its rods' centres of mass made consistent: a bent rod's centre of
+    mass moves with its fill (steel balls at mid-arc, the cavity beside them), so the statics'
+    masses and the centres of mass they imply are iterated to a fixed point (the centres of
+    mass move by fractions of a mm for grams: a few rounds). Returns (the plan with ``com``,
+    rounds used)."""
+    from optimize import design_net_masses
+
+    t = plan.target
+    com = plan.statics_com
+    used = 0
+    for used in range(1, rounds + 1):
+        st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
+                               node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
+                               allow_compression=t.compression, g=g)
+        new = plan.rod_com(st.masses)
+        change = float(np.max(np.abs(new - com)))
+        com = new
+        if change <= COM_TOL * t.size:
+            break
+    return dataclasses.replace(plan, com=com), used
+
+
+def _imbalance(plan: NetPlan, design: NetDesign, g: float, lines: np.ndarray) -> str:
+    """Where the statics' best fit leaves the largest imbalance, when no masses at all (any
+    positive mass, rods pushing or not) balance the target; with hubs whose rods' pulls, their
+    sockets on the lines between the node points (``lines``), can hold every node, what fails
+    is the hubs' balance about their centres, and the text says so."""
+    t = plan.target
+    st = net_statics(t.positions, t.edges, plan.lengths, t.anchored, node_masses=plan.node_masses,
+                     node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com, g=g)
+    res = np.abs(st.residual(design.statics.tensions, design.statics.masses))
+    force = st.rows[:, 1] < 3
+    if plan.hardware.is_hub and _forces_balance(replan(plan, lines), g):
+        # the rods' pulls can hold every node: what fails is every hub balancing about its centre
+        worst = _worst(st.rows[~force, 0], res[~force], t.n)
+        return (f"No masses balance this target with the hubs' sockets as turned: the rods' pulls can hold every "
+                f"node, but no turn of the sockets was found that lets every hub balance about its centre as well "
+                f"within the rods' mass ranges (the largest moment imbalance is at node(s) {worst}). A target "
+                "nearer the shape such hubs hang in, or point nodes (the catalog's node kind: point), would "
+                "reach it.")
+    worst = _worst(st.rows[force, 0], res[force], t.n)
+    text = (f"No masses at all balance this target: some nodes' rods cannot pull them in every direction the "
+            f"load needs (the largest imbalance is at node(s) {worst}).")
+    if t.kind == "surface" and t.anchored_as in ("corners", "ends"):
+        text += (" A grid drawn over a rectangle and hung from its corners cannot hang in it: its straight border "
+                 "has nothing to pull it outward (a hanging net's border curves inward in plan); anchor the "
+                 "border (anchored: boundary), or give a target whose border curves.")
+    else:
+        text += " Move those nodes toward where their rods and the weights can hold them, or anchor them."
+    return text
+
+
+def _worst(nodes: np.ndarray, res: np.ndarray, n: int) -> list[int]:
+    """Up to 8 nodes with the largest residual, largest first."""
+    per_node = np.zeros(n)
+    np.maximum.at(per_node, nodes, res)
+    order = np.argsort(-per_node, kind="stable")[:8]
+    return [int(k) for k in order if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
+
+
+def _forces_balance(plan: NetPlan, g: float) -> bool:
+    """Whether some positive masses (within the bounds or beyond them), every rod in tension
+    unless the target allows compression, balance the nodes' forces at the target, leaving the hubs' moments aside."""
+    from optimize import design_net_masses
+
+    t = plan.target
+    fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
+                           node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
+                           allow_compression=t.compression, g=g, forces_only=True)
+    return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

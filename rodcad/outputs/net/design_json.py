@@ -1,0 +1,163 @@
+"""design.json of a net (contract.md, section "Nets") and its bill of materials.
+
+The contract's fields come first and keep their names; rodcad adds more beside them (each
+node's hub mass, socket centres and error, each rod's mass range and steel balls, the
+hardware, the statics' verdict, the bill of materials).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from optimize import pivots_by_node
+
+__all__ = ["net_bill", "net_json", "rod_balls"]
+
+
+def _f(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _v(a) -> list[float | None]:
+    return [_f(x) for x in np.asarray(a, float).ravel()]
+
+
+def rod_balls(check) -> np.ndarray:
+    """(m,) the steel balls each rod holds at its designed mass (the fewest whose range holds
+    it: :meth:`rodcad.catalog.net.node.NodeHardware.rod_fill`)."""
+    hw = check.plan.hardware
+    return np.array([hw.rod_fill(float(L), float(m))[0] for L, m in zip(check.plan.fill_lengths, check.masses)], int)
+
+
+def net_bill(check, catalog) -> dict[str, Any]:
+    """What to print and buy: hubs (or point parts), rods, steel balls, filament (g)."""
+    plan, hw = check.plan, check.plan.hardware
+    balls = rod_balls(check)
+    ball_mass = hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 / 1000.0
+    rod_plastic = float(np.sum(check.masses - balls * ball_mass))
+    out: dict[str, Any] = {"rods": plan.target.m, "rod_plastic_g": rod_plastic,
+                           "steel_balls": int(balls.sum())}
+    if balls.sum():
+        out["steel_ball"] = {"diameter": hw.insert_diameter, "density": hw.insert_density}
+    if hw.is_hub:
+        held = plan.degree > 0  # a node no rod reaches (an anchor between anchors) needs no hub
+        out["hubs"] = int(np.count_nonzero(held))
+        out["hub_plastic_g"] = float(plan.node_masses[held].sum())
+        out["filament_g"] = rod_plastic + float(plan.node_masses.sum())
+    else:
+        out["point_parts"] = plan.target.n
+        out["point_part"] = hw.name
+        out["filament_g"] = rod_plastic
+    m = next(iter(catalog)).material
+    out["material"] = m.name
+    return out
+
+
+def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, Any]) -> dict[str, Any]:
+    """design.json of a designed net (see the module docstring)."""
+    plan, eq = check.plan, check.equilibrium
+    t, hw = plan.target, plan.hardware
+    per_node = pivots_by_node(t.edges, plan.pivots, t.n) if hw.is_hub else [None] * t.n
+    sock = pivots_by_node(t.edges, check.sockets, t.n) if hw.is_hub else [None] * t.n
+    mask = t.anchored_mask
+    nodes = []
+    for k in range(t.n):
+        nodes.append({
+            "index": k,
+            "target": _v(t.positions[k]),
+            "simulated": _v(eq.positions[k]),
+            "anchored": bool(mask[k]),
+            "mass": _f(plan.node_masses[k]),
+            "pivots": per_node[k],
+            "rotation": np.asarray(eq.rotations[k]).tolist() if hw.is_hub else None,
+            "sockets": sock[k],
+            "com": _v(plan.node_com[k]),
+            "rods": int(plan.degree[k]),
+            "error_mm": _f(check.node_error[k]),
+        })
+    balls = rod_balls(check)
+    rods = []
+    arcs = plan.arcs
+    com = plan.com if plan.com is not None else plan.rod_com(check.masses)
+    for e in range(t.m):
+        rn = plan.rods[e]
+        L = float(plan.lengths[e])
+        Lf = float(plan.fill_lengths[e])
+        arc = arcs[e]
+        rods.append({
+            "index": e,
+            "nodes": [int(x) for x in t.edges[e]],
+            "length": L,
+            "mass": _f(check.masses[e]),
+            "com": _v(com[e]),
+            "tension": _f(eq.tensions[e]),
+            "ends": [_v(eq.ends[e, 0]), _v(eq.ends[e, 1])],
+            "target_ends": [_v(plan.target_ends[e, 0]), _v(plan.target_ends[e, 1])],
+            "mass_range": [rn.mass_range[0], rn.mass_range[1]],
+            "solid_mass": rn.solid_mass,
+            "steel_balls": int(balls[e]),
+            "cavity_mm3": hw.rod_fill(Lf, float(check.masses[e]))[1],
+            "buildable_mass": hw.rod_fill(Lf, float(check.masses[e]))[2],
+            "body_length": rn.body_length,
+            "diameter": hw.rod_diameter,
+            "shape": "straight" if arc is None else "bent",
+            "bend": None if arc is None else {"bend": arc.bend, "sagitta": arc.sagitta, "radius": arc.radius,
+                                              "half_angle_deg": float(np.degrees(arc.half_angle)),
+                                              "plane": "vertical through the chord, bowing down"},
+            "swing_limit_deg": _f(plan.swing_limits[e]) if hw.is_hub else None,
+            "swing_deg": _v(check.swing_deg[e]),
+        })
+    st = check.design.statics
+    alts = eq.alternatives
+    return {
+        "name": name,
+        "kind": "net",
+        "units": {"length": "mm", "mass": "g", "force": "mN", "angle": "deg"},
+        "method": st.method,
+        "seed": int(seed),
+        "time_s": round(float(check.time_s), 3),
+        "net": {
+            "nodes": nodes,
+            "rods": rods,
+            "error": {"max_mm": _f(check.error_mm), "max_rel_size": _f(check.rel_size),
+                      "mean_node_mm": _f(float(np.mean(check.node_error)))},
+            "stable": bool(eq.stable),
+            "kkt_residual": _f(eq.kkt_residual),
+            "success": bool(eq.success),
+            "size": t.size,
+            "tolerance": check.tolerance,
+            "meets_tolerance": bool(check.meets_tolerance),
+            "in_tension": bool(check.in_tension),
+            "compressed": [int(x) for x in check.compressed],
+            "generated": t.kind,
+            "anchored": [int(x) for x in t.anchored],
+            "anchored_as": t.anchored_as or None,
+            "compression_allowed": bool(t.compression),
+            "rods_left_out": int(t.dropped),
+            "statics": {"exact": bool(st.exact), "residual": _f(st.residual), "margin": _f(st.margin),
+                        "message": st.message, "refined": bool(check.design.refined)},
+            "alternatives": {"count": len(alts), "lower": bool(eq.lower), "starts": int(eq.n_starts),
+                             "energies": [_f(a.energy) for a in alts], "energy": _f(eq.energy)},
+            "reactions": [{"node": int(a), "force": _v(f)} for a, f in zip(eq.anchors, eq.reactions)],
+            "notes": list(check.notes),
+        },
+        "hardware": {
+            "kind": hw.kind, "name": hw.name, "diameter": hw.diameter if hw.is_hub else None,
+            "pivot_radius": hw.pivot, "ball": hw.ball if hw.is_hub else None,
+            "clearance": hw.clearance if hw.is_hub else None, "cone_deg": hw.cone_deg if hw.is_hub else None,
+            "neck": hw.neck if hw.is_hub else None, "rod_diameter": hw.rod_diameter,
+            "swing_deg": _f(hw.swing_deg) if hw.is_hub else None,
+            "min_angle_deg": _f(hw.min_angle_deg), "point_mass": None if hw.is_hub else hw.mass,
+            "free_play": ("each socket printed clearance/2 back from its pivot against the rod's pull at the "
+                          "design: loaded balls sit on the pivots exactly; an unloaded ball rattles by up to "
+                          f"{hw.clearance / 2:g} mm") if hw.is_hub else None,
+            "rod_length_range": list(plan.length_range),
+        },
+        "print": print_profile,
+        "bill_of_materials": net_bill(check, catalog),
+        "cad": None,
+    }

@@ -1,0 +1,131 @@
+"""The pipeline of a chandelier: placements of many chains on a frame, each chain through the
+steps of a single one (:mod:`rodcad.pipeline.chain`), the frame laid out and built. It
+sequences the steps and owns none of them::
+
+    design.yaml (chandelier:) -> load_design()                rodcad.design.loader
+    -> joint limits and mass ranges from the rods             rodcad.pipeline.chain.arrays_step
+    -> placements, then per chain: plan, masses, check        rodcad.design.chandelier.design_chandelier
+    -> the frame as numbers, its solid and clearances         rodcad.design.frame, rodcad.cad.chandelier
+    -> every rod of every chain built in one go               rodcad.pipeline.chain.fabricate_step
+    -> as-built re-simulation per chain                       rodcad.pipeline.chain.as_built
+    -> design.json, report.md, 3D preview, STEP/STL, print.3mf per chain  write_chandelier_outputs()
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rodcad.cad.chainfiles import write_rod_files
+from rodcad.cad.chandelier import build_frame, chandelier_nodes
+from rodcad.cad.export import export_assembly, export_step, export_stl
+from rodcad.cad.printfile import write_print_files
+from rodcad.design.chandelier import design_chandelier
+from rodcad.design.frame import frame_outline, plan_frame
+from rodcad.design.model import Design
+from rodcad.design.printed import rods_of
+from rodcad.errors import InputError
+from rodcad.outputs.design_json import chandelier_json, print_profile
+from rodcad.outputs.preview3d import preview_3d
+from rodcad.outputs.report import chandelier_markdown
+from rodcad.pipeline.chain import N_STARTS, arrays_step, as_built, fabricate_step, intervals_step
+from rodcad.pipeline.folder import staged, write_design
+from rodcad.progress import Progress
+from rodcad.results import ChandelierBuild
+
+__all__ = ["build_chandelier", "write_chandelier_outputs"]
+
+
+def build_chandelier(design: Design, *, method: str | None = None, seed: int | None = None,
+                     cad: bool | None = None, jobs: int | None = None,
+                     progress: Progress | None = None) -> ChandelierBuild:
+    """Design every chain of a chandelier (the path of a single chain, chain by chain), lay
+    out its frame and (optionally) build it all."""
+    progress = progress or Progress(quiet=True)
+    t0 = time.perf_counter()
+    method = method or design.method
+    seed = design.seed if seed is None else seed
+    cad = design.cad if cad is None else cad
+    spec = design.chandelier
+    c = design.constraints
+    if c.anchor_stops == "auto" or c.end_limits is not None:
+        key = "constraints.anchor_stops" if c.anchor_stops == "auto" else "constraints.anchor_limits_deg"
+        raise InputError([design.problem(key, "a chandelier's chains hang from the frame's lugs, bare pins: anchor "
+                                         "stops are for a single chain's printed fixture")])
+    arrays = arrays_step(design, jobs, progress)
+    try:
+        # the frame's lugs are bare pins, and the chains are built rod by rod: neither anchor
+        # stops nor (unless asked for) fused pieces
+        chains_c = dataclasses.replace(c, anchor_stops="none", fuse=c.fuse if c.fuse is not None else "never")
+        res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
+                                seed=seed, jobs=jobs or 1, arrays=arrays, constraints=chains_c,
+                                problem=design.problem, n_starts=N_STARTS, g=design.g, progress=progress,
+                                intervals=intervals_step(design, jobs, progress) if cad else None)
+    except ValueError as err:
+        raise InputError([design.problem("chandelier", str(err))]) from None
+    made = rods_of([ch.design.plan for ch in res.chains])
+    if made:  # rods printed to order: the catalog now knows them by name
+        design = dataclasses.replace(design, catalog=design.catalog.with_types(made))
+    extra = {}
+    if spec.frame_kind == "bars":
+        # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order
+        extra["vertices"] = spec.vertices or [
+            list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
+    frame_plan = plan_frame(spec.frame_kind, design.placements, design.catalog, res.chains, **spec.frame,
+                            **extra)
+    out = ChandelierBuild(design, res, frame_plan)
+    for ch in res.chains:
+        if not ch.equilibrium.stable:
+            out.notes.append(f"{ch.name}: the designed shape is not a stable equilibrium")
+        if not ch.design.unique:
+            out.notes.append(f"{ch.name}: {ch.design.n_stable} stable shapes found; guide it into the designed one")
+    if cad and any(ch.design.plan.fused for ch in res.chains):
+        raise InputError([design.problem("constraints.fuse", "a chandelier's chains are built rod by rod: fused "
+                                         "pieces are built for a single chain only; use 'never'")])
+    if cad:
+        with progress.step("frame solid and clearance checks"):
+            out.frame = build_frame(frame_plan, design.catalog, res.chains)
+        out.notes += [f"frame: {p}" for p in out.frame[1].problems]
+        out.fabrications, problems = fabricate_step(design, [(ch.type_names, ch.masses) for ch in res.chains],
+                                                jobs=jobs, progress=progress,
+                                                label=f"building {res.bom.n_rods} rods")
+        out.notes += problems
+        with progress.step("as-built check of every chain"):
+            out.as_built = [as_built(fab.rods, ch.design.plan.problem.lengths, ch.design.plan.problem.limits,
+                                     np.array(ch.placement.plane_anchors()), ch.target, design.g)
+                            for ch, fab in zip(res.chains, out.fabrications)]
+    out.time_s = time.perf_counter() - t0
+    return out
+
+
+def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
+                             progress: Progress | None = None) -> dict[str, Any]:
+    """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
+    and <chain>/rods/*.step|stl|3mf and <chain>/print.3mf; staged like a chain's
+    (:func:`rodcad.pipeline.chain.write_outputs`), whose return it shares."""
+    with staged(outdir, progress) as (tmp, progress):
+        if b.frame is not None:
+            with progress.step("writing and checking the rods' STEP/STL files"):
+                for ch, fab in zip(b.result.chains, b.fabrications):
+                    write_rod_files(fab, tmp / ch.name)
+            with progress.step("writing each chain's print.3mf (PrusaSlicer project) and rods/*.3mf"):
+                for ch, fab in zip(b.result.chains, b.fabrications):
+                    write_print_files(fab.rods, tmp / ch.name, printer=b.design.catalog.printer,
+                                      profile=print_profile(b.design.catalog))
+            with progress.step("writing frame.step, frame.stl and assembly.step"):
+                frame = b.frame[0]
+                export_step(frame, tmp / "frame.step", name="frame")
+                export_stl(frame, tmp / "frame.stl")
+                nodes = chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
+                                         rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
+                export_assembly(tmp / "assembly.step", nodes, b.design.name)
+        with progress.step("writing design.json, report.md, preview.png"):
+            data = chandelier_json(b)
+            preview_3d(tmp / "preview.png", b.result.chains, frame_outline(b.frame_plan),
+                       title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
+            write_design(tmp, data, chandelier_markdown(b, data))
+    return data

@@ -1,0 +1,156 @@
+"""The pipeline of a net: a design file with a ``net:`` block in, numbers, report and
+pictures out. It sequences the steps and owns none of them::
+
+    design.yaml + catalog -> load_design() (net: rodcad.design.net.target)  rodcad.design.loader
+    -> hardware, lengths, mass bounds, hub masses                      rodcad.design.net.plan.plan_net
+    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.check.design_net_plan
+    -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net.solids
+    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.solids
+    -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.net.print_files
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rodcad.design.model import Design
+from rodcad.design.net.check import NetCheck, design_net_plan
+from rodcad.design.net.plan import plan_net
+from rodcad.outputs.design_json import print_profile
+from rodcad.outputs.net.design_json import net_json
+from rodcad.outputs.net.preview import plot_net
+from rodcad.outputs.net.report import net_report
+from rodcad.pipeline.folder import staged, write_design
+from rodcad.progress import Progress
+
+__all__ = ["NetBuild", "build_net", "write_net_outputs"]
+
+
+@dataclass
+class NetBuild:
+    """One run of a net design.
+
+    Attributes:
+        design: the validated design.
+        check: the designed net, its equilibrium and fit.
+        seed: the multi-start's seed.
+        solids: the hubs' and rods' solids and the net as built (with CAD), or None.
+    """
+
+    design: Design
+    check: NetCheck
+    seed: int
+    solids: Any = None  # rodcad.cad.net.solids.NetSolids when the solids were built
+
+    @property
+    def ok(self) -> bool:
+        return self.check.ok and self.as_built_ok
+
+    @property
+    def as_built_ok(self) -> bool:
+        """Without CAD, or the net as built within the tolerance of the design."""
+        return self.solids is None or bool(self.solids.rel_size <= self.check.tolerance)  # (NaN: no equilibrium)
+
+    @property
+    def as_built_stalled(self) -> bool:
+        """The as-built net's solver stopped short of round-off (see
+        :data:`rodcad.cad.net.solids.AS_BUILT_KKT`): its error is read where it stopped."""
+        return self.solids is not None and not self.solids.as_built.success
+
+    def limit(self) -> str:
+        return self.check.limit()
+
+
+def build_net(design: Design, *, seed: int | None = None, cad: bool = False,
+              progress: Progress | None = None) -> NetBuild:
+    """Design a net: hardware and rods on the target, masses, the exact equilibrium.
+
+    Raises:
+        DesignLimit: rods the catalog cannot print, nodes too crowded for the hubs.
+    """
+    progress = progress or Progress(quiet=True)
+    seed = design.seed if seed is None else int(seed)
+    t = design.net
+    with progress.step(f"laying hubs and rods on the target ({t.n} nodes, {t.m} rods)"):
+        plan = plan_net(t, design.catalog)
+    with progress.step("designing the masses and solving the net (exact equilibrium, multi-start)") as st:
+        st.note(f"{t.m} rods, mass bounds {plan.bounds[:, 0].min():.3g}-{plan.bounds[:, 1].max():.3g} g")
+        check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance)
+    solids = None
+    if cad:
+        from rodcad.cad.net.solids import build_net_solids
+
+        with progress.step("building the hubs and rods (B-rep) and the net as built") as st:
+            solids = build_net_solids(check, progress=st)
+    return NetBuild(design, check, seed, solids)
+
+
+def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
+    """Write design.json, report.md and preview.png to ``outdir`` (staged: a failed run
+    leaves it as it was). Returns the data written to design.json."""
+    d = b.design
+    with staged(outdir, progress) as (tmp, progress):
+        files = []
+        if b.solids is not None:
+            from rodcad.cad.net.solids import write_net_files
+
+            from rodcad.cad.net.print_files import write_net_print_files
+
+            with progress.step("writing and checking rods/*, hubs/* (STEP, STL) and assembly.step") as st:
+                files = write_net_files(b.check, b.solids, tmp, name=d.name, progress=st)
+            with progress.step("writing print.3mf (PrusaSlicer projects, one per bed) and rods/*.3mf, hubs/*.3mf"):
+                files += write_net_print_files(b.check, b.solids, tmp, printer=d.catalog.printer,
+                                               profile=print_profile(d.catalog), ball_name=_ball_name(d.catalog))
+        with progress.step("writing design.json, report.md, preview.png"):
+            data = _write(b, tmp, files)
+    return data
+
+
+def _finite(x: float) -> float | None:
+    """A float for design.json, None where it is not finite (JSON has no NaN)."""
+    return float(x) if np.isfinite(x) else None
+
+
+def _ball_name(catalog) -> str:
+    """The name of the steel balls that weigh the net's rods down ('' without)."""
+    balls = next(iter(catalog)).balls
+    return str(balls.name) if balls is not None else ""
+
+
+def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
+    """design.json (with the as-built net and the files when the solids were built), the
+    preview and report.md, into ``tmp``."""
+    d = b.design
+    data = net_json(b.check, name=d.name, seed=b.seed, catalog=d.catalog, print_profile=print_profile(d.catalog))
+    s = b.solids
+    if s is not None:
+        data["as_built"] = {"masses": [float(x) for x in s.rod_masses],
+                            "node_masses": [float(x) for x in s.node_masses],
+                            "node_com": [[float(v) for v in c] for c in s.node_com],
+                            "simulated": [[float(v) for v in p] for p in s.as_built.positions],
+                            "stable": bool(s.as_built.stable),
+                            "converged": bool(s.as_built.success),
+                            "kkt_residual": _finite(s.as_built.kkt_residual),
+                            "error": {"max_mm": _finite(s.error_mm), "max_rel_size": _finite(s.rel_size)},
+                            "note": "the net re-solved with the solids' masses and centres of mass, against the "
+                                    "design's simulated nodes and pivots" + (
+                                        "" if s.as_built.success else
+                                        f"; the solver stopped short of round-off ({s.as_built.message}), the "
+                                        "error read where it stopped (null: too far from an equilibrium to say)")}
+        parts = s.hub_parts if s.hub_splits else [(h, None, True) for h in s.hubs]
+        data["cad"] = {"hubs": sum(h is not None for h in s.hubs), "rods": len(s.rods),
+                       "nodes_without_hub": [k for k, h in enumerate(s.hubs) if h is None],
+                       "hub_parts": [p[0].label for p in parts],
+                       "hubs_not_split": {h.parts[0].label: h.reason for h in s.hub_splits if not h.split},
+                       "hubs_wider_sockets": {f"hub-{k:03d}": round(float(h.clearance), 4)
+                                              for k, h in enumerate(s.hub_splits)
+                                              if h.clearance is not None and h.clearance > d.catalog.node.clearance},
+                       "files": files}
+    plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "
+             "its target", tmp / "preview.png")
+    write_design(tmp, data, net_report(b.check, data, title=d.name))
+    return data

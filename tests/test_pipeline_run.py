@@ -1,0 +1,58 @@
+"""``rodcad.pipeline.run``: every kind of design (a chain, a chandelier, a net) through the
+same two steps, build then write, into OUTDIR or, when the build misses its tolerance,
+OUTDIR.best-fit beside it; ``rodcad build`` calls it (tests/test_build.py, test_net_build.py
+and test_chandelier.py check what the command prints and writes)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from rodcad import pipeline
+from rodcad.design.loader import load_design
+from rodcad.pipeline.net import NetBuild
+from rodcad.results import BuildResult, ChandelierBuild
+
+ROOT = Path(__file__).resolve().parents[1]
+
+V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
+         "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
+
+#: Two chains on a frame, one of them a catenary they can reach exactly.
+CHANDELIER = ("design: 1\nname: two\ncatalog: pla-pinned\nchandelier: {pattern: explicit, chains: [\n"
+              "  {anchors: [[0, 0, 0], [150, 0, 0]], target: {form: arc, sag: 50}},\n"
+              "  {anchors: [[0, 50, 0], [0, 200, 20]], target: {form: catenary, length: 220}}]}\n")
+
+
+def _written(run: pipeline.Run) -> dict:
+    return json.loads((run.outdir / "design.json").read_text(encoding="utf-8"))
+
+
+def test_a_chain_goes_to_outdir_or_to_its_best_fit(tmp_path):
+    """The fixed menu's semicircle hangs 1.8 % off its circle: within its own 2 % it goes to
+    OUTDIR; within 0.5 % it misses and goes to OUTDIR.best-fit, OUTDIR left alone."""
+    text = (ROOT / "examples" / "semicircle-menu.yaml").read_text(encoding="utf-8")
+    out = tmp_path / "out"
+    r = pipeline.run(load_design(tmp_path / "d.yaml", text=text), out, cad=False)
+    assert r.kind == "chain" and r.ok and r.outdir == out and isinstance(r.result, BuildResult)
+    assert _written(r) == json.loads(json.dumps(r.data)) and (out / "report.md").is_file()
+    miss = pipeline.run(load_design(tmp_path / "d.yaml", text=text.replace("tolerance: 0.02", "tolerance: 0.005")),
+                        tmp_path / "miss", cad=False)
+    assert miss.kind == "chain" and not miss.ok and not (tmp_path / "miss").exists()
+    assert miss.outdir == tmp_path / "miss.best-fit" and _written(miss)["meets_tolerance"] is False
+
+
+def test_a_chandelier_and_a_net_take_the_same_steps(tmp_path):
+    d = load_design(tmp_path / "two.yaml", text=CHANDELIER)
+    assert pipeline.kind_of(d) == "chandelier"
+    r = pipeline.run(d, tmp_path / "two", cad=False)
+    assert r.kind == "chandelier" and isinstance(r.result, ChandelierBuild)
+    assert r.ok == r.result.meets_tolerance == _written(r)["meets_tolerance"]
+    assert r.outdir == tmp_path / ("two" if r.ok else "two.best-fit")
+    assert [c["name"] for c in _written(r)["chains"]] == ["chain_01", "chain_02"]
+    d = load_design(tmp_path / "v.yaml", text=V_NET)
+    assert pipeline.kind_of(d) == "net"
+    r = pipeline.run(d, tmp_path / "v", cad=False)
+    assert r.kind == "net" and r.ok and isinstance(r.result, NetBuild) and r.result.solids is None
+    assert r.outdir == tmp_path / "v" and len(_written(r)["net"]["rods"]) == 2
+    assert sorted(p.name for p in r.outdir.iterdir()) == [".rodcad-output", "design.json", "preview.png", "report.md"]

@@ -25,6 +25,7 @@ from rodcad.outputs.design_json import print_profile, write_json
 from rodcad.outputs.netjson import net_json
 from rodcad.outputs.netpreview import plot_net
 from rodcad.outputs.netreport import net_report
+from rodcad.outputs.view import write_net_view
 from rodcad.progress import Progress
 
 __all__ = ["NetBuild", "build_net", "write_net_outputs"]
@@ -108,6 +109,7 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
                                                profile=print_profile(d.catalog), ball_name=_ball_name(d.catalog))
         with progress.step("writing design.json, report.md, preview.png"):
             data = _write(b, tmp, files)
+            write_net_view(b, data, tmp)  # assembly.glb, view.html
     return data
 
 

@@ -61,6 +61,7 @@ from rodcad.outputs.design_json import chandelier_json, design_json, print_profi
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.preview3d import preview_3d
 from rodcad.outputs.report import chandelier_markdown, report_markdown
+from rodcad.outputs.view import write_chain_view, write_chandelier_view
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult, ChandelierBuild
 
@@ -389,6 +390,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             write_json(tmp / "design.json", data)
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             (tmp / "report.md").write_text(report_markdown(result, data), encoding="utf-8")
+            write_chain_view(result, data, tmp)  # assembly.glb, view.html
     return data
 
 
@@ -484,4 +486,5 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
             preview_3d(tmp / "preview.png", b.result.chains, frame_outline(b.frame_plan),
                        title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
             (tmp / "report.md").write_text(chandelier_markdown(b, data), encoding="utf-8")
+            write_chandelier_view(b, data, tmp)  # assembly.glb, view.html
     return data

@@ -467,6 +467,7 @@
       if (drag) {
         var dx = e.clientX - drag.x, dy = e.clientY - drag.y;
         drag.x = e.clientX; drag.y = e.clientY; drag.moved += Math.abs(dx) + Math.abs(dy);
+      cam.moved = true;
         if (drag.pan) {
           var b = basis(), s = 2 * cam.dist * Math.tan(FOV / 2) / Math.max(view.clientHeight, 1);
           for (var j = 0; j < 3; j++) cam.target[j] += (-dx * b.r[j] + dy * b.u[j]) * s;
@@ -488,7 +489,8 @@
     canvas.addEventListener("pointerleave", function () { if (!drag) { hover = null; tip.style.display = "none"; redraw(); } });
     canvas.addEventListener("wheel", function (e) {
       e.preventDefault();
-      cam.dist *= Math.exp(Math.max(-1, Math.min(1, e.deltaY * (e.deltaMode ? 0.05 : 0.0015))));
+      cam.moved = true;
+    cam.dist *= Math.exp(Math.max(-1, Math.min(1, e.deltaY * (e.deltaMode ? 0.05 : 0.0015))));
       redraw();
     }, { passive: false });
     canvas.addEventListener("dblclick", function () { fit(); });
@@ -497,7 +499,9 @@
     if (e.key === "f" || e.key === "F") fit(selected.length ? selected : null);
     if (e.key === "Escape") select([]);
   });
-  window.addEventListener("resize", function () { if (resize()) redraw(); });
+  function onResize() { if (resize()) { if (cam.moved) redraw(); else fit(); } } /* framed again until moved */
+  window.addEventListener("resize", onResize);
+  if (window.ResizeObserver) new ResizeObserver(onResize).observe(view);
   function pickAt(e) {
     var r = canvas.getBoundingClientRect(), s = canvas.width / Math.max(r.width, 1);
     return renderer.pick((e.clientX - r.left) * s, (e.clientY - r.top) * s);
@@ -532,4 +536,11 @@
   document.body.setAttribute("data-render", renderer.name.split(" ")[0] === "WebGL" ? "webgl" : "canvas2d");
   fit();
   renderer.draw();
+  /* for scripts and tests: the parts, what is at a point of the canvas, select by name */
+  window.rodcadView = {
+    renderer: renderer.name, parts: items.map(function (it) { return it.name; }),
+    pick: function (x, y) { var it = renderer.pick(x, y); return it ? it.name : null; },
+    select: function (names) { select(names.map(function (n) { return byName[n]; }).filter(Boolean)); },
+    selected: function () { return selected.map(function (it) { return it.name; }); }
+  };
 })();

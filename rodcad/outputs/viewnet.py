@@ -18,7 +18,7 @@ import numpy as np
 from rodcad.outputs.viewgeom import Y_UP, ViewPart, ViewScene, cylinder, sphere, tube, unit_cylinder
 from rodcad.outputs.viewscene import ANCHOR, GREY, cad_parts, legend, mass_scale, mm, pct, step_colors
 
-__all__ = ["net_scene", "rod_frame"]
+__all__ = ["VIEW_TRIANGLES", "net_scene", "rod_frame"]
 
 
 def rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
@@ -70,8 +70,10 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
     rod_d = float(hw.get("rod_diameter") or rods[0].get("diameter") or 6.0)
     node_d = float(hw.get("diameter") or 0.0) if hub else 1.4 * rod_d
     parts: list[ViewPart] = []
+    simple_hubs = b.solids is None
     if b.solids is not None:
-        parts += _net_cad(b, pos, ends, rot, colors)
+        cad, simple_hubs = _net_cad(b, pos, ends, rot, colors)
+        parts += cad
     else:
         arcs = b.check.plan.arcs
         unit = unit_cylinder(rod_d / 2, 12)
@@ -85,6 +87,7 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
                 a = arcs[e]
                 parts.append(ViewPart(f"rod-{e:03d}", "rods", f"bent:{a.length:.3f}:{a.bend:.5f}:{step}",
                                       tube(_bent_line(a), rod_d / 2, 12), m, color))
+    if simple_hubs:
         ball = sphere(node_d / 2, 8, 14)
         for k, nd in enumerate(nodes):
             if hub and not nd.get("rods", 1):
@@ -94,7 +97,7 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
             parts.append(ViewPart(f"hub-{k:03d}" if hub else f"node-{k:03d}", "hubs", "hub", ball, m, GREY))
     hanger = cylinder([0, 0, 0.4 * node_d], [0, 0, 0.4 * node_d + 1.2 * max(node_d, 10.0)], max(0.1 * node_d, 1.2), 10)
     for k, nd in enumerate(nodes):
-        if nd.get("anchored"):
+        if nd.get("anchored") and nd.get("rods", 1):  # (an anchor no rod reaches holds nothing)
             m = np.eye(4)
             m[:3, 3] = pos[k]
             parts.append(ViewPart(f"anchor-{k:03d}", "anchors", "anchor", hanger, m, ANCHOR))
@@ -116,8 +119,10 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
     summary.append(["net mass", f"{total:.1f} g" + (f"; filament {bom['filament_g']:.1f} g" if "filament_g" in bom
                                                      else "")])
     force = (data.get("units") or {}).get("force", "mN")
-    half = {k: [p.name for p in parts if p.name.startswith(f"hub-{k:03d}") or p.name == f"node-{k:03d}"]
-            for k in range(len(nodes))}
+    half: dict[int, list[str]] = {k: [] for k in range(len(nodes))}  # a node's hub (or its halves)
+    for p in parts:
+        if p.group == "hubs":
+            half[int(p.name.split("-")[1])].append(p.name)
     tables = [{"id": "rods", "title": "Rods", "columns": [
         {"label": "#"}, {"label": "nodes"}, {"label": "length mm", "digits": 2}, {"label": "mass g", "digits": 3},
         {"label": f"tension {force}", "digits": 1}, {"label": "shape"}],
@@ -133,6 +138,8 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
                    for nd in nodes]}]
     shown = "as built (the solids)" if built else ("the solids, where the design hangs" if b.solids is not None
                                                    else "simulated (no CAD: simple shapes)")
+    if b.solids is not None and simple_hubs:
+        shown += f"; the hubs drawn as spheres (their solids' meshes would pass {VIEW_TRIANGLES:,} triangles)"
     panel = {"title": data["name"], "subtitle": f"net of {len(rods)} rods and {len(nodes)} nodes, {shown}",
              "summary": summary,
              "legend": legend(scale, [(GREY, "hub" if hub else "node"), (ANCHOR, "anchored node")]),
@@ -140,8 +147,15 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
     return ViewScene(data["name"], parts, Y_UP, panel, {"yaw": -35.0, "pitch": 28.0})
 
 
-def _net_cad(b, pos, ends, rot, colors) -> list[ViewPart]:
-    """The net's solids (rods, hub halves) where it hangs."""
+#: The most triangles a net's view meshes from its solids (about 10 MB of glb): beyond, its hubs
+#: (each one its own solid, where the rods of one length share a mesh) are drawn as spheres.
+VIEW_TRIANGLES = 400_000
+
+
+def _net_cad(b, pos, ends, rot, colors) -> tuple[list[ViewPart], bool]:
+    """The net's solids (rods, hub halves) where it hangs, and whether its hubs are left to
+    the simple shapes: when meshing them all would pass :data:`VIEW_TRIANGLES` (estimated
+    from the first hub's mesh)."""
     from rodcad.cad.viewmesh import ViewMeshes, net_view_nodes
 
     rods, hubs = net_view_nodes(b.solids, pos, ends, rot)
@@ -149,4 +163,12 @@ def _net_cad(b, pos, ends, rot, colors) -> list[ViewPart]:
     for p in hubs:
         shade = 0.66 if p.name.endswith("-b") else 0.78  # a hub's halves in two greys
         named[p.name] = ("hubs", (shade, shade, shade + 0.03))
-    return cad_parts(ViewMeshes().parts([*rods, *hubs]), named, lambda s: ("hubs", GREY))
+    meshes = ViewMeshes()
+    parts = meshes.parts(rods)
+    rod_tris = sum(len(f) for f in (m[1] for m in meshes.meshes.values()))
+    if hubs:
+        first = meshes.parts(hubs[:1])
+        if rod_tris + len(first[0].faces) * len(hubs) > VIEW_TRIANGLES:
+            return cad_parts(parts, named, lambda s: ("hubs", GREY)), True
+        parts += first + meshes.parts(hubs[1:])
+    return cad_parts(parts, named, lambda s: ("hubs", GREY)), False

@@ -119,8 +119,9 @@ def _chain_parts(rods: list[dict[str, Any]], points: np.ndarray, colors, steps, 
                  group: str = "rods", base: np.ndarray | None = None, pins: list[float | None] | None = None
                  ) -> list[ViewPart]:
     """One chain's rods (its printed outline extruded, rod ``NN_TYPE``), its pins (``pin_NN``
-    through every joint between rods; ``pins[j]`` its diameter) and its two anchors, from the
-    numbers; ``base`` places the chain plane in the world."""
+    through every joint between rods; ``pins[j]`` its diameter, 0 for the rods' own, None for a
+    fused joint: no pin) and its two anchors, from the numbers; ``base`` places the chain plane
+    in the world."""
     base = np.eye(4) if base is None else base
     parts = []
     for i, (rod, color, step) in enumerate(zip(rods, colors, steps)):
@@ -135,7 +136,9 @@ def _chain_parts(rods: list[dict[str, Any]], points: np.ndarray, colors, steps, 
     for j, p in enumerate(points):
         rod = rods[min(j, len(rods) - 1)]
         h, t, d = _section(rod)
-        if pins is not None and pins[j] is not None:
+        if pins is not None and pins[j] is None and 0 < j < len(points) - 1:
+            continue  # a fused joint: no pin
+        if pins is not None and pins[j]:
             d = float(pins[j])
         m = np.eye(4)
         m[:2, 3] = p
@@ -170,7 +173,7 @@ def _chain_panel(data: dict[str, Any], piece_of: dict[int, str]) -> list[dict[st
             {"label": "#"}, {"label": "hardware"}, {"label": "load N", "digits": 3}, {"label": "rated N", "digits": 3},
             {"label": "friction"}],
             "rows": [[p["pin"], p["option"], p["load_n"], p["rated_n"], "{:g}-{:g}".format(*p["friction"])]
-                     for p in hw],
+                     if p.get("option") is not None else [p["pin"], "fused (no pin)", None, None, "-"] for p in hw],
             "parts": [[f"anchor_{'AB'[p['pin'] > 0]}" if p["pin"] in (0, n) else f"pin_{p['pin']:02d}"]
                       for p in hw]})
     return tables
@@ -187,8 +190,8 @@ def chain_scene(result, data: dict[str, Any]) -> ViewScene:
     ab = data.get("as_built")
     points = np.asarray(ab["points"] if ab and "points" in ab else data["simulated"]["points"], float)
     hw = (data.get("hardware") or {}).get("pins") or []
-    pin_d = {p["pin"]: p["pin_diameter_mm"] for p in hw}
-    pins = [pin_d.get(j) for j in range(len(points))]
+    pin_d = {p["pin"]: p.get("pin_diameter_mm") for p in hw}  # None: a fused joint, no pin
+    pins = [pin_d.get(j, 0.0) for j in range(len(points))]
     parts = _chain_parts(rods, points, colors, steps, pins=pins)
     if result.fabrication is not None:
         parts = _chain_cad(result, data, points, parts, dict(zip([f"{r['index']:02d}_{r['type']}" for r in rods],
@@ -228,7 +231,7 @@ def _chain_cad(result, data, points, numbers: list[ViewPart], colors) -> list[Vi
     fab = result.fabrication
     fused = {j + 1 for p in fab.pieces for j in range(p.first, p.last)}
     hw = (data.get("hardware") or {}).get("pins") or []
-    pin_d = {p["pin"]: p["pin_diameter_mm"] for p in hw}
+    pin_d = {p["pin"]: p["pin_diameter_mm"] for p in hw if p.get("pin_diameter_mm")}
     n = len(fab.rods)
     pins = [None if j in fused else (pin_d.get(j, fab.rods[min(j, n - 1)].pin_diameter), fab.rods[min(j, n - 1)].thickness)
             for j in range(len(points))]

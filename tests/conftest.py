@@ -196,7 +196,9 @@ def build_store(tmp_path_factory) -> BuildStore:
 #: pytest-xdist worker, one after the other (on two workers at once one would wait, idle, for
 #: the other's build): module -> the module whose worker runs it too.
 SAME_WORKER = {"tests/test_build_cad.py": "tests/test_asprinted.py",  # the semicircle with CAD
-               "tests/test_netprint.py": "tests/test_net_build.py"}  # the V net with CAD
+               "tests/test_view.py": "tests/test_asprinted.py",  # its view
+               "tests/test_netprint.py": "tests/test_net_build.py",  # the V net with CAD
+               "tests/test_view_net_cad.py": "tests/test_net_build.py"}  # its view
 
 
 @pytest.hookimpl(optionalhook=True)

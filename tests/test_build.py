@@ -62,7 +62,8 @@ def test_every_example_builds_without_cad(example, build_store):
     code, out, summary = build_store.cli_build(example, "--no-cad", "-q")
     assert code == EXPECTED_EXIT.get(example.stem, 0)
     out = built_folder(out, code)
-    assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg", MARKER}
+    assert {p.name for p in out.iterdir()} == {"design.json", "report.md", "preview.png", "preview.svg", "assembly.glb",
+                                               "view.html", MARKER}
     data = json.loads((out / "design.json").read_text())
     check_contract(data)
     # the simulated shape is the equilibrium of the rods listed, re-solved independently

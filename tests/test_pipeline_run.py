@@ -55,4 +55,4 @@ def test_a_chandelier_and_a_net_take_the_same_steps(tmp_path):
     r = pipeline.run(d, tmp_path / "v", cad=False)
     assert r.kind == "net" and r.ok and isinstance(r.result, NetBuild) and r.result.solids is None
     assert r.outdir == tmp_path / "v" and len(_written(r)["net"]["rods"]) == 2
-    assert sorted(p.name for p in r.outdir.iterdir()) == [".rodcad-output", "design.json", "preview.png", "report.md"]
+    assert sorted(p.name for p in r.outdir.iterdir()) == [".rodcad-output", "assembly.glb", "design.json", "preview.png", "report.md", "view.html"]

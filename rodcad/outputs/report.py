@@ -13,6 +13,7 @@ from rodcad import __version__
 from rodcad.fabrication.layers import LayerGrid
 from rodcad.outputs.hardware import hardware_lines, hardware_summary, tapping_sentence
 from rodcad.outputs.design_json import ball_text, bill_of_materials, curve_error
+from rodcad.outputs.view import view_line
 
 __all__ = ['report_markdown', 'summary_text', 'chandelier_markdown', 'chandelier_summary']
 
@@ -115,6 +116,8 @@ def report_markdown(r, data: dict[str, Any]) -> str:
         add(f"- Note: {note}")
     add("")
     add("![preview](preview.png)")
+    add("")
+    add(view_line())
     add("")
     add("## Rods")
     add("")
@@ -333,7 +336,7 @@ def summary_text(r, outdir: Path | None) -> str:
     for note in r.notes:
         L.append(f"  note: {note}")
     if outdir is not None:
-        files = "design.json, report.md, preview.png"
+        files = "design.json, report.md, preview.png, view.html, assembly.glb"
         if r.fabrication is not None:
             files += ", assembly.step, print.3mf, rods/*.step|stl|3mf"
         if getattr(r, "fixture", None) is not None:
@@ -382,7 +385,7 @@ def chandelier_markdown(b, data: dict[str, Any]) -> str:
         L.append(f"| {ch['name']} | {len(ch['rods'])} | {mass:.1f} | {ch['error']['max_mm']:.3g} "
                  f"| {100 * ch['error']['max_rel_span']:.3g} | {ab} | {'yes' if ch['simulated']['stable'] else 'NO'} "
                  f"| {'yes' if ch['simulated']['unique'] else 'no'} |")
-    L += ["", "![preview](preview.png)", ""]
+    L += ["", "![preview](preview.png)", "", view_line(), ""]
     for note in b.notes:
         L.append(f"- Note: {note}")
     if "frame" in data:

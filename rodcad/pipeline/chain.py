@@ -57,6 +57,7 @@ from rodcad.fabrication.intervals import chain_intervals
 from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
+from rodcad.outputs.view import write_chain_view
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
@@ -383,4 +384,5 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             data = design_json(result)
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             write_design(tmp, data, report_markdown(result, data))
+            write_chain_view(result, data, tmp)  # assembly.glb, view.html
     return data

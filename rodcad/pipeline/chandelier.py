@@ -33,6 +33,7 @@ from rodcad.outputs.design_json import chandelier_json, print_profile
 from rodcad.outputs.preview3d import preview_3d
 from rodcad.outputs.report import chandelier_markdown
 from rodcad.pipeline.chain import N_STARTS, arrays_step, as_built, fabricate_step, intervals_step
+from rodcad.outputs.view import write_chandelier_view
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import ChandelierBuild
@@ -128,4 +129,5 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
             preview_3d(tmp / "preview.png", b.result.chains, frame_outline(b.frame_plan),
                        title=f"{b.design.name}: {len(b.result.chains)} chains", svg=True)
             write_design(tmp, data, chandelier_markdown(b, data))
+            write_chandelier_view(b, data, tmp)  # assembly.glb, view.html
     return data

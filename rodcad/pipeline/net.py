@@ -24,6 +24,7 @@ from rodcad.outputs.design_json import print_profile
 from rodcad.outputs.net.design_json import net_json
 from rodcad.outputs.net.preview import plot_net
 from rodcad.outputs.net.report import net_report
+from rodcad.outputs.view import write_net_view
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 
@@ -107,6 +108,7 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
                                                profile=print_profile(d.catalog), ball_name=_ball_name(d.catalog))
         with progress.step("writing design.json, report.md, preview.png"):
             data = _write(b, tmp, files)
+            write_net_view(b, data, tmp)  # assembly.glb, view.html
     return data
 
 

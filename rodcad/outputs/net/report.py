@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from rodcad.outputs.view import view_line
+
 __all__ = ["assembly_layers", "net_report", "net_summary"]
 
 
@@ -54,7 +56,7 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
               f"'{t.kind}'. It {verdict} its tolerance: the simulated net hangs **{check.error_mm:.3g} mm** "
               f"({100 * check.rel_size:.3g} % of its {t.size:.4g} mm size) from its target at worst "
               f"(tolerance {100 * check.tolerance:.3g} %).", "",
-              "![from above and from the side](preview.png)", "", "## Fit and equilibrium", ""]
+              "![from above and from the side](preview.png)", "", view_line(), "", "## Fit and equilibrium", ""]
     lines += [f"- Statics at the target: {check.design.statics.message}",
               f"- Exact equilibrium of the designed net from the target: "
               f"{'stable' if eq.stable else 'NOT stable'}, KKT residual {eq.kkt_residual:.2g}; {eq.message}",
@@ -210,5 +212,5 @@ def net_summary(check, outdir: Path) -> str:
     return (f"{t.n} nodes, {t.m} rods: hangs {check.error_mm:.3g} mm ({100 * check.rel_size:.3g} % of its size) "
             f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
             f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
-            f"wrote {outdir}/design.json, report.md, preview.png"
+            f"wrote {outdir}/design.json, report.md, preview.png, view.html, assembly.glb"
             + (", rods/, hubs/, assembly.step, print.3mf" if (outdir / "assembly.step").exists() else ""))

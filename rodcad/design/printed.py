@@ -391,11 +391,13 @@ def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: Printed
     sculpture).
 
     Longer rods: :data:`LONGER` times the plan's mean length (within the family's range), tried
-    from the shortest; the first that keeps :data:`FREE_SHARE` free is taken (the most faithful
-    of those), else the one that keeps most free. A longer plan counts only where the solver
-    accepted it (on target, stable, nothing lower), its rods' centrelines follow the curve within
-    :data:`FREER_FIT` x ``tolerance`` of the target's size, and its chain comes back to its
-    shape when released near it (:func:`returns`). ``kw`` as :func:`plan_printed`'s."""
+    from the longest (the quickest to plan, and the freest): going shorter while a plan keeps at
+    least as many free (at :data:`FREE_SHARE` or more, while it keeps that share), it stops at
+    the first that keeps fewer; so the plan taken is the most faithful of the freest. A longer
+    plan counts only where the solver accepted it (on target, stable, nothing lower), its rods'
+    centrelines follow the curve within :data:`FREER_FIT` x ``tolerance`` of the target's size,
+    and its chain comes back to its shape when released near it (:func:`returns`). ``kw`` as
+    :func:`plan_printed`'s."""
     from rodcad.design.fit import curve_fit
     from rodcad.design.shell import curve_size
 
@@ -405,9 +407,9 @@ def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: Printed
     mean = float(np.mean(plan.problem.lengths))
     top = float(pf.family.ranges.length[1])
     size = curve_size(curve)
-    best, best_share, best_len = plan, share, mean
+    best, best_share = None, share
     seen = {len(plan.rods)}
-    for length in sorted({min(top, f * mean) for f in LONGER}):
+    for length in sorted({min(top, f * mean) for f in LONGER}, reverse=True):
         if length <= 1.05 * mean:
             continue
         try:
@@ -418,19 +420,22 @@ def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: Printed
             continue
         seen.add(len(p.rods))
         v = p.verified[1] if p.verified is not None else None
-        if v is None or not v.on_target or v.lower or p.unmet or free_share(p) <= best_share + 1e-9:
+        if v is None or not v.on_target or v.lower or p.unmet:
             continue
         if curve_fit(curve, p.discretization.points, [r.curvature for r in p.rods]) > FREER_FIT * tolerance:
             continue
-        if not returns(p, size):
+        s = free_share(p)
+        enough = best is not None and best_share >= FREE_SHARE
+        if (enough and s < FREE_SHARE) or (best is not None and not enough and s < best_share - 1e-9):
+            break  # shorter rods keep fewer free from here on
+        if s <= share + 1e-9 or not returns(p, size):
             continue
-        best, best_share, best_len = p, free_share(p), float(np.mean(p.problem.lengths))
-        if best_share >= FREE_SHARE:
-            break
-    if best is not plan:
-        best.notes.append(f"rods of about {best_len:.0f} mm keep {100 * best_share:.0f} % of the joints free (the "
-                          f"longest rods that follow the curve, {mean:.0f} mm, {100 * share:.0f} %): a hanging chain, "
-                          "not a rigid one")
+        best, best_share = p, s  # as free as the best so far, on shorter rods: more faithful
+    if best is None:
+        return plan
+    best.notes.append(f"rods of about {np.mean(best.problem.lengths):.0f} mm keep {100 * best_share:.0f} % of "
+                      f"the joints free (the longest rods that follow the curve, {mean:.0f} mm, {100 * share:.0f} "
+                      "%): a hanging chain, not a rigid one")
     return best
 
 

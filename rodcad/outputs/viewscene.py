@@ -202,7 +202,9 @@ def chain_scene(result, data: dict[str, Any]) -> ViewScene:
             ["rods off the target curve", f"{mm(curve.get('max_mm'))} ({pct(curve.get('rel_size'))} of its size)"],
             ["joints off the target", f"{mm(err.get('max_mm'))} ({pct(err.get('max_rel_span'))} of the span)"]]
     if ab:
-        rows.append(["as built (the solids' masses)", pct(ab["error"].get("max_rel_span")) + " of the span"])
+        e, size = ab["error"], curve.get("size_mm")
+        rel = None if e.get("max_mm") is None or not size else e["max_mm"] / size  # judged as the fit: by the size
+        rows.append(["as built (the solids' masses)", f"{mm(e.get('max_mm'))} ({pct(rel)} of its size)"])
     if data.get("tolerance") is not None:
         rows.append(["tolerance", f"{pct(data['tolerance'])}: {'met' if data.get('meets_tolerance') else 'MISSED'}"])
     sim = data["simulated"]

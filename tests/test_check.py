@@ -250,6 +250,9 @@ def test_rebalance_brings_the_chain_back(built, edited, tmp_path, capsys):
     assert (out / ".rodcad-output").is_file() and not (tmp_path / "chain.best-fit").exists()
     new = json.loads((out / "design.json").read_text())
     assert new["round_trip"][-1]["edited"] == [BEAD_ROD, GROOVE_ROD]
+    # no 3D view of the chain before the re-balance is left beside the new design.json
+    assert not (out / "view.html").exists() and not (out / "assembly.glb").exists()
+    assert any("view.html" in n for n in new["notes"])
     assert new["rods"][BEAD_ROD]["fabrication"]["edited"] is True
     assert "Round trip" in (out / "report.md").read_text()
     # checked again, nothing is edited any more and the chain hangs as the new design.json says

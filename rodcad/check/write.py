@@ -287,6 +287,11 @@ def write_rebalanced(res: CheckResult, rb: Rebalanced, outdir: Path, *, from_ass
         rb.notes.append("print.3mf and rods/*.3mf written again from the rods as they are now (the edited "
                         "rods as saved, the re-designed ones rebuilt)")
     rewrite |= set(stale)
+    views = {src / "view.html", src / "assembly.glb"}
+    if any(p.is_file() for p in views):  # the build's 3D view shows the chain before the re-balance
+        rewrite |= views
+        rb.notes.append("view.html and assembly.glb (the 3D view) are left out: they showed the chain before the "
+                        "re-balance; `rodcad build` writes them for a design")
     data = rebalanced_json(res, rb)
     old_report = (src / "report.md").read_text(encoding="utf-8") if (src / "report.md").is_file() else ""
     with staged_output(outdir) as tmp:

@@ -149,18 +149,12 @@ def net_view_nodes(solids, positions: np.ndarray, ends: np.ndarray, rotations: n
     write_net_files places them in assembly.step: a rod's frame at its first pivot, x along
     its chord, z the upward side of the chord (a bent rod bows toward -z); a hub's at its
     node, turned with its body. Colourless: the view colours them. Returns (rods, hubs)."""
+    from rodcad.cad.net.solids import rod_matrix
+
     rods = []
     for e, s in enumerate(solids.rods):
         p0, p1 = np.asarray(ends[e], float)
-        x = (p1 - p0) / np.linalg.norm(p1 - p0)
-        y = np.cross([0.0, 0.0, 1.0], x)
-        if np.linalg.norm(y) < 1e-9:
-            y = np.cross([0.0, 1.0, 0.0], x)
-        y /= np.linalg.norm(y)
-        m = np.eye(4)
-        m[:3, :3] = np.column_stack([x, y, np.cross(x, y)])
-        m[:3, 3] = p0
-        rods.append(AssemblyPart(s.label, s, m))
+        rods.append(AssemblyPart(s.label, s, rod_matrix(p0, p1)))
     hubs = []
     for k, s in enumerate(solids.hubs):
         if s is None:

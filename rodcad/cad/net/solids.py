@@ -35,7 +35,7 @@ from rodcad.parallel import default_jobs, worker_pool
 ROD_DEFLECTION = 0.0015
 HUB_DEFLECTION = 0.004
 
-__all__ = ["AS_BUILT_KKT", "HUB_DEFLECTION", "PARTS_PER_WORKER", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "whole_hub",
+__all__ = ["AS_BUILT_KKT", "HUB_DEFLECTION", "PARTS_PER_WORKER", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "rod_matrix", "whole_hub",
            "write_net_files"]
 
 
@@ -277,6 +277,12 @@ def _matrix(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
     return m
 
 
+def rod_matrix(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """4 x 4: the rod frame (:func:`_rod_frame`) placed at its first pivot ``p0``, as
+    assembly.step and the 3D view place a net's rods."""
+    return _matrix(_rod_frame(p0, p1), p0)
+
+
 def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
     """The rod frame in the world: x along the chord, y horizontal, z = x cross y the upward
     side of the chord (a bent rod, bowing toward -z, hangs so)."""
@@ -334,7 +340,7 @@ def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progre
     for e, s in enumerate(solids.rods):
         p0, p1 = eq.ends[e]
         color = tuple(float(c) for c in cmap(norm(m[e]))[:3])
-        nodes.append(AssemblyPart(s.label, s, _matrix(_rod_frame(p0, p1), p0), color))
+        nodes.append(AssemblyPart(s.label, s, rod_matrix(p0, p1), color))
     for k, s in enumerate(solids.hubs):
         for i, p in enumerate(solids.hub_splits[k].parts if solids.hub_splits else [s]):
             grey = 0.8 - 0.15 * i  # the halves of a hub in two greys

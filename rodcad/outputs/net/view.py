@@ -22,17 +22,10 @@ __all__ = ["VIEW_TRIANGLES", "net_scene", "rod_frame"]
 
 
 def rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """4 x 4 rod frame in the world, as assembly.step's: origin the first pivot, x along the
-    chord, y horizontal, z the upward side of the chord (a bent rod bows toward -z)."""
-    x = (p1 - p0) / np.linalg.norm(p1 - p0)
-    y = np.cross([0.0, 0.0, 1.0], x)
-    if np.linalg.norm(y) < 1e-9:
-        y = np.cross([0.0, 1.0, 0.0], x)
-    y /= np.linalg.norm(y)
-    m = np.eye(4)
-    m[:3, :3] = np.column_stack([x, y, np.cross(x, y)])
-    m[:3, 3] = p0
-    return m
+    """4 x 4 rod frame in the world, as assembly.step's (:func:`rodcad.cad.net.solids.rod_matrix`)."""
+    from rodcad.cad.net.solids import rod_matrix
+
+    return rod_matrix(np.asarray(p0, float), np.asarray(p1, float))
 
 
 def _bent_line(arc, segments: int = 10) -> np.ndarray:

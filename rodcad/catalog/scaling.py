@@ -73,16 +73,18 @@ def mass_span(catalog: Catalog, family: str, table: MassTable, length: float, cu
 
 
 def _bisect(f: Any, lo: float, hi: float) -> float:
-    """A scale in [lo, hi] at most :data:`SCALE_TOL` above where the increasing ``f`` crosses 0
-    (f(lo) < 0 <= f(hi)), with f >= 0 there: Brent's method (scipy's ``brentq``: a handful of
-    evaluations where halving the bracket to the tolerance took about 17), then the crossing's
-    upper side."""
-    from scipy.optimize import brentq
+    """The scale in [lo, hi] where the increasing ``f`` crosses 0 (f(lo) < 0 <= f(hi)).
 
-    x = brentq(f, lo, hi, xtol=SCALE_TOL / 4)
-    if f(x) >= 0:
-        return float(x)
-    return float(min(hi, x + SCALE_TOL / 4))  # the crossing lies within xtol of x
+    Halving, not a faster root finder: a rod's mass range is not a smooth function of its scale
+    (ball sockets come in whole numbers), and Brent's method found another crossing (the
+    semicircle's 22 g rods at scale 1.189 instead of 1.271)."""
+    while hi - lo > SCALE_TOL:
+        mid = (lo + hi) / 2
+        if f(mid) < 0:
+            lo = mid
+        else:
+            hi = mid
+    return hi
 
 
 def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: float, mass: float,

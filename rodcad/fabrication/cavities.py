@@ -17,13 +17,14 @@ from rodcad.cad.solids import mass_properties
 from rodcad.fabrication.layout import (
     MIN_CAVITY_RADIUS,
     UP,
+    BoundedMemo,
     SphereLayout,
     ball_offset,
     max_ball_layout,
     silo_top_points,
     sphere_layout,
-    symmetric_images,
     memo_key,
+    symmetric_images,
     tall_silo,
     void_volume,
 )
@@ -185,30 +186,22 @@ def dart_throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray
     orbits (their distinct points) in acceptance order (memoised). The sockets' roofs are
     ``socket_h`` above their centres (default: their radius)."""
     key = (id(pool), radius, wall, np.asarray(sockets, dtype=float).tobytes(), socket_r, socket_h)
-    if key not in THROWS:
-        if len(THROWS) > 4096:
-            THROWS.clear()
-        THROWS[key] = _throw(pool, radius, wall, sockets, socket_r, socket_h)
-    return THROWS[key]
+    return THROWS.get(key, lambda: _throw(pool, radius, wall, sockets, socket_r, socket_h))
 
 
 #: Each pool candidate's distance from a set of ball sockets (:func:`_socket_clearance`).
-SOCKET_CLEARANCE: dict[tuple, np.ndarray] = {}
+SOCKET_CLEARANCE = BoundedMemo(1024)
 
 
 def _socket_clearance(pool: CavityPool, sockets: np.ndarray, socket_r: float,
                       socket_h: float | tuple[float, ...] | None) -> np.ndarray:
     """Every candidate's (all its images') distance from the sockets: the same for every
     cavity radius the pool is thrown with (memoised)."""
-    key = (id(pool), np.asarray(sockets, dtype=float).tobytes(), socket_r, socket_h)
-    hit = SOCKET_CLEARANCE.get(key)
-    if hit is None:
+    def compute() -> np.ndarray:
         flat, starts = pool.flat
-        hit = np.minimum.reduceat(silo_distance(flat, sockets, socket_r, socket_h), starts)
-        if len(SOCKET_CLEARANCE) > 1024:
-            SOCKET_CLEARANCE.clear()
-        SOCKET_CLEARANCE[key] = hit
-    return hit
+        return np.minimum.reduceat(silo_distance(flat, sockets, socket_r, socket_h), starts)
+
+    return SOCKET_CLEARANCE.get((id(pool), np.asarray(sockets, dtype=float).tobytes(), socket_r, socket_h), compute)
 
 
 def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, socket_r: float,
@@ -314,18 +307,10 @@ class _MemoClearance:
     def __init__(self, clearance: RodClearance) -> None:
         self._f = clearance
         self.bounds = clearance.bounds
-        self._memo: dict[tuple, np.ndarray] = {}
+        self._memo = BoundedMemo(1024)
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
-        key = memo_key(points)
-        hit = self._memo.get(key)
-        if hit is None:
-            hit = np.asarray(self._f(points))
-            hit.setflags(write=False)
-            if len(self._memo) > 1024:
-                self._memo.clear()
-            self._memo[key] = hit
-        return hit
+        return self._memo.get(memo_key(points), lambda: np.asarray(self._f(points)))
 
 
 @lru_cache(maxsize=16)
@@ -486,4 +471,5 @@ class FabricationError(RuntimeError):
     """A fabricated solid or an exported file failed a check."""
 
 
-THROWS: dict[tuple[int, float, float, bytes, float], list[np.ndarray]] = {}
+#: Dart throws by pool, radius, wall and sockets (:func:`dart_throw`).
+THROWS = BoundedMemo(4096)

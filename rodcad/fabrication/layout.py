@@ -21,6 +21,7 @@ __all__ = [
     "SYMMETRIES",
     "UP",
     "VOIDS",
+    "BoundedMemo",
     "ball_offset",
     "memo_key",
     "Clearance",
@@ -253,18 +254,35 @@ def lattice_sites(bounds: tuple[Sequence[float], Sequence[float]], center: Seque
         raise ValueError(f"unknown lattice {kind!r} (expected one of {', '.join(LATTICES)})")
     key = (tuple(map(float, bounds[0])), tuple(map(float, bounds[1])), tuple(map(float, center)), float(pitch),
            tuple(map(float, offset)), kind)
-    hit = _SITES.get(key)
-    if hit is None:
-        hit = _lattice_sites(bounds, center, pitch, offset, kind)
-        hit.setflags(write=False)
-        if len(_SITES) > 4096:
-            _SITES.clear()
-        _SITES[key] = hit
-    return hit
+    return _SITES.get(key, lambda: _lattice_sites(bounds, center, pitch, offset, kind))
+
+
+class BoundedMemo:
+    """Values computed once by key, the whole memo emptied when it holds ``size`` entries (it
+    only ever saves time). Arrays it keeps are made read-only: every caller shares them."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self._values: dict = {}
+
+    def get(self, key, compute):
+        """The value for ``key``, from ``compute()`` the first time."""
+        hit = self._values.get(key)
+        if hit is None:
+            hit = compute()
+            if isinstance(hit, np.ndarray):
+                hit.setflags(write=False)
+            if len(self._values) >= self.size:
+                self._values.clear()
+            self._values[key] = hit
+        return hit
+
+    def __len__(self) -> int:
+        return len(self._values)
 
 
 #: :func:`lattice_sites` by its arguments (every ball option of a rod asks for the same).
-_SITES: dict[tuple, np.ndarray] = {}
+_SITES = BoundedMemo(4096)
 
 
 def _lattice_sites(bounds, center, pitch: float, offset, kind: str) -> np.ndarray:
@@ -317,28 +335,23 @@ def memo_key(points: np.ndarray, *rest) -> tuple:
 
 #: Image maps of :func:`symmetric_subset` by point set (the same lattice is asked about for
 #: every ball option of a rod: only which points are feasible changes).
-_IMAGE_MAPS: dict[tuple, np.ndarray] = {}
+_IMAGE_MAPS = BoundedMemo(2048)
 
 
 def _image_map(points: np.ndarray, center: Sequence[float], symmetry: str, tol: float) -> np.ndarray:
     """(flips, n) index of each point's image under each flip of ``symmetry`` among
     ``points`` (within ``tol``), or -1 where it has none; memoised by point set."""
-    from scipy.spatial import cKDTree
-
     c = np.asarray(center, dtype=float)
-    key = memo_key(points, tuple(c.tolist()), symmetry, tol)
-    hit = _IMAGE_MAPS.get(key)
-    if hit is not None:
-        return hit
-    flips = np.asarray(_flips(symmetry), dtype=float)
-    images = ((points - c)[None, :, :] * flips[:, None, :] + c).reshape(-1, 3)  # all flips, one query
-    dist, near = cKDTree(points).query(images, distance_upper_bound=tol)
-    out = np.where(np.isfinite(dist), near, -1).reshape(len(flips), len(points))
-    out.setflags(write=False)
-    if len(_IMAGE_MAPS) > 2048:
-        _IMAGE_MAPS.clear()
-    _IMAGE_MAPS[key] = out
-    return out
+
+    def compute() -> np.ndarray:
+        from scipy.spatial import cKDTree
+
+        flips = np.asarray(_flips(symmetry), dtype=float)
+        images = ((points - c)[None, :, :] * flips[:, None, :] + c).reshape(-1, 3)  # all flips, one query
+        dist, near = cKDTree(points).query(images, distance_upper_bound=tol)
+        return np.where(np.isfinite(dist), near, -1).reshape(len(flips), len(points))
+
+    return _IMAGE_MAPS.get(memo_key(points, tuple(c.tolist()), symmetry, tol), compute)
 
 
 def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[float], symmetry: str,

@@ -151,7 +151,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
                  end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0,
-                 report=None, robust=None):
+                 report=None, robust: tuple[float, float, float, float] | None = None):
     """Lay rods printed to order on a target (see the module's docstring); how each joint
     holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 
@@ -425,9 +425,8 @@ def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: Printed
         if curve_fit(curve, p.discretization.points, [r.curvature for r in p.rods]) > FREER_FIT * tolerance:
             continue
         s = free_share(p)
-        enough = best is not None and best_share >= FREE_SHARE
-        if (enough and s < FREE_SHARE) or (best is not None and not enough and s < best_share - 1e-9):
-            break  # shorter rods keep fewer free from here on
+        if best is not None and s < min(best_share, FREE_SHARE) - 1e-9:
+            break  # shorter rods keep fewer free (or fall below half) from here on
         if s <= share + 1e-9 or not returns(p, size):
             continue
         best, best_share = p, s  # as free as the best so far, on shorter rods: more faithful

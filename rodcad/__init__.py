@@ -80,29 +80,19 @@ def design_from(data: dict[str, Any] | str, *, name: str = "design.yaml", folder
 def build(design, *, cad: bool | None = None, method: str | None = None, seed: int | None = None,
           jobs: int | None = None, progress: bool = False):
     """Design (and with ``cad``, build the solids of) any design: a chain's
-    :class:`BuildResult`, a chandelier's :class:`ChandelierBuild` or a net's :class:`NetBuild`.
-    Nothing is written (see :func:`write`). ``progress`` prints the steps to stderr."""
-    from rodcad.pipeline import chain, chandelier, net
-    from rodcad.pipeline.kinds import kind_of
+    :class:`BuildResult`, a chandelier's :class:`ChandelierBuild` or a net's :class:`NetBuild`
+    (:func:`rodcad.pipeline.kinds.build`). Nothing is written (see :func:`write`).
+    ``progress`` prints the steps to stderr."""
+    from rodcad.pipeline.kinds import build as build_any
     from rodcad.progress import Progress
 
-    report = Progress(quiet=not progress)
-    kind = kind_of(design)
-    if kind == "chandelier":
-        return chandelier.build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=report)
-    if kind == "net":
-        return net.build_net(design, seed=seed, cad=design.cad if cad is None else cad, progress=report)
-    return chain.build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=report)
+    return build_any(design, cad=cad, method=method, seed=seed, jobs=jobs, progress=Progress(quiet=not progress))
 
 
 def write(result, outdir: str | Path) -> dict[str, Any]:
     """Write a build's folder (design.json, report.md, previews, the 3D view and, with CAD,
-    STEP/STL/3MF) to ``outdir``, atomically; returns the design.json data."""
-    from rodcad.pipeline import chain, chandelier, net
-    from rodcad.results import ChandelierBuild
+    STEP/STL/3MF) to ``outdir``, atomically; returns the design.json data
+    (:func:`rodcad.pipeline.kinds.write`)."""
+    from rodcad.pipeline.kinds import write as write_any
 
-    if isinstance(result, net.NetBuild):
-        return net.write_net_outputs(result, outdir)
-    if isinstance(result, ChandelierBuild):
-        return chandelier.write_chandelier_outputs(result, outdir)
-    return chain.write_outputs(result, outdir)
+    return write_any(result, outdir)

@@ -14,8 +14,9 @@ from rodcad.design.model import Design
 from rodcad.outdir import best_fit_folder
 from rodcad.pipeline import chain, chandelier, net
 from rodcad.progress import Progress
+from rodcad.results import ChandelierBuild
 
-__all__ = ["Run", "kind_of", "run"]
+__all__ = ["Run", "build", "kind_of", "run", "write"]
 
 
 def kind_of(design: Design) -> str:
@@ -66,17 +67,31 @@ def run(design: Design, outdir: str | Path, *, cad: bool | None = None, method: 
         InputError: the design cannot be built as given.
         DesignLimit: rods the catalog cannot print, nodes too crowded for the hubs (nets).
     """
-    kind = kind_of(design)
-    if kind == "chandelier":
-        result = chandelier.build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs,
-                                             progress=progress)
-        ok, write = result.meets_tolerance, chandelier.write_chandelier_outputs
-    elif kind == "net":
-        result = net.build_net(design, seed=seed, cad=design.cad if cad is None else cad, progress=progress)
-        ok, write = result.ok, net.write_net_outputs
-    else:
-        result = chain.build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
-        ok, write = result.ok, chain.write_outputs
+    result = build(design, cad=cad, method=method, seed=seed, jobs=jobs, progress=progress)
+    ok = result.meets_tolerance if isinstance(result, ChandelierBuild) else result.ok
     target = Path(outdir) if ok else best_fit_folder(Path(outdir))
     data = write(result, target, progress=progress)
-    return Run(kind, result, target, bool(ok), data)
+    return Run(kind_of(design), result, target, bool(ok), data)
+
+
+def build(design: Design, *, cad: bool | None = None, method: str | None = None, seed: int | None = None,
+          jobs: int | None = None, progress: Progress | None = None) -> Any:
+    """Build any design (arguments as :func:`run`'s), writing nothing: a chain's
+    :class:`rodcad.results.BuildResult`, a chandelier's :class:`rodcad.results.ChandelierBuild`
+    or a net's :class:`rodcad.pipeline.net.NetBuild`."""
+    kind = kind_of(design)
+    if kind == "chandelier":
+        return chandelier.build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
+    if kind == "net":
+        return net.build_net(design, seed=seed, cad=design.cad if cad is None else cad, progress=progress)
+    return chain.build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
+
+
+def write(result: Any, outdir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
+    """Write what :func:`build` returned to ``outdir`` (staged: all or nothing); the data
+    written to design.json."""
+    if isinstance(result, net.NetBuild):
+        return net.write_net_outputs(result, outdir, progress=progress)
+    if isinstance(result, ChandelierBuild):
+        return chandelier.write_chandelier_outputs(result, outdir, progress=progress)
+    return chain.write_outputs(result, outdir, progress=progress)

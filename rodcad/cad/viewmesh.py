@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from build123d import Solid
+from build123d import CenterOf, Solid
 
 from rodcad.cad.export import AssemblyGroup, AssemblyPart
 
@@ -104,24 +104,27 @@ class ViewMeshes:
 
     def __init__(self, deflection: float = VIEW_DEFLECTION) -> None:
         self.deflection = deflection
-        self._by_shape: dict[int, str] = {}
+        self._by_solid: dict[int, tuple[Solid, str]] = {}  # the solid kept: its id stays its own
         self._by_size: dict[tuple, str] = {}
         self.meshes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
     def key(self, solid: Solid) -> str:
-        """The key of ``solid``'s mesh, meshing it if no equal shape was meshed before."""
-        shape_id = id(solid.wrapped.TShape())
-        if shape_id in self._by_shape:
-            return self._by_shape[shape_id]
+        """The key of ``solid``'s mesh, meshing it if no equal shape was meshed before: the
+        same solid, or one of the same volume, area, bounding box and centre of mass (a mirror
+        image differs in its centre of mass)."""
+        seen = self._by_solid.get(id(solid))
+        if seen is not None:
+            return seen[1]
         bb = solid.bounding_box()
-        size = (round(float(solid.volume), 3), round(float(solid.area), 3),
-                *(round(float(x), 3) for x in (bb.min.X, bb.min.Y, bb.min.Z, bb.max.X, bb.max.Y, bb.max.Z)))
+        com = solid.center(CenterOf.MASS)
+        size = tuple(round(float(x), 3) for x in (solid.volume, solid.area, bb.min.X, bb.min.Y, bb.min.Z, bb.max.X,
+                                                     bb.max.Y, bb.max.Z, com.X, com.Y, com.Z))
         key = self._by_size.get(size)
         if key is None:
             key = f"solid-{len(self.meshes):04d}"
             self.meshes[key] = view_mesh(solid, deflection=self.deflection)
             self._by_size[size] = key
-        self._by_shape[shape_id] = key
+        self._by_solid[id(solid)] = (solid, key)
         return key
 
     def parts(self, nodes: Sequence[AssemblyPart | AssemblyGroup], group: str = "",

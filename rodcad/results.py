@@ -191,6 +191,8 @@ class ChandelierBuild:
         frame: the frame solid and its check (None without CAD).
         fabrications: per chain, the fabricated rods (None without CAD).
         as_built: per chain, the as-built re-simulation (None without CAD).
+        chains: per chain, the chain as a single one's result (:class:`BuildResult` in its
+            plane): its joint hardware, holes, as printed bands and tapping.
         notes: things the user should know.
         time_s: wall time.
     """
@@ -201,6 +203,7 @@ class ChandelierBuild:
     frame: tuple[Any, Any] | None = None
     fabrications: list[ChainFabrication] | None = None
     as_built: list[AsBuilt] | None = None
+    chains: list[BuildResult] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     time_s: float = 0.0
 

@@ -318,9 +318,11 @@ def test_chandelier_chains_honour_rod_count_and_fixed_rods(tmp_path):
     text = CHANDELIER_CONSTRAINED.replace("RODS", "11").replace("INDEX", "3").replace("MASS", str(m))
     b = pipeline.build_chandelier(load_design(tmp_path / "d.yaml", text=text), cad=False)
     assert len(b.result.chains) == 2
-    for ch in b.result.chains:  # every chain: 11 rods, rod 3 a free-20 of the given mass
+    for ch, r in zip(b.result.chains, b.chains):  # every chain: 11 rods, rod 3 a free-20 of the given mass
         assert len(ch.type_names) == 11 and ch.type_names[3] == "free-20"
-        assert ch.masses[3] == pytest.approx(m, rel=1e-8)
+        # the fixed mass is the rod's own, without the joint hardware that hangs on it
+        assert r.printed_masses[3] == pytest.approx(m, rel=1e-8)
+        assert ch.masses[3] == pytest.approx(m + r.attached[3].sum(), rel=1e-8)
         assert any("fixed by the design" in n for n in ch.design.plan.notes)
         assert ch.equilibrium.success and ch.distance.max_rel_span < 0.05
 

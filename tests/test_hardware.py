@@ -291,3 +291,37 @@ def test_mujoco_with_the_chosen_pins_rests_inside_the_band_necklace_and_a_drawn_
         if not r.meets_tolerance:
             pytest.skip(f"{shape.name} exits 1: no design to hang")
     _rested_inside(r, what)
+
+
+def test_chandelier_chains_get_hardware_per_joint_that_carries_their_loads():
+    """A chandelier's chains take a single chain's hardware step: every joint its own pin
+    option (by the chain's loads, in its plane), the masses designed with it on, the pins'
+    loads within their ratings by independent statics, the friction band recomputed from the
+    chosen parts, and the hardware in design.json's bill of materials."""
+    from rodcad.outputs.design_json import chandelier_json
+
+    b = pipeline.build_chandelier(load_design("examples/chandelier.yaml"), cad=False)
+    assert len(b.chains) == len(b.result.chains)
+    for ch, r in zip(b.result.chains, b.chains):
+        hw = r.hardware
+        assert hw is not None and all(o is not None for o in hw.options)
+        assert np.allclose(r.masses, ch.masses) and r.chain_design is ch.design
+        body = r.masses - r.attached.sum(axis=1)
+        own = (r.com * r.masses[:, None] - np.column_stack([r.attached[:, 1] * r.lengths, np.zeros(r.n)])) \
+            / body[:, None]
+        F, res = independent_pin_forces(r.equilibrium.points, body, own, r.design.g, r.attached)
+        assert res < 1e-9
+        load = newtons(np.hypot(*F.T), r.design.g)
+        assert np.allclose(load, hw.loads, rtol=1e-6)
+        assert np.all(load * hw.safety <= hw.rated)
+        tau = solver_moment([o.friction[1] * f * o.radius + o.torque[1] for o, f in zip(hw.options, hw.loads)],
+                            r.design.g)
+        fb = friction_band(r.lengths, r.masses, *r.design.anchors, capacity=tau, com=r.com, g=r.design.g)
+        assert fb.band == pytest.approx(r.as_printed.friction.band, rel=1e-6)
+        assert r.tapping is not None and r.tapping.converged
+    data = chandelier_json(b)
+    used = {o.name for r in b.chains for o in r.hardware.options}
+    bill = {e["option"]: e["joints"] for e in data["bill_of_materials"]["hardware"]}
+    assert set(bill) == used
+    assert sum(bill.values()) == sum(r.n + 1 for r in b.chains)
+    assert data["chains"][0]["hardware"]["pins"][0]["load_n"] > 0

@@ -41,7 +41,7 @@ from rodcad.design.plan import CatalogArrays, catalog_arrays
 from rodcad.errors import Problem
 from rodcad.progress import Progress
 
-__all__ = ['MIN_HORIZONTAL_SPAN', 'ChainPlacement', 'ring', 'two_rings', 'polygon_frame', 'explicit', 'BillOfMaterials', 'ChainResult', 'ChandelierDesign', 'TargetLike', 'design_chandelier']
+__all__ = ['MIN_HORIZONTAL_SPAN', 'ChainPlacement', 'ring', 'two_rings', 'polygon_frame', 'explicit', 'BillOfMaterials', 'bill_of_materials', 'ChainResult', 'ChandelierDesign', 'TargetLike', 'design_chandelier']
 
 
 #: Smallest horizontal distance between a chain's anchors (mm); below it the
@@ -504,7 +504,7 @@ def design_chandelier(catalog: Catalog, placements: Sequence[ChainPlacement],
     chains = [ChainResult(p, d.design, None if d.shared_with is None else placements[d.shared_with].name)
               for p, d in zip(placements, designed)]
     n_distinct = sum(1 for d in designed if d.shared_with is None)
-    return ChandelierDesign(chains, _bill_of_materials(chains), method, seed, time.perf_counter() - t0, n_distinct)
+    return ChandelierDesign(chains, bill_of_materials(chains), method, seed, time.perf_counter() - t0, n_distinct)
 
 
 def _problem(key: str, message: str) -> Problem:
@@ -520,7 +520,8 @@ def _is_curve(obj: Any) -> bool:
     return a.ndim == 2 and a.shape[1] == 2
 
 
-def _bill_of_materials(chains: Sequence[ChainResult]) -> BillOfMaterials:
+def bill_of_materials(chains: Sequence[ChainResult]) -> BillOfMaterials:
+    """Rods by type and their masses (as they hang), pins between rods and at the lugs."""
     count: Counter[str] = Counter()
     mass: dict[str, float] = {}
     for c in chains:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -321,6 +321,38 @@ def _pts3(p: np.ndarray) -> list[list[float]]:
     return [[float(v) for v in row] for row in np.asarray(p, float)]
 
 
+def _hung_chain_json(r, rods: list[dict[str, Any]], curvature, span: float) -> dict[str, Any]:
+    """A chandelier chain's joint hardware, as printed bands and tapping (as one chain's
+    design.json has them); its rods get their ``hardware`` (``rods`` updated in place)."""
+    out: dict[str, Any] = {}
+    if r.hardware is not None:
+        out["hardware"] = hardware_json(r)
+        for rod, h in zip(rods, rods_hardware_json(r)):
+            rod["hardware"] = h
+    if r.as_printed is not None:
+        out.update(as_printed_json(r.as_printed, r.plan.curve, curvature, span))
+    if r.tapping is not None:
+        out["tapping"] = tapping_json(r)
+    return out
+
+
+def merged_hardware_bill(bills: Sequence[list[dict[str, Any]]]) -> list[dict[str, Any]]:
+    """Several chains' :func:`rodcad.outputs.hardware.hardware_bill` as one: each option once,
+    its joints, pins, sleeves and bearings summed."""
+    out: dict[str, dict[str, Any]] = {}
+    for bill in bills:
+        for e in bill:
+            m = out.get(e["option"])
+            if m is None:
+                out[e["option"]] = json.loads(json.dumps(e))
+                continue
+            m["joints"] += e["joints"]
+            for part in ("pins", "sleeves", "bearings"):
+                if part in e:
+                    m[part]["count"] += e[part]["count"]
+    return list(out.values())
+
+
 def chandelier_json(b) -> dict[str, Any]:
     """design.json of a chandelier: per chain what design.json holds for one chain, plus
     its 3D anchors and points, the frame and the bill of materials over all chains.
@@ -354,8 +386,14 @@ def chandelier_json(b) -> dict[str, Any]:
         }
         if b.as_built is not None:
             entry["as_built"] = _as_built_json(b.as_built[k])
+        if b.chains:
+            entry.update(_hung_chain_json(b.chains[k], rods, curvature, span))
         chains.append(entry)
     bom = res.bom.as_dict()
+    thick = max(d.catalog[n].geometry.thickness for ch in res.chains for n in ch.type_names)
+    hw = merged_hardware_bill([hardware_bill(r, round(thick + 1.0, 2)) for r in b.chains])
+    if hw:
+        bom["hardware"] = hw
     if b.fabrications is not None:
         bom.update(_filament_and_balls([f for fab in b.fabrications for f in fab.rods]))
     out: dict[str, Any] = {

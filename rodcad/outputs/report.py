@@ -355,6 +355,13 @@ def chandelier_summary(b, outdir: Path) -> str:
               if b.as_built is not None else "")
         L.append(f"  {ch.name:<10} {len(ch.type_names):>3} rods  max error {ch.distance.max:.3g} mm "
                  f"({100 * ch.distance.max_rel_span:.3g} % of span{ab})")
+        if b.chains:
+            r = b.chains[k]
+            hw, ap = hardware_summary(r), getattr(r, "as_printed", None)
+            if hw:
+                L.append(f"  {'':<10} joints   {hw}")
+            if ap is not None:
+                L.append(f"  {'':<10} printed  {printed_summary(ap, curve_size_of(r))}")
     L.append("  rods      " + ", ".join(f"{v} x {k}" for k, v in res.bom.rods_by_type.items()))
     if b.fabrications is not None:
         filament = sum(f.filament_mass for fab in b.fabrications for f in fab.rods)
@@ -363,6 +370,41 @@ def chandelier_summary(b, outdir: Path) -> str:
         L.append(f"  note: {note}")
     L.append(f"  files     {outdir}/")
     return "\n".join(L)
+
+
+def curve_size_of(r) -> float:
+    """A designed chain's target size (mm): design.json's ``curve.size_mm``."""
+    from rodcad.design.shell import curve_size
+
+    return float(curve_size(r.plan.curve))
+
+
+def _chandelier_hardware(b, data_chains: list[dict[str, Any]]) -> list[str]:
+    """report.md's "Joint hardware" of a chandelier: per chain (chains that share a design
+    once), what its joints got, its friction band and where it rests after tapping."""
+    if not b.chains or all(r.hardware is None for r in b.chains):
+        return []
+    L = ["", "## Joint hardware", "",
+         "Each joint of each chain has the cheapest hardware of the catalog that carries its load and keeps "
+         "the chain's friction band within a tenth of the tolerance (0.1 % of the chain's size at most); "
+         "design.json's `chains[].hardware` lists it pin by pin (pin 0 at the A lug).", ""]
+    chains = b.result.chains
+    for k, (ch, r) in enumerate(zip(chains, b.chains)):
+        if ch.shared_with is not None:
+            continue
+        same = [c.name for c in chains if c.shared_with == ch.name]
+        who = f"`{ch.name}`" + (f" (and {', '.join(f'`{n}`' for n in same)}: the same chain)" if same else "")
+        size = float(data_chains[k]["curve"]["size_mm"])
+        text = f"- {who}: {hardware_summary(r) or 'no hardware chosen'}"
+        ap = r.as_printed
+        if ap is not None and ap.friction is not None:
+            text += f"; it rests within {ap.friction.band:.3g} mm ({100 * ap.friction.band / size:.3g} % of its size)"
+        L.append(text)
+        tapped = tapping_sentence(r, size)
+        if tapped:
+            L.append("  " + tapped[2:])
+        L += [f"  - Note: {n}" for n in (r.hardware.notes if r.hardware is not None else [])]
+    return L
 
 
 def chandelier_markdown(b, data: dict[str, Any]) -> str:
@@ -388,6 +430,7 @@ def chandelier_markdown(b, data: dict[str, Any]) -> str:
     L += ["", "![preview](preview.png)", "", view_line(), ""]
     for note in b.notes:
         L.append(f"- Note: {note}")
+    L += _chandelier_hardware(b, data["chains"])
     if "frame" in data:
         f = data["frame"]
         L += ["", "## Frame", "",
@@ -398,7 +441,17 @@ def chandelier_markdown(b, data: dict[str, Any]) -> str:
     L += ["", "## Bill of materials", ""]
     for name, count in bom["rods_by_type"].items():
         L.append(f"- {count} x rod `{name}`")
-    L.append(f"- {bom['pins']} pins between rods and {bom['anchor_pins']} pins through the frame's lugs")
+    if bom.get("hardware"):
+        L += [f"- {e['joints']} joint(s) with {e['option']}: {e['description']}; {e['pins']['count']} x "
+              f"{e['pins']['diameter_mm']:g} mm pin cut to {e['pins']['length_mm']:g} mm"
+              + (f", {e['sleeves']['count']} x sleeve {e['sleeves']['outer_diameter_mm']:g} mm OD" if "sleeves" in e
+                 else "")
+              + (f", {e['bearings']['count']} x bearing {e['bearings']['bore_mm']:g} x "
+                 f"{e['bearings']['outer_diameter_mm']:g} x {e['bearings']['width_mm']:g} mm" if "bearings" in e
+                 else "") for e in bom["hardware"]]
+        L.append(f"- ({bom['pins']} joints between rods and {bom['anchor_pins']} through the frame's lugs)")
+    else:
+        L.append(f"- {bom['pins']} pins between rods and {bom['anchor_pins']} pins through the frame's lugs")
     if "filament_g" in bom:
         L.append(f"- Filament for the rods: {bom['filament_g']:.1f} g")
         for ball in bom["metal_balls"]:

@@ -117,7 +117,13 @@ def tube(path: np.ndarray, radius: float, sections: int = 12, caps: bool = True)
     p = p[np.r_[True, np.linalg.norm(np.diff(p, axis=0), axis=1) > 1e-9]]  # no repeated points
     if len(p) < 2:
         return Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64))
-    t = np.gradient(p, axis=0) if len(p) > 2 else np.repeat([p[-1] - p[0]], len(p), axis=0)
+    seg = np.diff(p, axis=0)
+    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+    # at a vertex the mean of its two segments' directions; where they are opposite (a path
+    # that turns back: a frame's bar drawn there and back) the incoming one
+    t = np.vstack([seg[:1], seg[:-1] + seg[1:], seg[-1:]])
+    flat = np.linalg.norm(t, axis=1) < 1e-9
+    t[flat] = np.vstack([seg[:1], seg])[flat]
     t /= np.linalg.norm(t, axis=1, keepdims=True)
     ref = np.array([0.0, 0.0, 1.0]) if abs(t[0, 2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     u = np.cross(t[0], ref)

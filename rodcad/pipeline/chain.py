@@ -70,7 +70,9 @@ __all__ = [
     "build",
     "build_fixture_for",
     "fabricate_step",
+    "hung_result",
     "intervals_step",
+    "printed_step",
     "simulate",
     "write_outputs",
 ]
@@ -168,10 +170,49 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     cd = chain.design
     if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
         design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
+    result = hung_result(design, cd, method=method, seed=seed, intervals=ivfn, progress=progress)
+    p = result.plan
+    rods = result.rods
+    if cad:
+        (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
+                                      progress=progress,
+                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
+                                      fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
+        result.fabrication = fab
+        result.notes += problems
+        if p.fused:
+            with progress.step(f"uniting {len(p.fused)} fused piece(s) into one solid each"):
+                try:
+                    fuse_pieces(fab, p.fused, result.equilibrium.points,
+                                [design.catalog[name] for name in result.type_names])
+                except PieceRefused as err:
+                    raise InputError([design.problem("constraints.fuse", str(err))]) from None
+        with progress.step("as-built check (masses and centres of mass from the solids)"):
+            result.as_built = as_built(as_printed_rods(fab), result.lengths, result.limits, design.anchors,
+                                       result.target_points, design.g, result.end_limits, metal=result.metal)
+        if result.end_limits is not None:
+            with progress.step("the anchor fixture (stops for the end rods), checked against the rods at rest"):
+                result.fixture, result.fixture_problems = build_fixture_for(result)
+            result.notes += [f"fixture: {p}" for p in result.fixture_problems]
+    printed_step(result, progress)
+    result.time_s = time.perf_counter() - t0
+    return result
+
+
+def hung_result(design: Design, cd, *, method: str, seed: int, intervals, progress: Progress) -> BuildResult:
+    """A designed chain (``cd``, :class:`rodcad.design.masses.ChainDesign`, in the plane of
+    ``design.anchors``) with its joint hardware chosen per joint and its masses designed with
+    that hardware hanging on the rods (:func:`rodcad.design.hung.design_hung`), as a
+    :class:`BuildResult` with its pin holes planned; a chandelier's chains take it one by one.
+
+    Args:
+        intervals: the achievable mass intervals of rod types (:func:`intervals_step`), None
+            without CAD.
+    """
     rods = [design.catalog[name] for name in cd.plan.type_names]
     with progress.step("joint hardware (pins, bushings or bearings for each joint's load and friction) and "
                        "the masses designed with it hanging on the rods"):
-        ivs = None if ivfn is None else dict(ivfn(list({r.name: r for r in rods}.values())))
+        ivs = None if intervals is None else dict(intervals(list({r.name: r for r in rods}.values())))
         hung = design_hung(cd, rods, lambda c: chain_hardware(rods, design, c), method=method, seed=seed,
                            n_starts=N_STARTS, g=design.g, intervals=ivs)
     if hung is not None:
@@ -195,32 +236,15 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
             f"{snap.snapped} rod mass(es) moved onto masses the rods can really be built at (metal balls "
             f"come in whole numbers): max error {100 * snap.error_before:.3g} % -> "
             f"{100 * snap.error_after:.3g} % of the span")
-    if cad:
-        (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
-                                      progress=progress,
-                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
-                                      fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
-        result.fabrication = fab
-        result.notes += problems
-        if p.fused:
-            with progress.step(f"uniting {len(p.fused)} fused piece(s) into one solid each"):
-                try:
-                    fuse_pieces(fab, p.fused, result.equilibrium.points,
-                                [design.catalog[name] for name in result.type_names])
-                except PieceRefused as err:
-                    raise InputError([design.problem("constraints.fuse", str(err))]) from None
-        with progress.step("as-built check (masses and centres of mass from the solids)"):
-            result.as_built = as_built(as_printed_rods(fab), result.lengths, result.limits, design.anchors,
-                                       result.target_points, design.g, result.end_limits, metal=result.metal)
-        if result.end_limits is not None:
-            with progress.step("the anchor fixture (stops for the end rods), checked against the rods at rest"):
-                result.fixture, result.fixture_problems = build_fixture_for(result)
-            result.notes += [f"fixture: {p}" for p in result.fixture_problems]
-    with progress.step("as printed: every pin bearing in its holes; friction and mass tolerance bands"):
-        result.as_printed = printed_chain(rods, result)
-    result.tapping = _tapped(result, progress)
-    result.time_s = time.perf_counter() - t0
     return result
+
+
+def printed_step(result: BuildResult, progress: Progress) -> None:
+    """The chain as printed (every pin bearing in its holes, the friction and mass bands) and
+    tapped in MuJoCo, onto ``result`` (its as-built solids' masses where built)."""
+    with progress.step("as printed: every pin bearing in its holes; friction and mass tolerance bands"):
+        result.as_printed = printed_chain(result.rods, result)
+    result.tapping = _tapped(result, progress)
 
 
 #: Light taps simulated after the chain is hung (MuJoCo with each pin's friction).

@@ -5,9 +5,11 @@ sequences the steps and owns none of them::
     design.yaml (chandelier:) -> load_design()                rodcad.design.loader
     -> joint limits and mass ranges from the rods             rodcad.pipeline.chain.arrays_step
     -> placements, then per chain: plan, masses, check        rodcad.design.chandelier.design_chandelier
+    -> per chain: joint hardware, masses designed with it     rodcad.pipeline.chain.hung_result
     -> the frame as numbers, its solid and clearances         rodcad.design.frame, rodcad.cad.chandelier
     -> every rod of every chain built in one go               rodcad.pipeline.chain.fabricate_step
     -> as-built re-simulation per chain                       rodcad.pipeline.chain.as_built
+    -> per chain: as printed (bands), tapped in MuJoCo         rodcad.pipeline.chain.printed_step
     -> design.json, report.md, 3D preview, STEP/STL, print.3mf per chain  write_chandelier_outputs()
 """
 
@@ -24,7 +26,7 @@ from rodcad.cad.chainfiles import write_rod_files
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.export import export_assembly, export_step, export_stl
 from rodcad.cad.printfile import write_print_files
-from rodcad.design.chandelier import design_chandelier
+from rodcad.design.chandelier import bill_of_materials, design_chandelier
 from rodcad.design.frame import frame_outline, plan_frame
 from rodcad.design.model import Design
 from rodcad.design.printed import rods_of
@@ -32,7 +34,8 @@ from rodcad.errors import InputError
 from rodcad.outputs.design_json import chandelier_json, print_profile
 from rodcad.outputs.preview3d import preview_3d
 from rodcad.outputs.report import chandelier_markdown
-from rodcad.pipeline.chain import N_STARTS, arrays_step, as_built, fabricate_step, intervals_step
+from rodcad.pipeline.chain import (N_STARTS, arrays_step, as_built, fabricate_step, hung_result, intervals_step,
+                                   printed_step)
 from rodcad.outputs.view import write_chandelier_view
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
@@ -58,6 +61,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
         raise InputError([design.problem(key, "a chandelier's chains hang from the frame's lugs, bare pins: anchor "
                                          "stops are for a single chain's printed fixture")])
     arrays = arrays_step(design, jobs, progress)
+    ivfn = intervals_step(design, jobs, progress) if cad else None
     try:
         # the frame's lugs are bare pins, and the chains are built rod by rod: neither anchor
         # stops nor (unless asked for) fused pieces
@@ -65,12 +69,13 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
         res = design_chandelier(design.catalog, design.placements, design.chain_targets, method=method,
                                 seed=seed, jobs=jobs or 1, arrays=arrays, constraints=chains_c,
                                 problem=design.problem, n_starts=N_STARTS, g=design.g, progress=progress,
-                                intervals=intervals_step(design, jobs, progress) if cad else None)
+                                intervals=ivfn)
     except ValueError as err:
         raise InputError([design.problem("chandelier", str(err))]) from None
     made = rods_of([ch.design.plan for ch in res.chains])
     if made:  # rods printed to order: the catalog now knows them by name
         design = dataclasses.replace(design, catalog=design.catalog.with_types(made))
+    chains = _hung_chains(design, res, method=method, seed=seed, intervals=ivfn, progress=progress)
     extra = {}
     if spec.frame_kind == "bars":
         # the polygon's vertices, or (explicit anchors) a closed polygon through every anchor in order
@@ -78,7 +83,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
             list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
     frame_plan = plan_frame(spec.frame_kind, design.placements, design.catalog, res.chains, **spec.frame,
                             **extra)
-    out = ChandelierBuild(design, res, frame_plan)
+    out = ChandelierBuild(design, res, frame_plan, chains=chains)
     for ch in res.chains:
         if not ch.equilibrium.stable:
             out.notes.append(f"{ch.name}: the designed shape is not a stable equilibrium")
@@ -91,15 +96,48 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
         with progress.step("frame solid and clearance checks"):
             out.frame = build_frame(frame_plan, design.catalog, res.chains)
         out.notes += [f"frame: {p}" for p in out.frame[1].problems]
-        out.fabrications, problems = fabricate_step(design, [(ch.type_names, ch.masses) for ch in res.chains],
-                                                jobs=jobs, progress=progress,
-                                                label=f"building {res.bom.n_rods} rods")
+        sized = all(r.hardware is not None for r in chains)
+        out.fabrications, problems = fabricate_step(
+            design, [(r.type_names, r.printed_masses) for r in chains], jobs=jobs, progress=progress,
+            label=f"building {res.bom.n_rods} rods", holes=[h for r in chains for h in r.holes.holes],
+            sizes=[s for r in chains for s in r.hole_sizes] if sized else None)
         out.notes += problems
         with progress.step("as-built check of every chain"):
-            out.as_built = [as_built(fab.rods, ch.design.plan.problem.lengths, ch.design.plan.problem.limits,
-                                     np.array(ch.placement.plane_anchors()), ch.target, design.g)
-                            for ch, fab in zip(res.chains, out.fabrications)]
+            out.as_built = [as_built(fab.rods, r.lengths, r.limits, r.design.anchors, r.target_points, design.g,
+                                     metal=r.metal) for r, fab in zip(chains, out.fabrications)]
+        for r, ab in zip(chains, out.as_built):
+            r.as_built = ab
+    seen: dict[str, Any] = {}
+    for ch, r in zip(res.chains, chains):
+        twin = seen.get(ch.shared_with) if ch.shared_with is not None else None
+        if twin is not None and (r.as_built is None or np.array_equal(r.as_built.masses, twin.as_built.masses)):
+            r.as_printed, r.tapping = twin.as_printed, twin.tapping  # the same chain, the same rods
+        else:
+            k = len(r.notes)
+            printed_step(r, progress)
+            out.notes += [f"{ch.name}: {n}" for n in r.notes[k:]]
+        seen[ch.name] = r
     out.time_s = time.perf_counter() - t0
+    return out
+
+
+def _hung_chains(design: Design, res, *, method: str, seed: int, intervals, progress: Progress) -> list:
+    """Per chain, its joint hardware chosen joint by joint and its masses designed with it
+    (:func:`rodcad.pipeline.chain.hung_result`, in the chain's plane), as a
+    :class:`rodcad.results.BuildResult`; each chain's design in ``res`` becomes the hung one
+    and the bill of materials follows. Chains that share a problem share its result."""
+    out: list = []
+    done: dict[str, Any] = {}
+    for ch in res.chains:
+        plane = dataclasses.replace(design, anchors=np.asarray(ch.placement.plane_anchors(), float))
+        if ch.shared_with is not None and ch.shared_with in done:
+            r = dataclasses.replace(done[ch.shared_with], design=plane, notes=list(done[ch.shared_with].notes))
+        else:
+            r = hung_result(plane, ch.design, method=method, seed=seed, intervals=intervals, progress=progress)
+        ch.design = r.chain_design
+        done[ch.name] = r
+        out.append(r)
+    res.bom = bill_of_materials(res.chains)
     return out
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import rodcad.catalog.jointlimits as jl
 from rodcad.catalog.jointlimits import SAFETY_DEG, joint_limits
 from rodcad.catalog.limits import TOLERANCE_DEG, all_pair_limits, compute_pair_limits
 from rodcad.catalog.loader import load_catalog
@@ -91,13 +92,91 @@ def test_random_end_geometries_agree_with_a_fresh_b_rep_search(seed):
     _agrees(joint_limits(left, right), (brep["lo"], brep["hi"]), seed)
 
 
-def test_it_is_fast():
-    import time
+def _plain_march(left, right, bound=180.0):
+    """The search without its quick tests: the full overlap test at every 1-degree step of
+    the march, then the same bisection (what joint_limits must return, to the bit)."""
+    pair = jl._Pair(left, right)
+    mid = (left.half_angle_deg + right.half_angle_deg
+           + (left.second.top_chamfer + right.first.top_chamfer
+              - left.second.bottom_chamfer - right.first.bottom_chamfer) / 2)
+    start = next(s for s in [mid, 0.0] + [s * k * 5.0 for k in range(1, 36) for s in (1, -1)]
+                 if not pair.overlaps(s))
+    out = []
+    for direction in (-1.0, 1.0):
+        a = start
+        while True:
+            b = a + direction * jl.MARCH_DEG
+            if abs(b) >= bound:
+                b = direction * bound
+                if not pair.overlaps(b):
+                    out.append(None)
+                    break
+            if pair.overlaps(b):
+                while abs(b - a) > jl.BISECT_DEG:
+                    m = (a + b) / 2
+                    a, b = (a, m) if pair.overlaps(m) else (m, b)
+                out.append(a)
+                break
+            a = b
+    lo, hi = out
+    return (None if lo is None else lo + SAFETY_DEG, None if hi is None else hi - SAFETY_DEG)
 
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_quick_tests_change_no_limit(seed):
+    """The march's quick tests (strides over steps proved clear, thinned samples against a
+    grown outline) only skip steps the full test would pass: the limits are the plain
+    march's, to the bit, on the family's end-of-range pairs (``sample_pairs``: stops at the
+    ends of the stop range, graduated rods) and on random rods printed to order (lengths,
+    curvatures, scales, top and bottom stops)."""
+    from rodcad.catalog.geometry import max_curvature
+    from rodcad.catalog.printed import sample_pairs
+
+    cat = load_catalog("pla-parametric")
+    fam = cat.printed_families[0]
+    rng = np.random.default_rng(200 + seed)
+    pairs = [(a.geometry, b.geometry) for a, b in sample_pairs(cat, fam)] if seed == 0 else []
+    for _ in range(6):
+        length = [float(rng.uniform(30, 60)) for _ in range(2)]
+        k = [float(rng.uniform(-1, 1) * max_curvature(x)) for x in length]
+        s = [float(rng.uniform(0.6, 1.4)) for _ in range(2)]
+        kind = rng.integers(3)
+        c = float(rng.uniform(-40, 40))
+        ends = [{}, {}] if kind == 0 else ([{"second_stop": c}, {"first_stop": c}] if kind == 1 else
+                                          [{"second_under": -abs(c) / 2}, {"first_under": -abs(c) / 2}])
+        try:
+            a = cat.rod(fam.name, length[0], k[0], scale=s[0], **ends[0])
+            b = cat.rod(fam.name, length[1], k[1], scale=s[1], **ends[1])
+        except ValueError:  # a scale this rod's length cannot take
+            continue
+        pairs.append((a.geometry, b.geometry))
+    assert len(pairs) >= 4
+    for left, right in pairs:
+        try:
+            want = _plain_march(left, right)
+        except StopIteration:  # overlapping at every start: joint_limits says so
+            with pytest.raises(ValueError):
+                joint_limits(left, right)
+            continue
+        assert joint_limits(left, right) == want
+
+
+def test_a_pair_takes_few_full_tests():
+    """What the quick tests are for (counted, not timed): a pair needs about the bisection's
+    full tests, not a full test at every degree of the march."""
     cat = load_catalog("pla-pinned")
     g = cat["arc-30"].geometry
-    t0 = time.perf_counter()
-    for _ in range(5):
-        joint_limits(g, g)
-    assert (time.perf_counter() - t0) / 5 < 0.5  # about 20 ms; the B-rep search takes about 1 s
-    assert math.isfinite(joint_limits(g, g)[1])
+    calls = [0]
+    full = jl._Pair.overlaps
+
+    def counted(self, phi):
+        calls[0] += 1
+        return full(self, phi)
+
+    jl._Pair.overlaps = counted
+    try:
+        got = joint_limits(g, g)
+    finally:
+        jl._Pair.overlaps = full
+    assert got == _plain_march(g, g) and math.isfinite(got[1])
+    assert calls[0] < 120

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from expected_exits import EXPECTED_EXIT, built_folder
 from rodcad.colors import mass_colors
 from rodcad.outputs.viewgeom import Y_UP
 
@@ -257,9 +258,18 @@ def _check_screenshot(image: np.ndarray) -> None:
     assert (panel.max(axis=2) < 110).sum() > 2000  # the panel's text
 
 
-@pytest.mark.parametrize("build", ["semicircle", "lampshade", "chandelier"])
-def test_headless_chromium_draws_the_view(build, request, tmp_path):
-    _check_screenshot(_screenshot(request.getfixturevalue(build), tmp_path))
+#: Every example a build can take (chain.yaml is for ``rodcad simulate``).
+ALL_EXAMPLES = sorted(p for p in EXAMPLES.glob("*.yaml") if p.stem != "chain")
+
+
+@pytest.mark.parametrize("example", ALL_EXAMPLES, ids=lambda p: p.stem)
+def test_every_example_s_view_draws_in_headless_chromium(example, build_store, tmp_path):
+    """The session's build of every example (the one tests/test_build.py and the net tests
+    read; a best fit's folder where the example exits 1) opens in headless Chromium and draws
+    its structure."""
+    code, out, _ = build_store.cli_build(example, "--no-cad", "-q")
+    assert code == EXPECTED_EXIT.get(example.stem, 0)
+    _check_screenshot(_screenshot(built_folder(out, code), tmp_path))
 
 
 def test_without_webgl_the_view_draws_on_a_2d_canvas(semicircle, tmp_path):

@@ -280,3 +280,38 @@ def test_design_chandelier_end_to_end(catalog, arrays):
         assert a.type_names == b.type_names and np.array_equal(a.masses, b.masses)
     with pytest.raises(ValueError, match="4 targets for 6 chains"):
         design_chandelier(catalog, pl, targets[:4])
+
+
+def test_lug_holes_take_each_chain_s_anchor_hardware_and_its_compensation(tmp_path):
+    """With joint hardware chosen per joint, each lug's pin hole is the anchor option's hole
+    for the lug's knuckle, moved to where the loaded anchor pin bears on the anchor (as a
+    single chain's fixture), and the frame solid has it there: the hole's centre and a point
+    just inside its rim are empty, a point just outside the rim is frame."""
+    from build123d import Vector
+
+    from rodcad import pipeline
+    from rodcad.design.asprinted import anchor_holes
+    from rodcad.design.loader import load_design
+
+    text = ("design: 1\nname: two\ncatalog: pla-pinned\nchandelier: {pattern: explicit, chains: [\n"
+            "  {anchors: [[0, 0, 0], [150, 0, 0]], target: {form: arc, sag: 50}},\n"
+            "  {anchors: [[0, 60, 0], [0, 200, 20]], target: {form: catenary, length: 220}}]}\n")
+    b = pipeline.build_chandelier(load_design(tmp_path / "two.yaml", text=text), cad=False)
+    frame, check = build_frame(b.frame_plan, b.design.catalog, check_clearance=False)
+    assert check.valid
+    for k, lug in enumerate(b.frame_plan.lugs):
+        r = b.chains[k // 2]
+        option = r.hardware.options[-1 if k % 2 else 0]
+        assert lug.pin_hole == pytest.approx(option.hole(lug.knuckle))
+        shift = anchor_holes(r.holes, r.equilibrium.points)[k % 2]
+        assert np.allclose(lug.hole_offset, shift) and 0 < np.hypot(*shift) <= option.clearance / 2 + 1e-9
+        m = lug.location
+        rim = lug.pin_hole / 2
+        knuckle = lug.hinge.knuckle_radius
+        for radius, inside in ((0.0, False), (rim - 0.05, False), (min(rim + 0.2, knuckle - 0.2), True)):
+            for ang in np.linspace(0, 2 * np.pi, 6, endpoint=False):
+                q = np.array([shift[0] + radius * np.cos(ang), shift[1] + radius * np.sin(ang), 0.0, 1.0])
+                if lug.knuckle == "fork":  # a fork's material is in its prongs, off the mid-plane
+                    q[2] = lug.width / 2 - lug.cheek / 2
+                w = m @ q
+                assert frame.is_inside(Vector(*w[:3])) == inside, (lug.name, radius, ang)

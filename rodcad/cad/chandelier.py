@@ -106,7 +106,8 @@ def build_frame(plan: FramePlan, catalog: Any, chains: Sequence[ChainResult] | N
 
 def chandelier_nodes(frame: Any, chains: Sequence[ChainResult], catalog: Any, *,
                      rod_solid: Callable[[int, int], Any] | None = None,
-                     frame_plan: FramePlan | None = None) -> list[Any]:
+                     frame_plan: FramePlan | None = None,
+                     pin_diameters: Sequence[Sequence[float | None] | None] | None = None) -> list[Any]:
     """The node tree of the whole chandelier for :func:`rodcad.cad.export.export_assembly`.
 
     Top level: the part 'frame' (world placement) and one group per chain, named
@@ -123,6 +124,8 @@ def chandelier_nodes(frame: Any, chains: Sequence[ChainResult], catalog: Any, *,
             (with cavities / sockets); default: the catalog type's plain solid.
         frame_plan: the frame's plan, for the anchor pin lengths (default: the
             rod thickness plus the layer gaps and the prongs).
+        pin_diameters: per chain, each pin's diameter (its joint hardware's, mm), or None:
+            the family's pin.
     """
     all_m = np.concatenate([c.masses for c in chains])
     scale = (float(all_m.min()), float(all_m.max()))
@@ -142,7 +145,8 @@ def chandelier_nodes(frame: Any, chains: Sequence[ChainResult], catalog: Any, *,
                     length = frame_plan.lugs[2 * ci + (1 if j == n else 0)].width
                 else:
                     length = 2 * g.thickness - g.hinge.tongue_thickness
-            pins.append((g.hinge.pin_diameter, length))
+            own = None if pin_diameters is None or pin_diameters[ci] is None else pin_diameters[ci][j]
+            pins.append((g.hinge.pin_diameter if own is None else own, length))
         children = chain_parts([f"{i:02d}_{name}" for i, name in enumerate(c.type_names)], solids, c.points,
                                c.masses, pins, mass_scale=scale)
         nodes.append(AssemblyGroup(c.name, children, c.placement.transform()))

@@ -135,9 +135,9 @@ def frame_solid(kind: str, params: dict, lugs: Sequence[object]) -> Solid:
     Lugs: objects like :class:`rodcad.design.frame.LugSpec` (``location`` 4x4 lug
     frame -> world, ``knuckle``, ``thickness``, ``hinge``, ``cheek``, ``width``,
     ``arm_points()``), built by :func:`lug_parts` and moved into place; every
-    lug's arm ends on the mid-plane of its member. Each lug gets a pin hole of the
-    hinge's ``hole_diameter`` whose axis is the lug frame's z axis through its
-    origin (the anchor).
+    lug's arm ends on the mid-plane of its member. Each lug gets a pin hole of its
+    ``pin_hole`` diameter along the lug frame's z axis, through ``hole_offset`` (the
+    anchor, or where the loaded pin puts it on the anchor).
 
     Raises:
         GeometryError: a boolean step leaves no single valid solid (e.g. a lug arm
@@ -154,7 +154,7 @@ def frame_solid(kind: str, params: dict, lugs: Sequence[object]) -> Solid:
     holes = []
     for lug in lugs:
         half = float(lug.width) / 2 + 1.0  # type: ignore[attr-defined]
-        hole = cylinder_solid((0.0, 0.0), lug.hinge.hole_diameter / 2, -half, half)  # type: ignore[attr-defined]
+        hole = cylinder_solid(tuple(lug.hole_offset), lug.pin_hole / 2, -half, half)  # type: ignore[attr-defined]
         holes.append(placed(hole, lug.location))  # type: ignore[attr-defined]
     if holes:
         body = one_part(body.cut(*holes).clean(), "drilling the lugs' pin holes")

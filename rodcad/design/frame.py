@@ -43,6 +43,11 @@ class LugSpec:
         attach_dz: signed height of the member's mid-plane above the axis (mm).
         tilt_deg: lean of the arm's first segment from vertical (deg).
         elbow: length of the arm's first segment (mm); 0 = straight arm.
+        hole_diameter: the pin hole (mm): the joint hardware's for this lug's knuckle, or
+            None: the hinge's own.
+        hole_offset: the pin hole's centre from the anchor in the lug frame's xy (mm): where
+            the loaded pin bears on its far side at the anchor (the pins-in-holes
+            compensation, :func:`rodcad.design.asprinted.anchor_holes`).
     """
 
     name: str
@@ -53,6 +58,13 @@ class LugSpec:
     attach_dz: float
     tilt_deg: float = 0.0
     elbow: float = 0.0
+    hole_diameter: float | None = None
+    hole_offset: tuple[float, float] = (0.0, 0.0)
+
+    @property
+    def pin_hole(self) -> float:
+        """The pin hole's diameter (mm)."""
+        return float(self.hinge.hole_diameter if self.hole_diameter is None else self.hole_diameter)
 
     @property
     def anchor(self) -> np.ndarray:

@@ -26,6 +26,7 @@ from rodcad.cad.chainfiles import write_rod_files
 from rodcad.cad.chandelier import build_frame, chandelier_nodes
 from rodcad.cad.export import export_assembly, export_step, export_stl
 from rodcad.cad.printfile import write_print_files
+from rodcad.design.asprinted import anchor_holes
 from rodcad.design.chandelier import bill_of_materials, design_chandelier
 from rodcad.design.frame import frame_outline, plan_frame
 from rodcad.design.model import Design
@@ -83,6 +84,7 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
             list(map(float, a)) for p in design.placements for a in (p.a3, p.b3)]
     frame_plan = plan_frame(spec.frame_kind, design.placements, design.catalog, res.chains, **spec.frame,
                             **extra)
+    frame_plan.lugs = fitted_lugs(frame_plan.lugs, chains)
     out = ChandelierBuild(design, res, frame_plan, chains=chains)
     for ch in res.chains:
         if not ch.equilibrium.stable:
@@ -118,6 +120,24 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
             out.notes += [f"{ch.name}: {n}" for n in r.notes[k:]]
         seen[ch.name] = r
     out.time_s = time.perf_counter() - t0
+    return out
+
+
+def fitted_lugs(lugs: list, chains: list) -> list:
+    """The frame's lugs (A, B per chain) with the pin holes of each chain's chosen anchor
+    hardware, moved where the loaded anchor pins sit on the anchors (as a single chain's
+    fixture: :func:`rodcad.design.asprinted.anchor_holes`)."""
+    out = []
+    for k, lug in enumerate(lugs):
+        r = chains[k // 2]
+        end = k % 2
+        hw = r.hardware
+        option = None if hw is None else hw.options[-1 if end else 0]
+        shift = (0.0, 0.0)
+        if r.holes is not None:
+            shift = tuple(float(v) for v in anchor_holes(r.holes, r.equilibrium.points)[end])
+        out.append(dataclasses.replace(lug, hole_offset=shift,
+                                       hole_diameter=None if option is None else option.hole(lug.knuckle)))
     return out
 
 
@@ -160,7 +180,10 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
                 export_step(frame, tmp / "frame.step", name="frame")
                 export_stl(frame, tmp / "frame.stl")
                 nodes = chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
-                                         rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid)
+                                         rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid,
+                                         pin_diameters=[None if r.hardware is None else
+                                                        [None if o is None else o.pin_diameter
+                                                         for o in r.hardware.options] for r in b.chains])
                 export_assembly(tmp / "assembly.step", nodes, b.design.name)
         with progress.step("writing design.json, report.md, preview.png"):
             data = chandelier_json(b)

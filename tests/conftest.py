@@ -136,6 +136,8 @@ class BuildStore:
         it builds (and part of the key)."""
         import importlib
 
+        from rodcad.pipeline import kinds
+
         entry, path = self._cli_entry(design, options, text, patches)
         done = entry / "done.json"
         with self._locked(entry):
@@ -144,10 +146,20 @@ class BuildStore:
                 if text is not None:
                     path.write_text(text, encoding="utf-8")
                 printed = io.StringIO()
+                build = kinds.build
+
+                def kept(*args, **kwargs):  # what the command built, for result()
+                    out = build(*args, **kwargs)
+                    if set(options) == {"--no-cad", "-q"} and not patches:
+                        with contextlib.suppress(pickle.PicklingError, TypeError, AttributeError, RecursionError):
+                            (entry / "result.pickle").write_bytes(pickle.dumps(out))
+                    return out
+
                 with (pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(printed),
                       saved_figures() as figures):
                     for module, name, value in patches:
                         mp.setattr(importlib.import_module(module), name, value)
+                    mp.setattr(kinds, "build", kept)
                     code = main(["build", str(path), "-o", str(entry / "out"), *options])
                 done.write_text(json.dumps({"code": code, "stdout": printed.getvalue(), "figures": figures}),
                                 encoding="utf-8")
@@ -163,13 +175,19 @@ class BuildStore:
 
     def result(self, design: Path | str, *, text: str | None = None):
         """``pipeline.build(load_design(DESIGN), cad=False)`` run once per session (each
-        caller gets its own copy, unpickled); with ``text``, DESIGN is a file name and the
-        design is that text (written into the store)."""
+        caller gets its own copy, unpickled): for a design file, what ``rodcad build DESIGN
+        --no-cad -q`` (:meth:`cli_build`) built, which is that; with ``text``, DESIGN is a
+        file name and the design is that text (written into the store)."""
         from rodcad import pipeline
         from rodcad.design.loader import load_design
 
         if text is None:
             design = Path(design).resolve()
+            # the command's build without CAD is this one (same design, defaults): share it
+            self.cli_build(design, "--no-cad", "-q")
+            kept = self._cli_entry(design, ("--no-cad", "-q"), None, ())[0] / "result.pickle"
+            if kept.is_file():
+                return pickle.loads(kept.read_bytes())
             entry = self._entry("result", str(design), design.read_text(encoding="utf-8"))
         else:
             entry = self._entry("result-text", str(design), text)

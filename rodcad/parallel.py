@@ -134,7 +134,14 @@ def task_runner(tasks: int, *, jobs: int | None = None, scheduler: str | None = 
     if scheduler:
         from distributed import Client
 
-        with Client(scheduler, timeout="30s") as client:
+        from rodcad.errors import InputError, Problem
+
+        try:
+            client = Client(scheduler, timeout="30s")
+        except (OSError, TimeoutError, ValueError, TypeError) as err:
+            raise InputError([Problem("--scheduler", 0, 0, "--scheduler",
+                                      f"no Dask scheduler answers at {scheduler!r}: {err}")]) from None
+        with client:
             yield _dask(client), f"on the Dask scheduler at {scheduler}"
         return
     cpus = default_jobs()

@@ -108,7 +108,7 @@ def build_net_solids(check, *, printer=None, layer_height: float = 0.2, runner=N
     parts = []
     for (kind, members, rotations), res in zip(owners, results):
         shared = [from_brep(data, label) for label, data in res.solids]
-        part = NetPart(kind, shared[0].label, members, rotations, shared, res.print_matrices, res.files,
+        part = NetPart(kind, f"{kind}-{members[0]:03d}", members, rotations, shared, res.print_matrices, res.files,
                        res.mesh_volumes, res.split_reason)
         parts.append(part)
         whole_hub_solid = from_brep(res.whole) if res.whole else None

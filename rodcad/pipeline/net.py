@@ -4,8 +4,8 @@ pictures out. It sequences the steps and owns none of them::
     design.yaml + catalog -> load_design() (net: rodcad.design.net.target)  rodcad.design.loader
     -> hardware, lengths, mass bounds, hub masses                      rodcad.design.net.plan.plan_net
     -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.check.design_net_plan
-    -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net.solids
-    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.solids
+    -> each distinct hub and rod built once (Dask tasks), the net as built (with CAD)  rodcad.cad.net.build
+    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.build
     -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.net.print_files
 """
 

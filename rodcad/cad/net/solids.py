@@ -1,5 +1,7 @@
 """The solids of a net: printed hubs with ball sockets, round rods with ball ends, cavities and
-steel-ball sockets, their files and the assembly (the geometry of rodcad.catalog.net.node).
+steel-ball sockets (the geometry of rodcad.catalog.net.node); what a built net holds
+(:class:`NetSolids`, its distinct parts :class:`NetPart`). Built, written and assembled by
+:mod:`rodcad.cad.net.build`.
 
 Hub ``k`` (its own frame: origin the node point, axes the hub's at the target) is a sphere
 less, per rod, a socket sphere ``ball + clearance`` across at its printed centre (the pivot

@@ -137,7 +137,7 @@ def task_runner(tasks: int, *, jobs: int | None = None, scheduler: str | None = 
         from rodcad.errors import InputError, Problem
 
         try:
-            client = Client(scheduler, timeout="30s")
+            client = Client(scheduler, timeout="10s")
         except (OSError, TimeoutError, ValueError, TypeError) as err:
             raise InputError([Problem("--scheduler", 0, 0, "--scheduler",
                                       f"no Dask scheduler answers at {scheduler!r}: {err}")]) from None

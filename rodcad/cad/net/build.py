@@ -1,7 +1,7 @@
 """A net's solids built and written: every distinct rod and hub built once, as a task
 (:func:`build_group`: numbers in; BREP, checked STEP and STL bytes and numbers out) that runs in
 this process, in worker processes or on a Dask cluster with the same result
-(:func:`rodcad.parallel.run_tasks`); the members' instances of them, the net re-solved as
+(:func:`rodcad.parallel.task_runner`); the members' instances of them, the net re-solved as
 built (:func:`build_net_solids` -> :class:`rodcad.cad.net.solids.NetSolids`); their files, each
 distinct part once, and assembly.step with every instance where the net hangs
 (:func:`write_net_files`).
@@ -79,7 +79,7 @@ def build_net_solids(check, *, printer=None, layer_height: float = 0.2, runner=N
         printer, layer_height: the catalog's printer and the print's layer height (mm): the
             STL and 3MF meshes' deflection (:func:`rodcad.cad.mesh.print_deflection`).
         runner: runs the parts' tasks, ``runner(fn, tasks) -> results`` in order
-            (:func:`rodcad.parallel.run_tasks`); default: in this process.
+            (:func:`rodcad.parallel.task_runner`); default: in this process.
         progress: a progress step (``count``) or None.
     """
     from optimize import solve_net

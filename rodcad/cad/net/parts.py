@@ -19,7 +19,7 @@ centres of mass of every member are its own B-rep's.
 
 Tasks. :func:`rodcad.cad.net.build.build_group` is a pure function of a :class:`PartTask` (numbers in, BREP and
 checked STEP/STL bytes and numbers out): it runs in this process, in worker processes or on a
-Dask cluster (:func:`rodcad.parallel.run_tasks`) with the same result.
+Dask cluster (:func:`rodcad.parallel.task_runner`) with the same result.
 
 Units: mm.
 """

@@ -189,7 +189,7 @@ def _message(placements: Sequence[Placement], z: float) -> str:
     by_d: dict[tuple[float, str], list[tuple[str, int]]] = {}
     parts, pours = [], []
     for p in placements:
-        tag = _tag(p.rod, p.copy)
+        tag = _tag(p.rod, getattr(p, "copy", 0))
         n = p.pauses.get(z, 0)
         if n:
             kind = (float(p.rod.ball_diameter or 0.0), str(getattr(p.rod, "ball_name", "") or ""))

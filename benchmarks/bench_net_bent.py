@@ -74,7 +74,7 @@ def main(argv=None) -> int:
         if name == "lampshade, bend 0.12":
             bowed = c
     if args.cad and bowed is not None:
-        from rodcad.cad.net.solids import build_net_solids
+        from rodcad.cad.net.build import build_net_solids
 
         t0 = time.perf_counter()
         s = build_net_solids(bowed)

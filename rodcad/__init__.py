@@ -78,15 +78,17 @@ def design_from(data: dict[str, Any] | str, *, name: str = "design.yaml", folder
 
 
 def build(design, *, cad: bool | None = None, method: str | None = None, seed: int | None = None,
-          jobs: int | None = None, progress: bool = False):
+          jobs: int | None = None, scheduler: str | None = None, progress: bool = False):
     """Design (and with ``cad``, build the solids of) any design: a chain's
     :class:`BuildResult`, a chandelier's :class:`ChandelierBuild` or a net's :class:`NetBuild`
     (:func:`rodcad.pipeline.kinds.build`). Nothing is written (see :func:`write`).
-    ``progress`` prints the steps to stderr."""
+    ``progress`` prints the steps to stderr; ``scheduler``: a Dask scheduler's address to build a
+    net's parts on (``jobs``: a local cluster of that many workers)."""
     from rodcad.pipeline.kinds import build as build_any
     from rodcad.progress import Progress
 
-    return build_any(design, cad=cad, method=method, seed=seed, jobs=jobs, progress=Progress(quiet=not progress))
+    return build_any(design, cad=cad, method=method, seed=seed, jobs=jobs, scheduler=scheduler,
+                     progress=Progress(quiet=not progress))
 
 
 def write(result, outdir: str | Path) -> dict[str, Any]:

@@ -4,17 +4,29 @@ The OCCT kernel is not safe to ``fork`` once it has been used (a lock held by
 one of its threads in the parent stays locked in the child), so workers come
 from a *forkserver* that has imported the CAD modules (:mod:`rodcad.cad`) but never built
 anything; where forkserver is missing, they are spawned.
+
+A net's parts are tasks for Dask (:func:`task_runner`): on an existing scheduler (a cluster),
+or on a ``distributed.LocalCluster`` whose worker processes are spawned fresh by their nannies
+(never forked from this process), each importing the same rodcad as this one.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["KeyValueStore", "cached_map", "default_jobs", "worker_pool"]
+__all__ = ["PARTS_PER_WORKER", "KeyValueStore", "cached_map", "default_jobs", "task_runner", "worker_pool"]
+
+#: A build starts a local Dask cluster by default when it has at least this many tasks per
+#: CPU (a distinct net part: 0.5-2 s of kernel work each); fewer run in this process, where
+#: the cluster's start (spawning workers that import the CAD kernel, about 10 s on 2 cores)
+#: would cost more than the parallel work saves.
+PARTS_PER_WORKER = 12
 
 
 def default_jobs() -> int:
@@ -97,3 +109,66 @@ def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[st
         if pool is not None:
             pool.shutdown()
     return [found[key] for key in keys]
+
+
+Runner = Callable[[Callable[[Any], Any], Sequence[Any]], list[Any]]
+
+
+def _in_process(fn: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
+    return [fn(x) for x in items]
+
+
+@contextmanager
+def task_runner(tasks: int, *, jobs: int | None = None, scheduler: str | None = None
+                ) -> Iterator[tuple[Runner, str]]:
+    """Where ``tasks`` independent tasks run: yields (``runner(fn, items) -> results`` in item
+    order, a phrase saying where).
+
+    Args:
+        tasks: how many tasks there are.
+        jobs: worker processes of a local Dask cluster (1: in this process); default: the
+            CPUs when there are :data:`PARTS_PER_WORKER` tasks per CPU, else in this process.
+        scheduler: an existing Dask scheduler's address (``tcp://host:8786``): its workers run
+            the tasks (they must import the same rodcad).
+    """
+    if scheduler:
+        from distributed import Client
+
+        from rodcad.errors import InputError, Problem
+
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError, ValueError, TypeError) as err:
+            raise InputError([Problem("--scheduler", 0, 0, "--scheduler",
+                                      f"no Dask scheduler answers at {scheduler!r}: {err}")]) from None
+        with client:
+            yield _dask(client), f"on the Dask scheduler at {scheduler}"
+        return
+    cpus = default_jobs()
+    n = jobs if jobs is not None else (cpus if tasks >= PARTS_PER_WORKER * cpus else 1)
+    n = max(1, min(int(n), tasks))
+    if n == 1:
+        yield _in_process, "in this process"
+        return
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    import rodcad
+
+    root = str(Path(rodcad.__file__).resolve().parents[1])  # the workers import this rodcad
+    path = os.pathsep.join([root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
+    env = {"PYTHONPATH": path, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.ERROR, env=env) as cluster, Client(cluster) as client:
+        yield _dask(client), f"{n} Dask worker processes"
+
+
+def _dask(client) -> Runner:
+    """A runner submitting each item as a task to ``client``; results gathered in item order."""
+
+    def run(fn: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
+        futures = client.map(fn, list(items), pure=False)
+        return list(client.gather(futures))
+
+    return run

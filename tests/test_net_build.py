@@ -250,9 +250,9 @@ def test_exit_codes_of_net_builds(tmp_path, capsys):
 V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
          "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
 
-#: V_NET built with its solids by the session's BuildStore, by the worker pool even for its 8
-#: parts (one part per worker): tests/test_netprint.py reads the same build.
-V_BUILD = {"text": V_NET, "patches": (("rodcad.cad.net.solids", "PARTS_PER_WORKER", 1),)}
+#: V_NET built with its solids by the session's BuildStore, on a Dask local cluster even for its 4
+#: distinct parts (two per worker): tests/test_netprint.py reads the same build.
+V_BUILD = {"text": V_NET, "patches": (("rodcad.parallel", "PARTS_PER_WORKER", 1),)}
 
 
 def test_a_net_with_its_solids_hangs_as_designed(build_store):

@@ -20,7 +20,7 @@ from OCP.TopLoc import TopLoc_Location
 from rodcad.cad.mesh import ANGULAR, DEFLECTION, mesh_solid, write_stl
 from rodcad.cad.solids import GeometryError
 
-__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed', 'check_files']
+__all__ = ['export_step', 'import_step', 'matrix_location', 'transformed', 'PRINT_ROTATION', 'print_matrix', 'export_stl', 'AssemblyPart', 'AssemblyGroup', 'export_assembly', 'assembly_leaves', 'read_assembly', 'placed', 'check_files', 'export_instanced_assembly']
 
 
 def export_step(solid: Solid, path: str | os.PathLike[str], name: str | None = None) -> Path:
@@ -198,6 +198,57 @@ def assembly_leaves(path: str | os.PathLike[str]) -> list[tuple[str, Solid]]:
             out.append((getattr(shape, "label", "") or "", s))
 
     walk(root)
+    if len({label for label, _ in out}) < len(out):  # shared products: name each leaf by its instance
+        named = _instance_leaves(Path(path))
+        if len(named) == len(out):
+            return named
+    return out
+
+
+def _instance_leaves(path: Path) -> list[tuple[str, Solid]]:
+    """The leaf solids of a STEP assembly, depth first, each named by its instance (the
+    NEXT_ASSEMBLY_USAGE_OCCURRENCE's name; the product's where it has none) and placed, read
+    through OCC's XCAF document: a product instanced several times
+    (:func:`export_instanced_assembly`) gives one leaf per instance."""
+    from OCP.collections import Sequence_TDF_Label
+    from OCP.STEPCAFControl import STEPCAFControl_Reader
+    from OCP.TCollection import TCollection_AsciiString, TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TDF import TDF_Label
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
+
+    reader = STEPCAFControl_Reader()
+    reader.SetNameMode(True)
+    reader.ReadFile(str(path))
+    doc = TDocStd_Document(TCollection_ExtendedString("XmlOcaf"))
+    reader.Transfer(doc)
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+
+    def name(label) -> str:
+        attr = TDataStd_Name()
+        found = label.FindAttribute(TDataStd_Name.GetID_s(), attr)
+        return TCollection_AsciiString(attr.Get()).ToCString() if found else ""
+
+    out: list[tuple[str, Solid]] = []
+
+    def walk(label, loc: TopLoc_Location, own: str) -> None:
+        if XCAFDoc_ShapeTool.IsAssembly_s(label):
+            comps = Sequence_TDF_Label()
+            XCAFDoc_ShapeTool.GetComponents_s(label, comps, False)
+            for i in range(1, comps.Length() + 1):
+                c, ref = comps.Value(i), TDF_Label()
+                XCAFDoc_ShapeTool.GetReferredShape_s(c, ref)
+                walk(ref, loc.Multiplied(XCAFDoc_ShapeTool.GetLocation_s(c)), name(c) or name(ref))
+            return
+        for s in Compound(XCAFDoc_ShapeTool.GetShape_s(label).Moved(loc)).solids():
+            s.label = own or name(label)
+            out.append((s.label, s))
+
+    free = Sequence_TDF_Label()
+    tool.GetFreeShapes(free)
+    for i in range(1, free.Length() + 1):
+        walk(free.Value(i), TopLoc_Location(), name(free.Value(i)))
     return out
 
 
@@ -242,10 +293,13 @@ def rod_matrices(points: np.ndarray) -> list[np.ndarray]:
     return [rod_matrix(p[i], math.atan2(d[i, 1], d[i, 0])) for i in range(len(d))]
 
 
-def check_files(step: Path, stl: Path, volume: float, deflection: float = DEFLECTION) -> None:
+def check_files(step: Path, stl: Path, volume: float, deflection: float = DEFLECTION, *,
+                coarse: bool = False) -> None:
     """A written solid checked: the STEP re-imports as one valid solid of the same volume
     and the STL, read back by trimesh, is watertight with that volume to within its accuracy: ``deflection``
-    (mm, the STL's absolute linear deflection) times the solid's area.
+    (mm, the STL's absolute linear deflection) times the solid's area, and (unless ``coarse``:
+    a mesh as coarse as the print allows, :func:`rodcad.cad.mesh.print_deflection`) within
+    :data:`rodcad.fabrication.cavities.MASS_TOL` of it.
 
     Raises:
         FabricationError: what is wrong.
@@ -263,6 +317,66 @@ def check_files(step: Path, stl: Path, volume: float, deflection: float = DEFLEC
     mesh = trimesh.load(str(stl), force="mesh")
     if not mesh.is_watertight:
         raise FabricationError(f"{stl} is not watertight")
-    if abs(mesh.volume - volume) > min(MASS_TOL * volume, deflection * back.area):
+    bound = deflection * back.area if coarse else min(MASS_TOL * volume, deflection * back.area)
+    if abs(mesh.volume - volume) > bound:
         raise FabricationError(f"{stl} encloses {mesh.volume:.3f} mm^3, the solid {volume:.3f} mm^3 "
                                f"({(mesh.volume - volume) / volume:+.2%})")
+
+
+def export_instanced_assembly(path: str | os.PathLike[str], parts: Sequence[AssemblyPart],
+                              name: str = "assembly") -> Path:
+    """Write a STEP assembly in which parts holding the same ``solid`` object are one product
+    (its shape written once, named after its first part, coloured by it) placed as several
+    named instances (NEXT_ASSEMBLY_USAGE_OCCURRENCE), each at its own 4 x 4 placement: a
+    net's equal rods and hubs. Written with OCC's XCAF document directly (build123d's exporter
+    merges shared shapes into one placement).
+
+    Args:
+        path: destination file.
+        parts: the instances (AssemblyPart: instance name, shared solid in its own frame,
+            placement, colour).
+        name: the root assembly's name.
+
+    Returns:
+        The path written.
+    """
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.Interface import Interface_Static
+    from OCP.Message import Message, Message_Gravity
+    from OCP.Quantity import Quantity_Color, Quantity_TOC_RGB
+    from OCP.STEPCAFControl import STEPCAFControl_Writer
+    from OCP.STEPControl import STEPControl_AsIs
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_ColorType, XCAFDoc_DocumentTool
+
+    doc = TDocStd_Document(TCollection_ExtendedString("XmlOcaf"))
+    shapes = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    colors = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
+    root = shapes.NewShape()
+    TDataStd_Name.Set_s(root, TCollection_ExtendedString(name))
+    products: dict[int, object] = {}
+    for part in parts:
+        label = products.get(id(part.solid))
+        if label is None:
+            shape = part.solid.wrapped.Located(TopLoc_Location())
+            label = products[id(part.solid)] = shapes.AddShape(shape, False)
+            TDataStd_Name.Set_s(label, TCollection_ExtendedString(part.name))
+            if part.color is not None:
+                colors.SetColor(label, Quantity_Color(*(float(c) for c in part.color), Quantity_TOC_RGB),
+                                XCAFDoc_ColorType.XCAFDoc_ColorSurf)
+        comp = shapes.AddComponent(root, label, TopLoc_Location(_trsf_of(part.location)))
+        TDataStd_Name.Set_s(comp, TCollection_ExtendedString(part.name))
+    shapes.UpdateAssemblies()
+    for printer in Message.DefaultMessenger_s().Printers():  # no transfer statistics on the console
+        printer.SetTraceLevel(Message_Gravity.Message_Fail)
+    Interface_Static.SetCVal_s("write.step.unit", "MM")
+    writer = STEPCAFControl_Writer()
+    writer.SetColorMode(True)
+    writer.SetNameMode(True)
+    writer.Transfer(doc, STEPControl_AsIs)
+    path = Path(path)
+    if writer.Write(str(path)) != IFSelect_RetDone:  # pragma: no cover - writer failure
+        raise OSError(f"could not write {path}")
+    return path

@@ -77,6 +77,8 @@ class Placement:
         rotated: turned 90 degrees about the bed's Z axis (to fit the bed).
         size: (x, y, z) of its box on the bed as placed, mm.
         pauses: {print_z: balls inserted at that pause}.
+        copy: which of the part's ``copies`` this is (a net's equal parts: one solid, printed
+            once per member).
     """
 
     rod: FabricatedRod
@@ -84,6 +86,7 @@ class Placement:
     rotated: bool
     size: tuple[float, float, float]
     pauses: dict[float, int] = field(default_factory=dict)
+    copy: int = 0
 
     @property
     def box(self) -> tuple[float, float, float, float]:
@@ -120,7 +123,9 @@ def _mesh(rod: FabricatedRod) -> _Mesh:
     from rodcad.cad.export import transformed
     from rodcad.cad.mesh import mesh_solid
 
-    mesh = mesh_solid(transformed(rod.solid, rod.print_matrix))
+    defl = getattr(rod, "mesh_deflection", None)  # a net part's: as coarse as the print allows
+    mesh = (mesh_solid(transformed(rod.solid, rod.print_matrix)) if defl is None else
+            mesh_solid(transformed(rod.solid, rod.print_matrix), deflection=defl[0], angular=defl[1]))
     if abs(mesh.volume - rod.plastic_volume) > VOLUME_TOL * rod.plastic_volume:
         raise ValueError(f"rod {rod.file_stem}: its mesh encloses {mesh.volume:.2f} mm^3, the solid "
                          f"{rod.plastic_volume:.2f} mm^3")
@@ -169,9 +174,12 @@ def _rod_tag(tag: str) -> str:
     return f"piece {tag}" if "-" in tag else f"rod {tag}"
 
 
-def _tag(rod: FabricatedRod) -> str:
-    """A part's tag in pause messages: its ``print_tag`` (a net rod's number), else its file
-    stem's first field ('03' of '03_rod')."""
+def _tag(rod: FabricatedRod, copy: int = 0) -> str:
+    """A part's tag in pause messages: its copy's ``copy_tags`` entry or its ``print_tag`` (a net
+    rod's number), else its file stem's first field ('03' of '03_rod')."""
+    tags = getattr(rod, "copy_tags", ())
+    if tags:
+        return str(tags[copy])
     return str(getattr(rod, "print_tag", "") or rod.file_stem.split("_")[0])
 
 
@@ -181,7 +189,7 @@ def _message(placements: Sequence[Placement], z: float) -> str:
     by_d: dict[tuple[float, str], list[tuple[str, int]]] = {}
     parts, pours = [], []
     for p in placements:
-        tag = _tag(p.rod)
+        tag = _tag(p.rod, getattr(p, "copy", 0))
         n = p.pauses.get(z, 0)
         if n:
             kind = (float(p.rod.ball_diameter or 0.0), str(getattr(p.rod, "ball_name", "") or ""))
@@ -222,7 +230,8 @@ def plan_plates(rods: Sequence[FabricatedRod], *, printer: Printer | None = None
 
 
 def _plan(rods: Sequence[FabricatedRod], prof: PrintProfile, printer: Printer | None, gap: float, margin: float,
-          meshes: dict[int, _Mesh]) -> list[Plate]:
+          meshes: dict[int, _Mesh], single: bool = False) -> list[Plate]:
+    """:func:`plan_plates`, each rod ``copies`` times (once if ``single``)."""
     (bx, by, bz), _ = bed(printer)
     ux, uy = bx - 2 * margin, by - 2 * margin
     items = []
@@ -235,23 +244,25 @@ def _plan(rods: Sequence[FabricatedRod], prof: PrintProfile, printer: Printer | 
             raise ValueError(f"rod {rod.file_stem} is {sz:.1f} mm tall on its side; the printer builds {bz:g} mm")
         pauses = rod_pauses(rod, prof, mesh.z_shift)
         if sx <= ux + Z_TOL and sy <= uy + Z_TOL:
-            items.append((rod, pauses, False, (sx, sy, sz)))
+            fit = (False, (sx, sy, sz))
         elif sy <= ux + Z_TOL and sx <= uy + Z_TOL:
-            items.append((rod, pauses, True, (sy, sx, sz)))
+            fit = (True, (sy, sx, sz))
         else:
             raise ValueError(f"rod {rod.file_stem} ({sx:.1f} x {sy:.1f} mm on the bed) does not fit the "
                              f"printer's {bx:g} x {by:g} mm bed less {margin:g} mm margins")
-    items.sort(key=lambda it: (-it[3][1], it[0].index))
+        copies = 1 if single else int(getattr(rod, "copies", 1) or 1)
+        items += [(rod, dict(pauses), *fit, c) for c in range(copies)]
+    items.sort(key=lambda it: (-it[3][1], it[0].index, it[4]))
     plates: list[Plate] = []
     current: list[Placement] = []
     x = y = row = 0.0
-    for rod, pauses, rotated, size in items:
+    for rod, pauses, rotated, size, copy in items:
         if current and x + size[0] > ux + Z_TOL:  # next row
             x, y, row = 0.0, y + row + gap, 0.0
         if current and y + size[1] > uy + Z_TOL:  # next plate
             plates.append(_plate(current, bx, by))
             current, x, y, row = [], 0.0, 0.0, 0.0
-        current.append(Placement(rod, (x, y), rotated, size, pauses))
+        current.append(Placement(rod, (x, y), rotated, size, pauses, copy))
         x += size[0] + gap
         row = max(row, size[1])
     if current:
@@ -265,7 +276,7 @@ def _plate(placements: list[Placement], bx: float, by: float) -> Plate:
     dx, dy = (bx - x1) / 2, (by - y1) / 2
     for p in placements:
         p.offset = (round(p.offset[0] + dx, 4), round(p.offset[1] + dy, 4))
-    placements.sort(key=lambda p: p.rod.index)
+    placements.sort(key=lambda p: (p.rod.index, p.copy))
     heights = sorted({z for p in placements for z in p.pauses})
     return Plate(placements, {z: _message(placements, z) for z in heights})
 
@@ -283,11 +294,33 @@ def _placed_vertices(mesh: _Mesh, placement: Placement) -> np.ndarray:
     return v + np.array([placement.offset[0], placement.offset[1], 0.0])
 
 
+def _placement_matrix(mesh: _Mesh, placement: Placement) -> np.ndarray:
+    """4 x 4 taking the mesh (on the bed from the origin) where :func:`_placed_vertices` puts it."""
+    m = np.eye(4)
+    if placement.rotated:  # (x, y) -> (ymax - y, x)
+        m[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
+        m[0, 3] = float(mesh.vertices[:, 1].max())
+    m[:2, 3] += placement.offset
+    return m
+
+
 def _write_plate(plate: Plate, path: Path, printer: Printer | None, prof: PrintProfile,
                  meshes: dict[int, _Mesh]) -> Path:
-    objects = [SlicerObject(p.rod.file_stem, _placed_vertices(meshes[id(p.rod.solid)], p),
-                            meshes[id(p.rod.solid)].triangles, bool(p.rod.print_note),
-                            dict(getattr(p.rod, "print_settings", None) or {})) for p in plate.placements]
+    """The plate's project: a rod of one copy an object of its own; a part with ``copies`` one
+    object (one mesh) with a build item per copy on this plate."""
+    objects, shared = [], {}
+    for p in plate.placements:
+        mesh = meshes[id(p.rod.solid)]
+        settings = dict(getattr(p.rod, "print_settings", None) or {})
+        if int(getattr(p.rod, "copies", 1) or 1) == 1:
+            objects.append(SlicerObject(p.rod.file_stem, _placed_vertices(mesh, p), mesh.triangles,
+                                        bool(p.rod.print_note), settings))
+            continue
+        if id(p.rod) not in shared:
+            shared[id(p.rod)] = len(objects)
+            objects.append(SlicerObject(p.rod.file_stem, mesh.vertices, mesh.triangles, bool(p.rod.print_note),
+                                        settings, []))
+        objects[shared[id(p.rod)]].instances.append(_placement_matrix(mesh, p))
     return write_3mf(path, objects, plate.pauses, profile=prof, printer=printer)
 
 
@@ -346,7 +379,7 @@ def write_rod_3mf(rod: FabricatedRod, path: str | Path, *, printer: Printer | No
     and, for a rod resting on its arc, support (see :func:`write_print_3mf`)."""
     prof = PrintProfile.from_mapping(profile)
     meshes: dict[int, _Mesh] = {}
-    (plate,) = _plan([rod], prof, printer, 5.0, 5.0, meshes)
+    (plate,) = _plan([rod], prof, printer, 5.0, 5.0, meshes, single=True)
     return _write_plate(plate, Path(path), printer, prof, meshes)
 
 
@@ -366,7 +399,7 @@ def write_print_files(rods: Sequence[FabricatedRod], outdir: str | Path, *, prin
     meshes: dict[int, _Mesh] = {}
     written = _write_plates(rods, outdir / "print.3mf", printer, prof, 5.0, 5.0, meshes)
     for rod in rods:  # rods sharing a solid share its mesh, each under its own name
-        (plate,) = _plan([rod], prof, printer, 5.0, 5.0, meshes)
+        (plate,) = _plan([rod], prof, printer, 5.0, 5.0, meshes, single=True)
         folder = str(getattr(rod, "print_folder", "") or "rods")
         written.append(_write_plate(plate, outdir / folder / f"{rod.file_stem}.3mf", printer, prof, meshes))
     return written

@@ -150,6 +150,9 @@ class SlicerObject:
         support: the slicer adds support under it (a rod resting on its arc).
         settings: further per-object settings (PrusaSlicer keys, e.g.
             ``support_material_buildplate_only``).
+        instances: 4 x 4 placements of the mesh on the bed, one build item each (PrusaSlicer
+            reads them as instances of one object: one mesh, printed that many times); empty:
+            one item, the vertices already on the bed.
     """
 
     name: str
@@ -157,6 +160,7 @@ class SlicerObject:
     triangles: np.ndarray
     support: bool = False
     settings: Mapping[str, str] = field(default_factory=dict)
+    instances: Sequence[np.ndarray] = ()
 
 
 def bed(printer: Printer | None) -> tuple[tuple[float, float, float], float]:
@@ -237,7 +241,8 @@ def model_config(objects: Sequence[tuple[Any, ...]]) -> str:
     per object."""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', "<config>"]
     for rid, name, ntri, support, *more in objects:
-        lines.append(f' <object id="{rid}" instances_count="1">')
+        count = int(more[1]) if len(more) > 1 else 1
+        lines.append(f' <object id="{rid}" instances_count="{count}">')
         lines.append(f'  <metadata type="object" key="name" value={quoteattr(name)}/>')
         if support:  # a rod resting on its arc: support under the rising ends
             lines.append('  <metadata type="object" key="support_material" value="1"/>')
@@ -249,6 +254,20 @@ def model_config(objects: Sequence[tuple[Any, ...]]) -> str:
         lines.append(" </object>")
     lines.append("</config>")
     return "\n".join(lines) + "\n"
+
+
+def _transform(matrix: np.ndarray):
+    """lib3mf's Transform of a rigid 4 x 4 (3MF multiplies row vectors: its rows are the
+    rotation's columns, then the translation)."""
+    from lib3mf import Lib3MF
+
+    m = np.asarray(matrix, float)
+    t = Lib3MF.Transform()
+    for i in range(3):
+        for j in range(3):
+            t.Fields[i][j] = float(m[j, i])
+        t.Fields[3][i] = float(m[i, 3])
+    return t
 
 
 def package_3mf(objects: Sequence[SlicerObject]) -> tuple[bytes, list[tuple[int, str, int]]]:
@@ -271,7 +290,8 @@ def package_3mf(objects: Sequence[SlicerObject]) -> tuple[bytes, list[tuple[int,
         mo.SetType(Lib3MF.ObjectType.Model)
         if not mo.IsManifoldAndOriented():
             raise ValueError(f"{obj.name}: the mesh is not closed and oriented")
-        model.AddBuildItem(mo, identity)
+        for m in obj.instances if len(obj.instances) else [None]:
+            model.AddBuildItem(mo, identity if m is None else _transform(m))
         info.append((int(mo.GetModelResourceID()), obj.name, len(t)))
     return bytes(model.QueryWriter("3mf").WriteToBuffer()), info
 
@@ -289,7 +309,8 @@ def write_3mf(path: str | Path, objects: Sequence[SlicerObject], pauses: Mapping
     prof = PrintProfile.from_mapping(profile)
     package, info = package_3mf(objects)
     extra = {CONFIG_FILE: slicer_config(prof, printer, pauses=bool(pauses)),
-             MODEL_CONFIG_FILE: model_config([(*i, o.support, o.settings) for i, o in zip(info, objects)])}
+             MODEL_CONFIG_FILE: model_config([(*i, o.support, o.settings, max(1, len(o.instances)))
+                                               for i, o in zip(info, objects)])}
     if pauses:
         extra[PAUSES_FILE] = pause_xml(pauses, prof.pause_gcode)
     path = Path(path)

@@ -184,7 +184,8 @@ def _build(doc: Checked, path: Path | None) -> Catalog:
         if len(bv) != 3:
             v.report_at("printer.build_volume", f"expected 3 numbers (x, y, z), got {len(bv)}")
         else:
-            printer = Printer(tuple(bv), p["nozzle"], p.get("name", ""))  # type: ignore[arg-type]
+            printer = Printer(tuple(bv), p["nozzle"], p.get("name", ""),  # type: ignore[arg-type]
+                              p.get("mesh_deflection"), p.get("mesh_angle"))
 
     types: list[RodType] = []
     families: list[Family] = []

@@ -429,6 +429,18 @@ def catalog_spec() -> Obj:
                         ),
                         "nozzle": Field(Num(maximum=5, **mm_pos), required=True,
                                         description="Nozzle diameter (mm); the minimum wall must not be thinner."),
+                        "mesh_deflection": Field(
+                            Num(minimum=0.001, maximum=1, unit="mm"),
+                            description="How far (mm) the STL and 3MF meshes of a net's parts may lie from the "
+                            "solids' surfaces (absolute linear deflection). Default: 0.15 x print.layer_height "
+                            "(0.03 mm for 0.2 mm layers), well under a layer's own ridges, so that the "
+                            "meshes (what the slicer prints) hold within 0.3 % of the solids' plastic; "
+                            "masses and checks are taken from the exact solids, never the meshes."),
+                        "mesh_angle": Field(
+                            Num(minimum=1, maximum=45, unit="deg"),
+                            description="The meshes' angular deflection (degrees between neighbouring "
+                            "facets' normals). Default 11.5 (0.2 rad): round features as small as a net "
+                            "rod's 9 mm body keep their volume (the printed plastic) within 0.3 %."),
                     },
                     description="The printer the catalog is sized for (optional; enables size checks).",
                 )

@@ -85,11 +85,16 @@ class Printer:
         build_volume: (x, y, z) of the build volume (mm).
         nozzle: nozzle diameter (mm).
         name: free text.
+        mesh_deflection: the STL/3MF meshes' linear deflection (mm, absolute), or None for
+            the default, a quarter of the print's layer height (:func:`rodcad.cad.mesh.print_deflection`).
+        mesh_angle: their angular deflection (degrees), or None for the default.
     """
 
     build_volume: tuple[float, float, float]
     nozzle: float
     name: str = ""
+    mesh_deflection: float | None = None
+    mesh_angle: float | None = None
 
 
 @dataclass(frozen=True)

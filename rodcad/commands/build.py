@@ -39,7 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--no-cad", action="store_true", help="design and check only: no solids, no STEP/STL")
     p.add_argument("--method", choices=METHOD_NAMES, help="inverse-design method (default: the design's)")
     p.add_argument("--seed", type=int, metavar="N", help="random seed (default: the design's)")
-    p.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: number of CPUs)")
+    p.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: number of CPUs; a net's CAD: a "
+                   "Dask local cluster of N workers, by default when the net has enough distinct parts)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="build a net's parts on this Dask scheduler's workers "
+                   "(e.g. tcp://10.0.0.5:8786; they must import the same rodcad)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress, only the summary")
     p.set_defaults(handler=run)
 
@@ -60,10 +63,16 @@ def run(args: argparse.Namespace) -> int:
     if args.seed is not None and args.seed < 0:
         print("rodcad: --seed must be 0 or more", file=sys.stderr)
         return 2
+    if args.jobs is not None and args.jobs < 1:
+        print("rodcad: --jobs must be 1 or more", file=sys.stderr)
+        return 2
+    if args.scheduler is not None and not args.scheduler.strip():
+        print("rodcad: --scheduler needs an address (tcp://HOST:PORT)", file=sys.stderr)
+        return 2
     from rodcad import pipeline
 
     written = pipeline.run(design, outdir, cad=False if args.no_cad else None, method=args.method,
-                           seed=args.seed, jobs=args.jobs, progress=progress)
+                           seed=args.seed, jobs=args.jobs, scheduler=args.scheduler, progress=progress)
     return _REPORTS[written.kind](written, design, outdir)
 
 

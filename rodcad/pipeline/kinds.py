@@ -49,7 +49,8 @@ class Run:
 
 
 def run(design: Design, outdir: str | Path, *, cad: bool | None = None, method: str | None = None,
-        seed: int | None = None, jobs: int | None = None, progress: Progress | None = None) -> Run:
+        seed: int | None = None, jobs: int | None = None, scheduler: str | None = None,
+        progress: Progress | None = None) -> Run:
     """Build any design and write its folder: ``outdir`` when the build meets its tolerance,
     else ``outdir``'s best-fit folder (:func:`rodcad.outdir.best_fit_folder`; ``outdir`` is
     then left as it was).
@@ -60,14 +61,15 @@ def run(design: Design, outdir: str | Path, *, cad: bool | None = None, method: 
         cad: build the solids (default: the design's fabrication.cad).
         method: inverse-design method (default: the design's; chains and chandeliers).
         seed: seed (default: the design's).
-        jobs: worker processes (chains and chandeliers; a net chooses its own).
+        jobs: worker processes (a net's: a Dask local cluster of that many).
+        scheduler: a Dask scheduler's address to build a net's parts on.
         progress: where to report progress (default: silent).
 
     Raises:
         InputError: the design cannot be built as given.
         DesignLimit: rods the catalog cannot print, nodes too crowded for the hubs (nets).
     """
-    result = build(design, cad=cad, method=method, seed=seed, jobs=jobs, progress=progress)
+    result = build(design, cad=cad, method=method, seed=seed, jobs=jobs, scheduler=scheduler, progress=progress)
     ok = result.meets_tolerance if isinstance(result, ChandelierBuild) else result.ok
     target = Path(outdir) if ok else best_fit_folder(Path(outdir))
     data = write(result, target, progress=progress)
@@ -75,7 +77,7 @@ def run(design: Design, outdir: str | Path, *, cad: bool | None = None, method: 
 
 
 def build(design: Design, *, cad: bool | None = None, method: str | None = None, seed: int | None = None,
-          jobs: int | None = None, progress: Progress | None = None) -> Any:
+          jobs: int | None = None, scheduler: str | None = None, progress: Progress | None = None) -> Any:
     """Build any design (arguments as :func:`run`'s), writing nothing: a chain's
     :class:`rodcad.results.BuildResult`, a chandelier's :class:`rodcad.results.ChandelierBuild`
     or a net's :class:`rodcad.pipeline.net.NetBuild`."""
@@ -83,7 +85,8 @@ def build(design: Design, *, cad: bool | None = None, method: str | None = None,
     if kind == "chandelier":
         return chandelier.build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
     if kind == "net":
-        return net.build_net(design, seed=seed, cad=design.cad if cad is None else cad, progress=progress)
+        return net.build_net(design, seed=seed, cad=design.cad if cad is None else cad, jobs=jobs,
+                             scheduler=scheduler, progress=progress)
     return chain.build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
 
 

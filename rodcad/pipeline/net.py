@@ -4,8 +4,8 @@ pictures out. It sequences the steps and owns none of them::
     design.yaml + catalog -> load_design() (net: rodcad.design.net.target)  rodcad.design.loader
     -> hardware, lengths, mass bounds, hub masses                      rodcad.design.net.plan.plan_net
     -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.check.design_net_plan
-    -> hubs and rods as solids, the net as built (with CAD)          rodcad.cad.net.solids
-    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.solids
+    -> each distinct hub and rod built once (Dask tasks), the net as built (with CAD)  rodcad.cad.net.build
+    -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.build
     -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.net.print_files
 """
 
@@ -66,9 +66,13 @@ class NetBuild:
         return self.check.limit()
 
 
-def build_net(design: Design, *, seed: int | None = None, cad: bool = False,
-              progress: Progress | None = None) -> NetBuild:
-    """Design a net: hardware and rods on the target, masses, the exact equilibrium.
+def build_net(design: Design, *, seed: int | None = None, cad: bool = False, jobs: int | None = None,
+              scheduler: str | None = None, progress: Progress | None = None) -> NetBuild:
+    """Design a net: hardware and rods on the target, masses, the exact equilibrium; with
+    ``cad``, its distinct parts built (each a task: in this process, or on Dask workers,
+    :func:`rodcad.parallel.task_runner`: ``scheduler`` an existing Dask scheduler's address,
+    ``jobs`` a local cluster of that many worker processes, by default one when the net has
+    enough distinct parts to be worth it).
 
     Raises:
         DesignLimit: rods the catalog cannot print, nodes too crowded for the hubs.
@@ -83,10 +87,16 @@ def build_net(design: Design, *, seed: int | None = None, cad: bool = False,
         check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance)
     solids = None
     if cad:
-        from rodcad.cad.net.solids import build_net_solids
+        from rodcad.cad.net.build import build_net_solids, distinct_count
+        from rodcad.parallel import task_runner
 
-        with progress.step("building the hubs and rods (B-rep) and the net as built") as st:
-            solids = build_net_solids(check, progress=st)
+        prof = print_profile(design.catalog)
+        parts = distinct_count(check)
+        with task_runner(parts, jobs=jobs, scheduler=scheduler) as (runner, where):
+            with progress.step(f"building the {parts} distinct hubs and rods (B-rep, files, checks; {where}) "
+                               "and the net as built") as st:
+                solids = build_net_solids(check, printer=design.catalog.printer,
+                                          layer_height=float(prof["layer_height"]), runner=runner, progress=st)
     return NetBuild(design, check, seed, solids)
 
 
@@ -97,7 +107,7 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
     with staged(outdir, progress) as (tmp, progress):
         files = []
         if b.solids is not None:
-            from rodcad.cad.net.solids import write_net_files
+            from rodcad.cad.net.build import write_net_files
 
             from rodcad.cad.net.print_files import write_net_print_files
 
@@ -110,6 +120,20 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
             data = _write(b, tmp, files)
             write_net_view(b, data, tmp)  # assembly.glb, view.html
     return data
+
+
+def _parts_json(s) -> list[dict[str, Any]]:
+    """design.json's ``cad.parts``: each distinct printed part (a rod, a hub or a hub's half)
+    once, with how many to print, for which rods or nodes, its solid's and its mesh's volume."""
+    out = []
+    for part in s.parts:
+        for solid, mesh_volume in zip(part.solids, part.mesh_volumes):
+            vol = float(solid.volume)
+            out.append({"name": solid.label, "kind": part.kind, "count": part.count,
+                        "members": [int(m) for m in part.members], "volume_mm3": round(vol, 4),
+                        "mesh_volume_mm3": round(float(mesh_volume), 4),
+                        "mesh_volume_rel": round(float(mesh_volume) / vol - 1, 6)})
+    return out
 
 
 def _finite(x: float) -> float | None:
@@ -151,7 +175,15 @@ def _write(b: NetBuild, tmp: Path, files: list[str]) -> dict[str, Any]:
                        "hubs_wider_sockets": {f"hub-{k:03d}": round(float(h.clearance), 4)
                                               for k, h in enumerate(s.hub_splits)
                                               if h.clearance is not None and h.clearance > d.catalog.node.clearance},
+                       "parts": _parts_json(s),
+                       "mesh": {"deflection_mm": s.deflection[0], "angle_deg": round(float(np.degrees(s.deflection[1])), 3),
+                                "note": "STL and 3MF meshes (what the slicer prints) to this deflection; masses and "
+                                        "checks from the exact solids"},
                        "files": files}
+        rho = d.catalog.node.density / 1000.0
+        data["bill_of_materials"]["parts"] = [
+            {"name": p["name"], "count": p["count"], "plastic_g": round(rho * p["volume_mm3"], 4)}
+            for p in data["cad"]["parts"]]
     plot_net(b.check, f"{d.name}: {b.check.error_mm:.3g} mm ({100 * b.check.rel_size:.3g} % of its size) off "
              "its target", tmp / "preview.png")
     write_design(tmp, data, net_report(b.check, data, title=d.name))

@@ -1,7 +1,7 @@
 """A net's print files: every part a user prints (rods and hub parts) in PrusaSlicer
 projects, through the chains' code (:mod:`rodcad.cad.printfile`): print.3mf (print-2.3mf,
-... when one bed is not enough: plates split by the printer's bed only), rods/rod-NNN.3mf
-and hubs/<part>.3mf, each with the catalog's print profile (100 % infill) and a pause
+... when one bed is not enough: plates split by the printer's bed only; each distinct part one
+object placed once per member), rods/rod-NNN.3mf and hubs/<part>.3mf (one per distinct part), each with the catalog's print profile (100 % infill) and a pause
 (M601, its message naming the rods) at every layer where steel balls go into a rod.
 
 Orientation. A rod lies along the bed's x axis on its round body (its axis ``rod_diameter
@@ -67,6 +67,8 @@ class NetPrintPart:
         ball_count, ball_diameter, ball_name: its steel balls.
         print_note: how it prints ('' without support).
         print_settings: PrusaSlicer per-object settings.
+        copies: how many to print (its members); copy_tags: each copy's tag in pause messages.
+        mesh_deflection: (linear mm, angular rad) of its mesh (:func:`rodcad.cad.mesh.print_deflection`).
     """
 
     index: int
@@ -87,12 +89,17 @@ class NetPrintPart:
     socket_height: float = 0.0
     pause_zs: tuple = ()
     fill_mass: float = 0.0
+    copies: int = 1
+    copy_tags: tuple = ()
+    mesh_deflection: tuple | None = None
 
 
 def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]:
-    """Every part of a built net to print: its rods (lying along x on their body) and its
-    hub parts (``solids.hub_parts`` when the hubs are split, each on its flat face by its
-    own print matrix, :mod:`rodcad.cad.net.hub`; a hub left whole on support).
+    """Every distinct part of a built net to print, each with its count (``solids.parts``,
+    :mod:`rodcad.cad.net.parts`): its rods (lying along x on their body) and its hub parts (the
+    halves of a split hub, each on its flat face by its own print matrix,
+    :mod:`rodcad.cad.net.hub`; a hub left whole on support). The plates place each part once
+    per member (its ``copies``), each copy's pauses named after its member's rod.
 
     Args:
         check: the designed net (:class:`rodcad.design.net.check.NetCheck`).
@@ -103,7 +110,9 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
     hw = plan.hardware
     parts = []
     arcs = plan.arcs
-    for e, s in enumerate(solids.rods):
+    for part in (p for p in solids.parts if p.kind == "rod"):
+        e = part.members[0]
+        s = part.solids[0]
         k = int(solids.rod_balls[e]) if solids.rod_balls else 0
         if arcs[e] is None:
             centres = np.column_stack([ball_positions(hw, float(plan.lengths[e]), k), np.zeros((k, 2))])
@@ -118,13 +127,18 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
             print_note=f"{note}: support from the bed under the body and the end balls",
             print_settings=dict(ROD_SETTINGS),
             socket_centers=centres if k else np.zeros((0, 3)),
-            socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0))
-    hub_parts = solids.hub_parts if solids.hub_splits else [(s, np.eye(4), True) for s in solids.hubs]
-    for i, (s, matrix, needs_support) in enumerate(hub_parts):
-        parts.append(NetPrintPart(
-            len(solids.rods) + i, s, float(s.volume), np.asarray(matrix, float), s.label, "hubs",
-            print_note=("a sphere: support from the bed" if needs_support else ""),
-            print_settings=dict(ROD_SETTINGS) if needs_support else {}))
+            socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0,
+            copies=part.count, copy_tags=tuple(f"{i:03d}" for i in part.members),
+            mesh_deflection=tuple(solids.deflection)))
+    for part in (p for p in solids.parts if p.kind == "hub"):
+        whole = len(part.solids) == 1
+        for s, matrix in zip(part.solids, part.print_matrices):
+            parts.append(NetPrintPart(
+                len(solids.rods) + len(parts), s, float(s.volume), np.asarray(matrix, float), s.label, "hubs",
+                print_note=("a sphere: support from the bed" if whole else ""),
+                print_settings=dict(ROD_SETTINGS) if whole else {},
+                copies=part.count, copy_tags=tuple(f"hub {i:03d}" for i in part.members),
+                mesh_deflection=tuple(solids.deflection)))
     return parts
 
 

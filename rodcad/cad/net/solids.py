@@ -1,5 +1,7 @@
 """The solids of a net: printed hubs with ball sockets, round rods with ball ends, cavities and
-steel-ball sockets, their files and the assembly (the geometry of rodcad.catalog.net.node).
+steel-ball sockets (the geometry of rodcad.catalog.net.node); what a built net holds
+(:class:`NetSolids`, its distinct parts :class:`NetPart`). Built, written and assembled by
+:mod:`rodcad.cad.net.build`.
 
 Hub ``k`` (its own frame: origin the node point, axes the hub's at the target) is a sphere
 less, per rod, a socket sphere ``ball + clearance`` across at its printed centre (the pivot
@@ -14,29 +16,19 @@ at mid-length.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from build123d import Axis, CenterOf, Edge, Face, Location, Plane, Solid, Wire
+from build123d import Axis, Edge, Face, Location, Plane, Solid, Wire
 
-from rodcad.cad.export import AssemblyPart, check_files, export_assembly, export_step, export_stl, import_step
-from rodcad.cad.net.bent import bent_rod_solid, bent_socket_centres
-from rodcad.cad.net.hub import HubSplit, split_hub, split_plane, splittable_sockets
+from rodcad.cad.export import export_step, import_step
+from rodcad.cad.net.hub import split_plane
 from rodcad.cad.solids import GeometryError, one_solid
-from rodcad.parallel import default_jobs, worker_pool
 
-#: STL deflection of net parts (mm): a rod's 9 mm cylinder needs a finer mesh than a chain's
-#: rods for its STL to hold the solid's volume well within 0.1 % (meshed to 0.004 mm it is
-#: 0.1 % short); a hub (a larger sphere, its volume larger for its area) is meshed as a
-#: chain's rods are, a finer mesh of its socket cones failing to weld closed.
-ROD_DEFLECTION = 0.0015
-HUB_DEFLECTION = 0.004
-
-__all__ = ["AS_BUILT_KKT", "HUB_DEFLECTION", "PARTS_PER_WORKER", "ROD_DEFLECTION", "NetSolids", "ball_positions", "build_net_solids", "hub_solid", "net_rod_solid", "rod_matrix", "whole_hub",
-           "write_net_files"]
+__all__ = ["AS_BUILT_KKT", "NetPart", "NetSolids", "ball_positions", "hub_solid", "net_rod_solid", "place",
+           "rod_matrix", "whole_hub"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -161,6 +153,38 @@ AS_BUILT_KKT = 1e-6
 
 
 @dataclass
+class NetPart:
+    """One distinct part of a net, built once (:mod:`rodcad.cad.net.parts`).
+
+    Attributes:
+        kind: 'rod' or 'hub'.
+        label: its name, its first member's ('rod-003', 'hub-012').
+        members: the rods' (or nodes') indices it is printed for.
+        rotations: per member, R (3 x 3): the member is ``solids`` turned by R (hub frame).
+        solids: what is printed (a rod; a hub whole, or its halves 'a' and 'b'), in the first
+            member's frame, labelled ``<label>``, ``<label>-a``, ...
+        print_matrices: per solid, its 4 x 4 onto the bed.
+        files: per solid, {'.step': bytes, '.stl': bytes}, checked.
+        mesh_volumes: per solid, its STL's volume (mm^3).
+        split_reason: a hub printed whole: why ('' else).
+    """
+
+    kind: str
+    label: str
+    members: list
+    rotations: list
+    solids: list
+    print_matrices: list
+    files: list
+    mesh_volumes: list
+    split_reason: str = ""
+
+    @property
+    def count(self) -> int:
+        return len(self.members)
+
+
+@dataclass
 class NetSolids:
     """The solids of a designed net and the net as built from them.
 
@@ -178,6 +202,9 @@ class NetSolids:
             halves through its sockets' centres, where they take the balls).
         rod_com: (m, 3) each rod's centre of mass as built (rod frame, mm): a bent rod's measured
             on its solid (bowing toward -z), a straight rod's at mid-length.
+        parts: the distinct parts (:class:`NetPart`), each written once; ``rods``, ``hubs`` and
+            ``hub_splits`` hold every member's instance of them (shapes shared).
+        deflection: (linear mm, angular rad) of the parts' STL and 3MF meshes.
     """
 
     hubs: list
@@ -192,6 +219,8 @@ class NetSolids:
     rod_balls: list = field(default_factory=list)
     hub_splits: list = field(default_factory=list)
     rod_com: np.ndarray | None = None
+    parts: list = field(default_factory=list)
+    deflection: tuple = (0.03, 0.2)
 
     @property
     def hub_parts(self) -> list:
@@ -200,77 +229,8 @@ class NetSolids:
         return [(p, m, not h.split) for h in self.hub_splits for p, m in zip(h.parts, h.print_matrices)]
 
 
-def build_net_solids(check, *, progress=None) -> NetSolids:
-    """Every hub and rod of a :class:`rodcad.design.net.check.NetCheck`, and the net re-solved
-    with the solids' masses and centres of mass.
-
-    Args:
-        check: the designed net (each rod's balls and cavity from NodeHardware.rod_fill).
-        progress: a progress step (``count``) or None.
-    """
-    from optimize import solve_net
-
-    plan = check.plan
-    t, hw = plan.target, plan.hardware
-    ball_mass = hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 / 1000.0
-    rho = hw.density / 1000.0
-    rods, rod_masses, rod_balls = [], np.zeros(t.m), []
-    total = t.m + (t.n if hw.is_hub else 0)
-    arcs, flen = plan.arcs, plan.fill_lengths
-    rod_com = np.column_stack([plan.lengths / 2, np.zeros((t.m, 2))])
-    for e in range(t.m):
-        k, cavity, _ = hw.rod_fill(float(flen[e]), float(check.masses[e]))
-        if arcs[e] is None:
-            s = net_rod_solid(hw, float(plan.lengths[e]), k, cavity, name=f"rod-{e:03d}")
-        else:  # measured on the solid: its plastic's centre of mass and its steel balls
-            s = bent_rod_solid(hw, arcs[e], k, cavity, name=f"rod-{e:03d}")
-            moment = rho * s.volume * np.array(tuple(s.center(CenterOf.MASS)))
-            moment += ball_mass * bent_socket_centres(hw, arcs[e], k).sum(axis=0)
-            rod_com[e] = moment / (rho * s.volume + k * ball_mass)
-        rods.append(s)
-        rod_balls.append(int(k))
-        rod_masses[e] = rho * s.volume + k * ball_mass
-        if progress is not None:
-            progress.count(e + 1, total)
-    hubs, splits = [], []
-    node_masses, node_com = plan.node_masses.copy(), plan.node_com.copy()
-    if hw.is_hub:
-        for k in range(t.n):
-            at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
-            socks = np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3)
-            if not at:  # an anchor no rod reaches (a boundary-held grid's corner): no hub to print
-                hubs.append(None)
-                splits.append(HubSplit([], [], np.array([0.0, 0.0, 1.0]), 0.0, 0.0))
-                continue
-            piv = np.array([plan.pivots[e, c] for e, c in at]).reshape(-1, 3)
-            socks, clear = splittable_sockets(socks, piv, hw.clearance, hw.ball)
-            hwk = hw if clear == hw.clearance else dataclasses.replace(hw, clearance=clear)
-            s = hub_solid(hwk, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
-            split = split_hub(s, socks, hwk, s.label)
-            if not split.split:  # printed whole: a sphere's parametrisation that writes to STEP as built
-                s = whole_hub(hwk, socks, name=s.label)
-                split.parts = [s]
-            hubs.append(s)
-            splits.append(split)
-            node_masses[k] = rho * s.volume
-            node_com[k] = np.array(tuple(s.center(CenterOf.MASS)))
-            if progress is not None:
-                progress.count(t.m + k + 1, total)
-    eq = check.equilibrium
-    res = solve_net(eq.positions, t.edges, plan.lengths, rod_masses, t.anchored, node_masses=node_masses,
-                    node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations,
-                    com=rod_com if plan.bent else None)
-    out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls, hub_splits=splits,
-                    rod_com=rod_com)
-    if res.success or (np.isfinite(res.kkt_residual) and res.kkt_residual <= AS_BUILT_KKT
-                       and np.all(np.isfinite(res.positions))):
-        err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
-                  float(np.max(np.linalg.norm(res.ends - eq.ends, axis=2))))
-        out.error_mm, out.rel_size = err, err / t.size
-    return out
-
-
-def _matrix(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
+def place(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """4 x 4 of a rotation R (3 x 3) and a translation (mm)."""
     m = np.eye(4)
     m[:3, :3] = R
     m[:3, 3] = origin
@@ -280,7 +240,7 @@ def _matrix(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
 def rod_matrix(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
     """4 x 4: the rod frame (:func:`_rod_frame`) placed at its first pivot ``p0``, as
     assembly.step and the 3D view place a net's rods."""
-    return _matrix(_rod_frame(p0, p1), p0)
+    return place(_rod_frame(p0, p1), p0)
 
 
 def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
@@ -292,61 +252,3 @@ def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
         y = np.cross([0.0, 1.0, 0.0], x)
     y /= np.linalg.norm(y)
     return np.column_stack([x, y, np.cross(x, y)])
-
-
-#: Parts written per worker process at least (fewer: written in this process).
-PARTS_PER_WORKER = 8
-
-
-def _write_part(item) -> None:
-    """Write one part's STEP and STL and check them (a worker process's task)."""
-    solid, label, step, stl, defl = item
-    export_step(solid, step, name=label)
-    export_stl(solid, stl, tolerance=defl)
-    check_files(step, stl, solid.volume, deflection=defl)
-
-
-def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progress=None) -> list[str]:
-    """rods/rod-NNN.step/.stl, hubs/hub-NNN-a.step/.stl and -b (each hub's halves; hub-NNN
-    for a hub left whole) (each checked: the STEP re-imports as one valid solid of the same
-    volume, the STL is watertight) and assembly.step: every part a named solid where the
-    designed net hangs, rods coloured light (blue) to heavy (red)."""
-    import matplotlib
-
-    written, items = [], []
-    hub_parts = [p for p, _, _ in solids.hub_parts] if solids.hub_splits else solids.hubs
-    for sub, parts, defl in (("rods", solids.rods, ROD_DEFLECTION), ("hubs", hub_parts, HUB_DEFLECTION)):
-        if parts:
-            (folder / sub).mkdir(exist_ok=True)
-        for s in parts:
-            step, stl = folder / sub / f"{s.label}.step", folder / sub / f"{s.label}.stl"
-            items.append((Solid(s.wrapped), s.label, step, stl, defl))  # the bare shape: it pickles
-            written += [str(step.relative_to(folder)), str(stl.relative_to(folder))]
-    jobs = max(1, min(default_jobs(), len(items) // PARTS_PER_WORKER))
-    pool = worker_pool(jobs) if jobs > 1 else None
-    try:
-        done = pool.map(_write_part, items, chunksize=2) if pool is not None else map(_write_part, items)
-        for k, _ in enumerate(done):
-            if progress is not None:
-                progress.count(k + 1, len(items))
-    finally:
-        if pool is not None:
-            pool.shutdown()
-    eq = check.equilibrium
-    m = solids.rod_masses
-    norm = matplotlib.colors.Normalize(float(m.min()), float(m.max()) if m.max() > m.min() else float(m.min()) + 1e-9)
-    cmap = matplotlib.colormaps["coolwarm"]
-    nodes = []
-    for e, s in enumerate(solids.rods):
-        p0, p1 = eq.ends[e]
-        color = tuple(float(c) for c in cmap(norm(m[e]))[:3])
-        nodes.append(AssemblyPart(s.label, s, rod_matrix(p0, p1), color))
-    for k, s in enumerate(solids.hubs):
-        for i, p in enumerate(solids.hub_splits[k].parts if solids.hub_splits else [s]):
-            grey = 0.8 - 0.15 * i  # the halves of a hub in two greys
-            nodes.append(AssemblyPart(p.label, p, _matrix(eq.rotations[k], eq.positions[k]), (grey, grey, grey)))
-    if not nodes:  # pragma: no cover - a net has rods
-        raise GeometryError("nothing to assemble")
-    export_assembly(folder / "assembly.step", nodes, name=name)
-    written.append("assembly.step")
-    return written

@@ -123,6 +123,10 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
         lines.append(f"- {bom['steel_balls']} steel balls, {bom['steel_ball']['diameter']:g} mm (inserted at a "
                      "print pause)")
     lines.append(f"- filament: {bom['filament_g']:.1f} g in all")
+    if bom.get("parts"):  # with CAD: each distinct part once, with how many to print
+        lines += ["", f"{len(bom['parts'])} distinct parts to print (equal rods and hubs are one file, printed once "
+                  "per rod or hub; print.3mf places every copy):", ""]
+        lines += [f"- {p['count']} x {p['name']} ({p['plastic_g']:.2f} g each)" for p in bom["parts"]]
     lines += ["", "## Assembly order", ""]
     if hw.is_hub:
         lines += ["Each hub prints as two halves (hub-NNN-a and -b) cut through its sockets' centres; a socket's "
@@ -153,10 +157,12 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     if "as_built" in data:
         ab, cad = data["as_built"], data["cad"]
         lines += ["", "## As built", "",
-                  f"{cad['rods']} rods (rods/rod-NNN.step, .stl) and {cad['hubs']} hubs in {len(cad['hub_parts'])} "
-                  "parts (hubs/hub-NNN-a.step, .stl and -b: each hub's two halves), "
+                  f"{cad['rods']} rods and {cad['hubs']} hubs in {len(cad['hub_parts'])} parts (each hub's two "
+                  f"halves), {len(cad.get('parts', []))} of them distinct: each distinct part written once "
+                  "(rods/rod-NNN.step, .stl; hubs/hub-NNN-a.step, .stl and -b; named after its first rod or hub), "
                   "each checked (the STEP re-imports as one valid solid of its volume, the STL is watertight); "
-                  "assembly.step holds every part as a named solid where the net hangs, rods coloured by mass. "
+                  "assembly.step holds every part where the net hangs, an instance of its distinct part named "
+                  "after its own rod or hub, rods coloured by mass. "
                   + (("With the solids' own masses and centres of mass the net hangs "
                       f"**{ab['error']['max_mm']:.3g} mm** ({100 * ab['error']['max_rel_size']:.3g} % of its size) "
                       f"from the design ({'stable' if ab['stable'] else 'NOT stable'})"
@@ -181,8 +187,8 @@ def _print_section(data: dict[str, Any]) -> list[str]:
     pr = data.get("print", {})
     return ["## Printing", "",
             f"{', '.join(plates)}: every rod and hub part on the printer's bed ({len(plates)} plate"
-            f"{'s' if len(plates) != 1 else ''}, split by the bed only); rods/rod-NNN.3mf and hubs/<part>.3mf: each "
-            f"part alone. PrusaSlicer projects with the print profile every mass assumes ({pr.get('material', '')}, "
+            f"{'s' if len(plates) != 1 else ''}, split by the bed only; each distinct part one object placed once per copy); rods/rod-NNN.3mf "
+            f"and hubs/<part>.3mf: each distinct part alone. PrusaSlicer projects with the print profile every mass assumes ({pr.get('material', '')}, "
             f"{100 * pr.get('infill', 1.0):g} % infill, {pr.get('layer_height', '')} mm layers, "
             f"{pr.get('perimeters', '')} perimeters).",
             "",

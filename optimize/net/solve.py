@@ -321,7 +321,7 @@ def _invariants(net: Net, res: NetResult) -> np.ndarray:
 
 def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None, g: float = 9.81,
               n_starts: int = 1, seed: int | None = 0, node_com=None, pivots=None, node_rotations0=None,
-              start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7) -> NetResult:
+              start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7, callback=None) -> NetResult:
     """Stable static equilibrium of a net of rigid rods hung from anchored nodes.
 
     Args:
@@ -350,6 +350,7 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
         max_iter: Newton iterations per start.
         tol: two equilibria are the same when no node differs by more than ``tol`` times
             the net's size (the largest extent of its start).
+        callback: called with a line of text before each start of the multi-start, or None.
 
     Returns:
         NetResult: the equilibrium reached from the given start (the designed state, when
@@ -381,7 +382,9 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     found: list[NetResult] = []
     counts: list[int] = []
     ref = _invariants(net, first) if first.success and first.stable else None
-    for _ in range(n_starts - 1):
+    for k in range(n_starts - 1):
+        if callback is not None:
+            callback(f"multi-start: start {k + 2} of {n_starts} (a perturbed shape)")
         o, _ = _solve_from(net, _perturbed(net, start, rng, start_scale), max_iter)
         if o is None:
             continue

@@ -87,3 +87,32 @@ def test_big_nets_limited_perturbed_starts_find_the_same_shape(monkeypatch):
     monkeypatch.setattr(solve_mod, "PERTURBED_ITER", 0)  # no Newton step at all: every perturbed start is lost
     stopped = solve_net(spec.positions, spec.edges, spec.lengths, d.masses, spec.anchored, node_masses=nm, n_starts=3)
     assert stopped.counts == [1] and "2 of the multi-start's 2 perturbed start(s) found no equilibrium" in stopped.message
+
+
+def test_a_big_nets_tensile_tensions_come_from_the_sparse_program(monkeypatch):
+    """The sector whose least-squares tensions push (test_net_mujoco): its tensions that pull in
+    every rod found by the sparse linear program a big net gets (forced here) hold the same
+    equilibrium, are stable there, and match the dense search's verdict."""
+    from test_net_mujoco import SECTOR
+
+    from optimize.net.deriv import evaluate
+    from optimize.net.model import Net
+    from optimize.net.newton import is_stable, kkt_residual, multipliers
+    from rodcad.design.loader import load_design
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.plan import plan_net
+
+    d = load_design("sector.yaml", text=SECTOR)
+    c = design_net_plan(plan_net(d.net, d.catalog), seed=0)
+    p, t, eq = c.plan, c.plan.target, c.equilibrium
+    net, st = Net.from_args(eq.positions, t.edges, p.lengths, c.masses, t.anchored, node_rotations0=eq.rotations,
+                            node_masses=p.node_masses, node_com=p.node_com, pivots=p.pivots)
+    ev = evaluate(net, st)
+    least = multipliers(net, ev)
+    assert least.min() < -1e-3 * least.max() and not is_stable(net, st, ev, least)
+    dense = solve_mod.tensile_multipliers(net, ev, least)
+    monkeypatch.setattr(solve_mod, "SELF_STRESS_NVAR", 0)
+    sparse = solve_mod.tensile_multipliers(net, ev, least)
+    assert dense is not None and sparse is not None
+    assert np.all(sparse >= 0) and kkt_residual(net, ev, sparse)[0] < 1e-10
+    assert is_stable(net, st, ev, sparse)

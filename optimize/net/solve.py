@@ -25,7 +25,7 @@ from scipy.sparse.linalg import splu
 
 from optimize.net.deriv import evaluate, rod_frames
 from optimize.net.model import Net, NetState
-from optimize.net.newton import CONVERGED, descend, is_stable, restore
+from optimize.net.newton import CONVERGED, descend, is_stable, kkt_residual, restore
 
 __all__ = ["NET_MESSAGES", "NetResult", "net_sag_guess", "pivots_by_node", "pivots_from_nodes", "solve_net"]
 
@@ -270,8 +270,9 @@ def _result(net: Net, out) -> NetResult:
 
 
 #: Nets up to this many unknowns get the dense search of their self-stresses
-#: (:func:`tensile_multipliers`) where the least-squares tensions push or do not hold them.
-SELF_STRESS_NVAR = 3000
+#: (:func:`tensile_multipliers`) where the least-squares tensions push or do not hold them;
+#: larger ones a sparse linear program in the tensions themselves.
+SELF_STRESS_NVAR = 600
 
 
 def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
@@ -282,15 +283,21 @@ def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
     holds the net as well, and rigid rods do not say which. The least-squares ``lam`` (the
     limit of equally stiff rods) may push in some rods where others of the set pull in all:
     those are found by a linear program, least ``sum |a|`` subject to ``lam + S a >= 0`` (S the
-    self-stresses from a dense SVD of J; nets up to :data:`SELF_STRESS_NVAR` unknowns).
+    self-stresses from a dense SVD of J; nets up to :data:`SELF_STRESS_NVAR` unknowns). A
+    larger net's program is sparse, in the change of tensions ``d`` itself: least ``sum |d|``
+    subject to ``J' d = 0`` and ``lam + d >= 0`` (HiGHS's interior point), its ``J' d = 0`` then
+    made exact by the least change (LSMR) and the tensions kept only where they hold the
+    equilibrium to the solver's tolerance.
 
     Returns:
-        (m,) the tensions, or None: no self-stress, too large a net, or none that pull in every rod.
+        (m,) the tensions, or None: no self-stress, or none that pull in every rod.
     """
     from scipy.optimize import linprog
 
-    if net.nvar == 0 or net.nvar > SELF_STRESS_NVAR:
+    if net.nvar == 0:
         return None
+    if net.nvar > SELF_STRESS_NVAR:
+        return _tensile_sparse(net, ev, lam)
     J = ev.J.toarray()
     U, sv, _ = np.linalg.svd(J, full_matrices=True)
     rank = int(np.sum(sv > 1e-9 * (sv[0] if sv.size else 0.0)))
@@ -304,6 +311,29 @@ def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
         return None
     alt = lam + S @ (res.x[:k] - res.x[k:])
     return np.maximum(alt, 0.0)  # (round-off below zero)
+
+
+def _tensile_sparse(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
+    """:func:`tensile_multipliers` for a large net: sparse throughout (see there)."""
+    from scipy.optimize import linprog
+    from scipy.sparse.linalg import lsmr
+
+    m = net.m
+    F = max(net.weight, float(np.max(np.abs(lam), initial=0.0)))
+    Jt = ev.J.T.tocsr()
+    eye = sp.identity(m, format="csr")
+    # d = p - q, p, q >= 0: min sum(p + q) s.t. J' (p - q) = 0, -(p - q) <= lam (over F)
+    res = linprog(np.ones(2 * m), A_ub=sp.hstack([-eye, eye]).tocsr(), b_ub=lam / F,
+                  A_eq=sp.hstack([Jt, -Jt]).tocsr(), b_eq=np.zeros(net.nvar), bounds=(0, None), method="highs-ipm",
+                  options={"presolve": False})
+    if res.status != 0:
+        return None
+    d = (res.x[:m] - res.x[m:]) * F
+    d -= lsmr(Jt, Jt @ d, atol=1e-15, btol=1e-15, maxiter=20 * m)[0]  # (J' d = 0 to round-off)
+    alt = lam + d
+    if np.any(alt < -1e-9 * F) or kkt_residual(net, ev, alt)[0] > CONVERGED:
+        return None
+    return np.maximum(alt, 0.0)
 
 
 def _failed(net: Net, start: NetState, nres: int) -> NetResult:

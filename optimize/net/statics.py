@@ -42,10 +42,11 @@ __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "s
 #: The central masses keep this share of the linear program's margin from the bounds.
 CENTRAL_SLACK = 1e-3
 #: Nets of more rods than this solve their linear programs by HiGHS's interior point method
-#: (with crossover to a vertex) instead of its dual simplex: on a 2,000-rod net whose rods'
-#: buildable masses are a few micrograms wide, the simplex ran 46 s into "numerical
-#: difficulties" where the interior point said "infeasible" in 1 s (and found a 27,000-pivot
-#: optimum in 1.2 s instead of 5.5 s); smaller nets keep the simplex they were designed with.
+#: (with crossover to a vertex) without presolve, instead of its dual simplex: on 2,000-rod
+#: nets whose rods' buildable masses are a few micrograms wide, the simplex ran 46 s into
+#: "numerical difficulties" where the interior point said "infeasible" in 0.4 s, and with
+#: presolve the interior point too ran 70 s into them where without it it found the optimum
+#: in 2.8 s; smaller nets keep the simplex they were designed with.
 LP_SIMPLEX_RODS = 300
 
 #: Where the linear program fails and the balance fixes the tensions and masses, its least
@@ -244,9 +245,11 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
     return _design(net, st, bounds, allow_compression, explain)
 
 
-def _lp_method(m: int) -> str:
-    """HiGHS's method for a net of ``m`` rods (:data:`LP_SIMPLEX_RODS`)."""
-    return "highs" if m <= LP_SIMPLEX_RODS else "highs-ipm"
+def _lp_method(m: int) -> dict:
+    """linprog's method and options for a net of ``m`` rods (:data:`LP_SIMPLEX_RODS`)."""
+    if m <= LP_SIMPLEX_RODS:
+        return {"method": "highs"}
+    return {"method": "highs-ipm", "options": {"presolve": False}}
 
 
 def _fixed_solution(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray | None:
@@ -299,7 +302,7 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
         b_ub.append(np.zeros(m))
     lp_args = dict(A_ub=sp.vstack(rows_ub).tocsr(), b_ub=np.concatenate(b_ub),
                    A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
-                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], method=_lp_method(m))
+                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], **_lp_method(m))
     lp = linprog(c, **lp_args)
     info = {"lp_status": int(lp.status)}
     x = _fixed_solution(A, b) if lp.status != 0 else None
@@ -378,7 +381,7 @@ def _why(A, b, m, lo_m, hi_m, width, allow_compression):
     b_ub = np.concatenate([hi_m, -lo_m, np.zeros(m)])
     A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 3 * m))]).tocsr()
     bounds = [(None, None)] * m + [(0.0, None)] * m + [(0.0, None)] * (3 * m)
-    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bounds, method=_lp_method(m))
+    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bounds, **_lp_method(m))
     if lp.status != 0:
         return np.full(m, np.nan), np.zeros(0, int)
     p, r, k = lp.x[2 * m:3 * m], lp.x[3 * m:4 * m], lp.x[4 * m:]

@@ -137,7 +137,7 @@ def _error(res: NetResult, target: np.ndarray) -> float:
 def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
                allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None, rotations=None,
                n_starts: int = 8, seed: int = 0, refine: bool = True, tol: float = 1e-6,
-               max_refine: int = 10, callback=None) -> NetDesign:
+               max_refine: int = 10, callback=None, statics: NetMassDesign | None = None) -> NetDesign:
     """Masses for a net to hang in its target, and the exact solver's check of them.
 
     Args:
@@ -155,14 +155,18 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
             Jacobian: one sparse solve per rod).
         callback: called with a line of text as the design goes (the multi-start's starts,
             the refinement's evaluations), or None.
+        statics: the statics' design of these same arguments
+            (:func:`optimize.net.statics.design_net_masses`) when the caller has it already
+            (e.g. from a first call with ``n_starts=1``), or None: designed here.
 
     Returns:
         NetDesign.
     """
     target = np.asarray(target_positions, float)
-    statics = design_net_masses(target, edges, lengths, mass_bounds, anchored, node_masses=node_masses, com=com,
-                                allow_compression=allow_compression, g=g, node_com=node_com, pivots=pivots,
-                                rotations=rotations)
+    if statics is None:
+        statics = design_net_masses(target, edges, lengths, mass_bounds, anchored, node_masses=node_masses,
+                                    com=com, allow_compression=allow_compression, g=g, node_com=node_com,
+                                    pivots=pivots, rotations=rotations)
     kw = dict(node_masses=node_masses, com=com, g=g, node_com=node_com, pivots=pivots)
     size = float(np.max(np.ptp(target, axis=0)))
     masses = statics.masses

@@ -213,6 +213,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     # stays; otherwise the statics' masses, solved once from the target, are refined through
     # the solver only where they hang measurably off (above REFINE_ABOVE of the size)
     refine = not (t.n > FULL_REFINE_NODES and residual > ORIENT_USEFUL)
+    probe = None
     if not residual > ORIENT_USEFUL:  # (NaN for point nodes: probe)
         note("the masses designed and the net solved from the target")
         probe = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=1, refine=False,
@@ -221,7 +222,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     note("the masses designed" + (", refined through the solver" if refine else "")
          + f", the net solved with a multi-start of {n_starts} start(s)")
     design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
-                        refine=refine, callback=note, **kw)
+                        refine=refine, callback=note, statics=probe.statics if probe is not None else None, **kw)
     recheck = False
     if plan.bent:
         final = plan.rod_com(design.masses)

@@ -291,23 +291,53 @@ def gauge_rows(net: Net, state: NetState, ev: NetEval) -> np.ndarray:
         k = int(np.argmax(np.abs(xi)))
         if abs(xi[k]) > 1e-9 * size:
             out.append(k)
-    for node in pattern(net).bodies:  # bodies that spin about the line of their pivots
-        pts = np.concatenate([ev.a[e[:, k] == node, k] for k in (0, 1)])
-        if net.node_masses[node] > 0:
-            pts = np.vstack([pts, state.R[node] @ net.node_com[node]])
-        rel = pts - pts[0]
-        _, sv, vt = np.linalg.svd(skew(rel).reshape(-1, 3))
-        tol = 1e-9 * max(size, float(np.max(np.abs(rel), initial=0.0)))
-        rank = int(np.sum(sv > tol))
-        for axis in vt[rank:]:
-            # the body turns by 'axis' about pts[0]: its node point moves by axis x (-p0)
+    for node, p0, axes in _spinning_bodies(net, state, ev, size):  # bodies that spin about the line of their pivots
+        for axis in axes:
+            # the body turns by 'axis' about p0: its node point moves by axis x (-p0)
             xi = np.zeros(net.nvar)
             xi[net.rot_idx[node] + np.arange(3)] = axis * size
             if net.pos_idx[node] >= 0:
-                xi[net.pos_idx[node] + np.arange(3)] = np.cross(axis, -pts[0])
+                xi[net.pos_idx[node] + np.arange(3)] = np.cross(axis, -p0)
             xi[out] = 0.0  # already held
             out.append(int(np.argmax(np.abs(xi))))
     return np.array(sorted(set(out)), dtype=int)
+
+
+def _spinning_bodies(net: Net, state: NetState, ev: NetEval, size: float) -> list:
+    """The free node bodies whose pivots (and centre of mass) lie on one line or at one
+    point, ascending: (node, its first point, the axes it spins about (k, 3)).
+
+    A body spins about the null space of the cross-product matrices of its points less its
+    first; the singular value decompositions run batched, the bodies of one number of points
+    at a time (a net of a thousand hubs: one call each for its 2-, 3- and 4-rod hubs)."""
+    bodies = pattern(net).bodies
+    if bodies.size == 0:
+        return []
+    e = net.edges
+    is_body = np.zeros(net.n, dtype=bool)
+    is_body[bodies] = True
+    # each body's points: its rods' pivots at end 0 in rod order, at end 1, then its centre of mass
+    node_of = np.concatenate([e[:, 0], e[:, 1]])
+    pts = np.concatenate([ev.a[:, 0], ev.a[:, 1]])
+    keep = np.flatnonzero(is_body[node_of])
+    heavy = bodies[net.node_masses[bodies] > 0]
+    owner = np.concatenate([node_of[keep], heavy])
+    pts = np.concatenate([pts[keep], np.einsum("nab,nb->na", state.R[heavy], net.node_com[heavy])])
+    order = np.argsort(owner, kind="stable")
+    owner, pts = owner[order], pts[order]
+    count = np.bincount(owner, minlength=net.n)
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    found: dict[int, tuple] = {}
+    for c in np.unique(count[bodies]):
+        group = bodies[count[bodies] == c]
+        P = pts[first[group][:, None] + np.arange(c)]          # (nb, c, 3)
+        rel = P - P[:, :1]
+        _, sv, vt = np.linalg.svd(skew(rel).reshape(group.size, 3 * c, 3))
+        tol = 1e-9 * np.maximum(size, np.max(np.abs(rel), axis=(1, 2), initial=0.0))
+        rank = np.sum(sv > tol[:, None], axis=1)
+        for q in np.flatnonzero(rank < 3):
+            found[int(group[q])] = (P[q, 0], vt[q, rank[q]:])
+    return [(node, *found[node]) for node in sorted(found)]
 
 
 def rod_frames(net: Net, ev: NetEval) -> np.ndarray:

@@ -137,7 +137,7 @@ def _error(res: NetResult, target: np.ndarray) -> float:
 def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
                allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None, rotations=None,
                n_starts: int = 8, seed: int = 0, refine: bool = True, tol: float = 1e-6,
-               max_refine: int = 10) -> NetDesign:
+               max_refine: int = 10, callback=None, statics: NetMassDesign | None = None) -> NetDesign:
     """Masses for a net to hang in its target, and the exact solver's check of them.
 
     Args:
@@ -153,14 +153,20 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
         tol: on target when every node lies within ``tol`` x the target's size.
         max_refine: solver evaluations the refinement may use (each also costs a shape
             Jacobian: one sparse solve per rod).
+        callback: called with a line of text as the design goes (the multi-start's starts,
+            the refinement's evaluations), or None.
+        statics: the statics' design of these same arguments
+            (:func:`optimize.net.statics.design_net_masses`) when the caller has it already
+            (e.g. from a first call with ``n_starts=1``), or None: designed here.
 
     Returns:
         NetDesign.
     """
     target = np.asarray(target_positions, float)
-    statics = design_net_masses(target, edges, lengths, mass_bounds, anchored, node_masses=node_masses, com=com,
-                                allow_compression=allow_compression, g=g, node_com=node_com, pivots=pivots,
-                                rotations=rotations)
+    if statics is None:
+        statics = design_net_masses(target, edges, lengths, mass_bounds, anchored, node_masses=node_masses,
+                                    com=com, allow_compression=allow_compression, g=g, node_com=node_com,
+                                    pivots=pivots, rotations=rotations)
     kw = dict(node_masses=node_masses, com=com, g=g, node_com=node_com, pivots=pivots)
     size = float(np.max(np.ptp(target, axis=0)))
     masses = statics.masses
@@ -169,10 +175,10 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
     if not statics.exact and refine:
         first = solve_net(target, edges, lengths, masses, anchored, node_rotations0=rotations, **kw)
         masses, _, info = _refine(target, edges, lengths, anchored, statics, first, mass_bounds, rotations,
-                                  max_refine, kw)
+                                  max_refine, kw, callback)
         refined = bool(info.get("refine_improved"))
     check = solve_net(target, edges, lengths, masses, anchored, node_rotations0=rotations, n_starts=n_starts,
-                      seed=seed, **kw)
+                      seed=seed, callback=callback, **kw)
     error = _error(check, target)
     on_target = bool(check.success and check.stable and error <= tol * size)
     if on_target:
@@ -190,7 +196,7 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
                      size=size, on_target=on_target, refined=refined, message=message, info=info)
 
 
-def _refine(target, edges, lengths, anchored, statics, check, mass_bounds, rotations, max_refine, kw):
+def _refine(target, edges, lengths, anchored, statics, check, mass_bounds, rotations, max_refine, kw, callback=None):
     """Bounded least squares on the node positions through the solver, from the best fit."""
     m = len(lengths)
     bounds = np.broadcast_to(np.asarray(mass_bounds, float), (m, 2))
@@ -202,6 +208,9 @@ def _refine(target, edges, lengths, anchored, statics, check, mass_bounds, rotat
     def solve(masses):
         if np.array_equal(masses, state["m"]) and state["res"] is not None:
             return state["res"]
+        state["nfev"] = state.get("nfev", 0) + 1
+        if callback is not None:
+            callback(f"refining the masses through the solver: evaluation {state['nfev']} of at most {max_refine}")
         start = state["res"] if state["res"] is not None and state["res"].success else None
         res = solve_net(target if start is None else start.positions, edges, lengths, masses, anchored,
                         node_rotations0=rotations if start is None else start.rotations, **kw)

@@ -25,7 +25,7 @@ from scipy.sparse.linalg import splu
 
 from optimize.net.deriv import evaluate, rod_frames
 from optimize.net.model import Net, NetState
-from optimize.net.newton import CONVERGED, descend, is_stable, restore
+from optimize.net.newton import CONVERGED, descend, is_stable, kkt_residual, restore
 
 __all__ = ["NET_MESSAGES", "NetResult", "net_sag_guess", "pivots_by_node", "pivots_from_nodes", "solve_net"]
 
@@ -200,9 +200,19 @@ def _perturbed(net: Net, state: NetState, rng: np.random.Generator, scale: float
     return out
 
 
-def _solve_from(net: Net, start: NetState, max_iter: int):
+#: Above this many unknowns a perturbed start of the multi-start gets at most
+#: PERTURBED_RESTORE restoration iterations and PERTURBED_ITER Newton iterations (the start
+#: from the target keeps the full limits): on a 2,000-rod hub grid one random start took
+#: minutes of factorizations to come back to its rods' lengths. A start that stops there
+#: counts as one that found no equilibrium, and the result says how many did.
+PERTURBED_NVAR = 3000
+PERTURBED_RESTORE = 60
+PERTURBED_ITER = 100
+
+
+def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200):
     """(Outcome or None, restoration iterations) from one start."""
-    state, ev, ok, nres = restore(net, start)
+    state, ev, ok, nres = restore(net, start, max_iter=max_restore)
     if not ok:
         return None, nres
     out = descend(net, state, max_iter=max_iter)
@@ -260,8 +270,9 @@ def _result(net: Net, out) -> NetResult:
 
 
 #: Nets up to this many unknowns get the dense search of their self-stresses
-#: (:func:`tensile_multipliers`) where the least-squares tensions push or do not hold them.
-SELF_STRESS_NVAR = 3000
+#: (:func:`tensile_multipliers`) where the least-squares tensions push or do not hold them;
+#: larger ones a sparse linear program in the tensions themselves.
+SELF_STRESS_NVAR = 600
 
 
 def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
@@ -272,15 +283,21 @@ def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
     holds the net as well, and rigid rods do not say which. The least-squares ``lam`` (the
     limit of equally stiff rods) may push in some rods where others of the set pull in all:
     those are found by a linear program, least ``sum |a|`` subject to ``lam + S a >= 0`` (S the
-    self-stresses from a dense SVD of J; nets up to :data:`SELF_STRESS_NVAR` unknowns).
+    self-stresses from a dense SVD of J; nets up to :data:`SELF_STRESS_NVAR` unknowns). A
+    larger net's program is sparse, in the change of tensions ``d`` itself: least ``sum |d|``
+    subject to ``J' d = 0`` and ``lam + d >= 0`` (HiGHS's interior point), its ``J' d = 0`` then
+    made exact by the least change (LSMR) and the tensions kept only where they hold the
+    equilibrium to the solver's tolerance.
 
     Returns:
-        (m,) the tensions, or None: no self-stress, too large a net, or none that pull in every rod.
+        (m,) the tensions, or None: no self-stress, or none that pull in every rod.
     """
     from scipy.optimize import linprog
 
-    if net.nvar == 0 or net.nvar > SELF_STRESS_NVAR:
+    if net.nvar == 0:
         return None
+    if net.nvar > SELF_STRESS_NVAR:
+        return _tensile_sparse(net, ev, lam)
     J = ev.J.toarray()
     U, sv, _ = np.linalg.svd(J, full_matrices=True)
     rank = int(np.sum(sv > 1e-9 * (sv[0] if sv.size else 0.0)))
@@ -294,6 +311,29 @@ def tensile_multipliers(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
         return None
     alt = lam + S @ (res.x[:k] - res.x[k:])
     return np.maximum(alt, 0.0)  # (round-off below zero)
+
+
+def _tensile_sparse(net: Net, ev, lam: np.ndarray) -> np.ndarray | None:
+    """:func:`tensile_multipliers` for a large net: sparse throughout (see there)."""
+    from scipy.optimize import linprog
+    from scipy.sparse.linalg import lsmr
+
+    m = net.m
+    F = max(net.weight, float(np.max(np.abs(lam), initial=0.0)))
+    Jt = ev.J.T.tocsr()
+    eye = sp.identity(m, format="csr")
+    # d = p - q, p, q >= 0: min sum(p + q) s.t. J' (p - q) = 0, -(p - q) <= lam (over F)
+    res = linprog(np.ones(2 * m), A_ub=sp.hstack([-eye, eye]).tocsr(), b_ub=lam / F,
+                  A_eq=sp.hstack([Jt, -Jt]).tocsr(), b_eq=np.zeros(net.nvar), bounds=(0, None), method="highs-ipm",
+                  options={"presolve": False})
+    if res.status != 0:
+        return None
+    d = (res.x[:m] - res.x[m:]) * F
+    d -= lsmr(Jt, Jt @ d, atol=1e-15, btol=1e-15, maxiter=20 * m)[0]  # (J' d = 0 to round-off)
+    alt = lam + d
+    if np.any(alt < -1e-9 * F) or kkt_residual(net, ev, alt)[0] > CONVERGED:
+        return None
+    return np.maximum(alt, 0.0)
 
 
 def _failed(net: Net, start: NetState, nres: int) -> NetResult:
@@ -321,7 +361,7 @@ def _invariants(net: Net, res: NetResult) -> np.ndarray:
 
 def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None, g: float = 9.81,
               n_starts: int = 1, seed: int | None = 0, node_com=None, pivots=None, node_rotations0=None,
-              start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7) -> NetResult:
+              start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7, callback=None) -> NetResult:
     """Stable static equilibrium of a net of rigid rods hung from anchored nodes.
 
     Args:
@@ -350,6 +390,7 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
         max_iter: Newton iterations per start.
         tol: two equilibria are the same when no node differs by more than ``tol`` times
             the net's size (the largest extent of its start).
+        callback: called with a line of text before each start of the multi-start, or None.
 
     Returns:
         NetResult: the equilibrium reached from the given start (the designed state, when
@@ -381,8 +422,16 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     found: list[NetResult] = []
     counts: list[int] = []
     ref = _invariants(net, first) if first.success and first.stable else None
-    for _ in range(n_starts - 1):
-        o, _ = _solve_from(net, _perturbed(net, start, rng, start_scale), max_iter)
+    big = net.nvar > PERTURBED_NVAR
+    lost = 0
+    for k in range(n_starts - 1):
+        if callback is not None:
+            callback(f"multi-start: start {k + 2} of {n_starts} (a perturbed shape)")
+        o, _ = _solve_from(net, _perturbed(net, start, rng, start_scale),
+                           min(max_iter, PERTURBED_ITER) if big else max_iter,
+                           PERTURBED_RESTORE if big else 200)
+        if big and (o is None or o.status != 0):
+            lost += 1
         if o is None:
             continue
         r = _result(net, o)
@@ -399,6 +448,9 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
         else:
             found.append(r)
             counts.append(1)
+    if lost:
+        first.message += (f" {lost} of the multi-start's {n_starts - 1} perturbed start(s) found no equilibrium within "
+                          "the iteration limits.")
     order = np.argsort([f.energy for f in found], kind="stable")
     first.alternatives = [found[k] for k in order]
     first.counts += [counts[k] for k in order]

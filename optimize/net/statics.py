@@ -41,6 +41,14 @@ __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "s
 
 #: The central masses keep this share of the linear program's margin from the bounds.
 CENTRAL_SLACK = 1e-3
+#: Nets of more rods than this solve their linear programs by HiGHS's interior point method
+#: (with crossover to a vertex) without presolve, instead of its dual simplex: on 2,000-rod
+#: nets whose rods' buildable masses are a few micrograms wide, the simplex ran 46 s into
+#: "numerical difficulties" where the interior point said "infeasible" in 0.4 s, and with
+#: presolve the interior point too ran 70 s into them where without it it found the optimum
+#: in 2.8 s; smaller nets keep the simplex they were designed with.
+LP_SIMPLEX_RODS = 300
+
 #: Where the linear program fails and the balance fixes the tensions and masses, its least
 #: squares solution is exact when its residual (over the force scale) is at most this.
 LSQ_EXACT = 1e-11
@@ -77,53 +85,56 @@ def statics_of(net: Net, state) -> NetStatics:
     frac = np.column_stack([1 - t - ev.q, t + ev.q])  # weight share per unit rod weight
     free = ~net.anchored
     body = free & net.body
-    row_of = np.full((net.n, 6), -1)
-    k = 0
-    for node in range(net.n):
-        if not free[node]:
-            continue
-        ncomp = 6 if body[node] else 3
-        row_of[node, :ncomp] = np.arange(k, k + ncomp)
-        k += ncomp
+    ncomp = np.where(free, np.where(body, 6, 3), 0)
+    first = np.concatenate([[0], np.cumsum(ncomp)[:-1]])
+    k = int(ncomp.sum())
+    row_of = np.where(np.arange(6) < ncomp[:, None], first[:, None] + np.arange(6), -1)
     rT, cT, vT, rM, cM, vM = [], [], [], [], [], []
     for end in (0, 1):
         node = net.edges[:, end]
         sign = 1.0 if end == 0 else -1.0  # u points from pivot 0 to pivot 1
         pull = sign * ev.u                # the rod pulls each node toward its other end
         wz = -g * frac[:, end]
-        for e in np.flatnonzero(free[node]):
-            n_ = node[e]
-            for comp in range(3):
-                rT.append(row_of[n_, comp])
-                cT.append(e)
-                vT.append(pull[e, comp])
-            rM.append(row_of[n_, 2])
-            cM.append(e)
-            vM.append(wz[e])
-            if body[n_]:
-                arm = ev.a[e, end]
-                mT = np.cross(arm, pull[e])
-                mM = np.cross(arm, [0.0, 0.0, wz[e]])
-                for comp in range(3):
-                    rT.append(row_of[n_, 3 + comp])
-                    cT.append(e)
-                    vT.append(mT[comp])
-                    rM.append(row_of[n_, 3 + comp])
-                    cM.append(e)
-                    vM.append(mM[comp])
-    A_T = sp.csr_matrix((vT, (rT, cT)), shape=(k, m))
-    A_m = sp.csr_matrix((vM, (rM, cM)), shape=(k, m))
+        e = np.flatnonzero(free[node])
+        rows_e = row_of[node[e]]
+        rT.append(rows_e[:, :3])
+        cT.append(np.repeat(e[:, None], 3, axis=1))
+        vT.append(pull[e])
+        rM.append(rows_e[:, 2])
+        cM.append(e)
+        vM.append(wz[e])
+        eb = e[body[node[e]]]
+        if eb.size:
+            arm = ev.a[eb, end]
+            mT = np.cross(arm, pull[eb])
+            wvec = np.zeros((eb.size, 3))
+            wvec[:, 2] = wz[eb]
+            mM = np.cross(arm, wvec)
+            rb = row_of[node[eb], 3:]
+            cb = np.repeat(eb[:, None], 3, axis=1)
+            rT.append(rb)
+            cT.append(cb)
+            vT.append(mT)
+            rM.append(rb)
+            cM.append(cb)
+            vM.append(mM)
+    cat = (lambda xs: np.concatenate([np.ravel(x) for x in xs]))
+    A_T = sp.csr_matrix((cat(vT), (cat(rT), cat(cT))), shape=(k, m))
+    A_m = sp.csr_matrix((cat(vM), (cat(rM), cat(cM))), shape=(k, m))
     b = np.zeros(k)
     rows = np.zeros((k, 2), dtype=int)
     node_c = np.einsum("nab,nb->na", state.R, net.node_com)
-    for node in np.flatnonzero(free):
-        idx = row_of[node][row_of[node] >= 0]
-        rows[idx, 0] = node
-        rows[idx, 1] = np.arange(idx.size)
-        w = np.array([0.0, 0.0, g * net.node_masses[node]])
-        b[idx[:3]] = w
-        if idx.size == 6:
-            b[idx[3:]] = np.cross(node_c[node], w)
+    fn = np.flatnonzero(free)
+    has = row_of[fn] >= 0
+    rows[row_of[fn][has], 0] = np.broadcast_to(fn[:, None], has.shape)[has]
+    rows[row_of[fn][has], 1] = np.broadcast_to(np.arange(6), has.shape)[has]
+    wz_node = g * net.node_masses[fn]
+    b[row_of[fn, 2]] = wz_node
+    fb = np.flatnonzero(body[fn])
+    if fb.size:
+        w = np.zeros((fb.size, 3))
+        w[:, 2] = wz_node[fb]
+        b[row_of[fn[fb], 3:]] = np.cross(node_c[fn[fb]], w)
     return NetStatics(A_T, A_m, b, rows, ev.dist.copy())
 
 
@@ -200,7 +211,7 @@ def _bounds(mass_bounds, m: int) -> np.ndarray:
 
 def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
                       allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None,
-                      rotations=None, forces_only: bool = False) -> NetMassDesign:
+                      rotations=None, forces_only: bool = False, explain: bool = True) -> NetMassDesign:
     """Rod masses within bounds that make the target an equilibrium (see the module).
 
     Args:
@@ -212,6 +223,9 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
         rotations: (n, 3, 3) node bodies' orientations at the target.
         forces_only: balance the nodes' forces only, not the node bodies' moments (for a
             caller that then turns the bodies' pivots to cancel the moments of these forces).
+        explain: where no masses within bounds balance, solve the second linear program
+            that says why (``beyond``, ``needs_compression``); False leaves ``beyond`` NaN
+            (for a caller that iterates on the best fit and explains only the last).
 
     Returns:
         NetMassDesign. E.g. masses of a net hung into its shape come back exactly when
@@ -228,7 +242,14 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
     if forces_only:
         keep = st.rows[:, 1] < 3
         st = NetStatics(st.A_T[keep], st.A_m[keep], st.b[keep], st.rows[keep], st.lengths)
-    return _design(net, st, bounds, allow_compression)
+    return _design(net, st, bounds, allow_compression, explain)
+
+
+def _lp_method(m: int) -> dict:
+    """linprog's method and options for a net of ``m`` rods (:data:`LP_SIMPLEX_RODS`)."""
+    if m <= LP_SIMPLEX_RODS:
+        return {"method": "highs"}
+    return {"method": "highs-ipm", "options": {"presolve": False}}
 
 
 def _fixed_solution(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray | None:
@@ -256,7 +277,8 @@ def _scales(net: Net, st: NetStatics, bounds: np.ndarray):
     return m_ref, F, row
 
 
-def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: bool) -> NetMassDesign:
+def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: bool,
+            explain: bool = True) -> NetMassDesign:
     m = net.m
     m_ref, F, row = _scales(net, st, bounds)
     R = sp.diags(row)
@@ -280,7 +302,7 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
         b_ub.append(np.zeros(m))
     lp_args = dict(A_ub=sp.vstack(rows_ub).tocsr(), b_ub=np.concatenate(b_ub),
                    A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
-                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], method="highs")
+                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], **_lp_method(m))
     lp = linprog(c, **lp_args)
     info = {"lp_status": int(lp.status)}
     x = _fixed_solution(A, b) if lp.status != 0 else None
@@ -332,7 +354,10 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     fit = box_qp(q, np.zeros(2 * m + k), Afit, b, lo, hi)
     x = fit.x[:2 * m]
     info.update(fit_nit=fit.nit, fit_success=fit.success)
-    beyond, needs = _why(A, b, m, lo_m, hi_m, width, allow_compression)
+    if explain:
+        beyond, needs = _why(A, b, m, lo_m, hi_m, width, allow_compression)
+    else:
+        beyond, needs = np.full(m, np.nan), np.zeros(0, int)
     masses, tensions = x[m:] * m_ref, x[:m] * F
     return _finish(net, st, bounds, masses, tensions, False, -1.0,
                    "bounded least squares on the statics (no masses within bounds balance the target)",
@@ -356,7 +381,7 @@ def _why(A, b, m, lo_m, hi_m, width, allow_compression):
     b_ub = np.concatenate([hi_m, -lo_m, np.zeros(m)])
     A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 3 * m))]).tocsr()
     bounds = [(None, None)] * m + [(0.0, None)] * m + [(0.0, None)] * (3 * m)
-    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bounds, method="highs")
+    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bounds, **_lp_method(m))
     if lp.status != 0:
         return np.full(m, np.nan), np.zeros(0, int)
     p, r, k = lp.x[2 * m:3 * m], lp.x[3 * m:4 * m], lp.x[4 * m:]

@@ -84,7 +84,7 @@ def build_net(design: Design, *, seed: int | None = None, cad: bool = False, job
         plan = plan_net(t, design.catalog)
     with progress.step("designing the masses and solving the net (exact equilibrium, multi-start)") as st:
         st.note(f"{t.m} rods, mass bounds {plan.bounds[:, 0].min():.3g}-{plan.bounds[:, 1].max():.3g} g")
-        check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance)
+        check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance, note=st.note)
     solids = None
     if cad:
         from rodcad.cad.net.build import build_net_solids, distinct_count

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from optimize import NetDesign, design_net, net_statics
 from rodcad.catalog.net.node import socket_centres
@@ -159,7 +160,7 @@ class NetCheck:
 
 
 def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,
-                    n_starts: int | None = None) -> NetCheck:
+                    n_starts: int | None = None, note=None) -> NetCheck:
     """Masses for the planned net, its exact equilibrium and its fit.
 
     Args:
@@ -168,13 +169,33 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         seed: the multi-start's seed.
         tolerance: largest acceptable error over the net's size (None: 1 %).
         n_starts: the multi-start's starts (None: :func:`net_starts`).
+        note: called with a line of text at each stage of the design (progress), or None.
     """
+    # one BLAS thread: the design's dense steps are small and its vector operations many (an
+    # iterative least squares' norms); on a busy 2-core machine OpenBLAS's spinning threads made
+    # a 17,000-element dot product take 14 ms instead of 0.02 ms
+    t0 = time.perf_counter()
+
+    def stage(text: str) -> None:
+        if note is not None:
+            note(f"{text} ({time.perf_counter() - t0:.1f} s)")
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _design_plan(plan, g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=stage)
+
+
+def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None, n_starts: int | None,
+                 note) -> NetCheck:
     t0 = time.perf_counter()
     n_starts = net_starts(plan.target.n) if n_starts is None else int(n_starts)
     lines = plan.pivots.copy()
+    hub = plan.hardware.is_hub
+    note("statics at the target" + (": the hubs' sockets turned to balance" if hub else ""))
     plan, rounds, residual = orient_sockets(plan, g=g)
+    note("the rods' mass bounds narrowed to masses they can be built at")
     plan, snapped = buildable_bounds(plan, g)
     if snapped and not residual > ORIENT_USEFUL:  # (where the forces themselves balance)
+        note(f"{snapped} rod(s) narrowed: the sockets turned again for their bounds")
         plan, more, _ = orient_sockets(plan, g=g)
         rounds += more
     turn = 0.0
@@ -192,12 +213,16 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     # stays; otherwise the statics' masses, solved once from the target, are refined through
     # the solver only where they hang measurably off (above REFINE_ABOVE of the size)
     refine = not (t.n > FULL_REFINE_NODES and residual > ORIENT_USEFUL)
+    probe = None
     if not residual > ORIENT_USEFUL:  # (NaN for point nodes: probe)
+        note("the masses designed and the net solved from the target")
         probe = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=1, refine=False,
-                           **kw)
+                           callback=note, **kw)
         refine = not (probe.equilibrium.success and probe.equilibrium.stable and probe.rel_error <= REFINE_ABOVE)
+    note("the masses designed" + (", refined through the solver" if refine else "")
+         + f", the net solved with a multi-start of {n_starts} start(s)")
     design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
-                        refine=refine, **kw)
+                        refine=refine, callback=note, statics=probe.statics if probe is not None else None, **kw)
     recheck = False
     if plan.bent:
         final = plan.rod_com(design.masses)
@@ -287,7 +312,7 @@ def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> t
     for used in range(1, rounds + 1):
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
-                               allow_compression=t.compression, g=g)
+                               allow_compression=t.compression, g=g, explain=False)
         new = plan.rod_com(st.masses)
         change = float(np.max(np.abs(new - com)))
         com = new

@@ -69,7 +69,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     for rounds in range(1, ORIENT_ROUNDS + 1):
         full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=t.compression, g=g)
+                                 com=plan.statics_com, allow_compression=t.compression, g=g, explain=False)
         if full.exact:
             return plan, rounds, full.residual
         if full.residual <= ORIENT_FINE:  # (this close, the joint solve below or the refinement finishes it)
@@ -77,7 +77,8 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             break
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                               com=plan.statics_com, allow_compression=t.compression, g=g, forces_only=True)
+                               com=plan.statics_com, allow_compression=t.compression, g=g, forces_only=True,
+                               explain=False)
         if full.residual < 0.9 * best_res:
             best, best_res, stall = plan, full.residual, 0
         else:
@@ -152,7 +153,7 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     def statics(p):
         return design_net_masses(t.positions, t.edges, p.lengths, p.bounds, t.anchored, node_masses=p.node_masses,
                                  node_com=p.node_com, pivots=p.pivots, com=p.statics_com,
-                                 allow_compression=t.compression, g=g)
+                                 allow_compression=t.compression, g=g, explain=False)
 
     st = statics(plan)
     if st.exact:
@@ -202,7 +203,7 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
     def statics(bounds):
         return design_net_masses(t.positions, t.edges, plan.lengths, bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=t.compression, g=g)
+                                 com=plan.statics_com, allow_compression=t.compression, g=g, explain=False)
 
     st = statics(plan.bounds)
     segs = [mass_segments(hw, float(L)) for L in plan.fill_lengths]

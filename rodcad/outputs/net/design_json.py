@@ -81,13 +81,18 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
         })
     balls = rod_balls(check)
     rods = []
+    # the plan's per-rod arrays are properties computed over every rod: read each once
     arcs = plan.arcs
+    fill = plan.fill_lengths
+    target_ends = plan.target_ends
+    swing_limits = plan.swing_limits if hw.is_hub else None
     com = plan.com if plan.com is not None else plan.rod_com(check.masses)
     for e in range(t.m):
         rn = plan.rods[e]
         L = float(plan.lengths[e])
-        Lf = float(plan.fill_lengths[e])
+        Lf = float(fill[e])
         arc = arcs[e]
+        fill_e = hw.rod_fill(Lf, float(check.masses[e]))
         rods.append({
             "index": e,
             "nodes": [int(x) for x in t.edges[e]],
@@ -96,19 +101,19 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "com": _v(com[e]),
             "tension": _f(eq.tensions[e]),
             "ends": [_v(eq.ends[e, 0]), _v(eq.ends[e, 1])],
-            "target_ends": [_v(plan.target_ends[e, 0]), _v(plan.target_ends[e, 1])],
+            "target_ends": [_v(target_ends[e, 0]), _v(target_ends[e, 1])],
             "mass_range": [rn.mass_range[0], rn.mass_range[1]],
             "solid_mass": rn.solid_mass,
             "steel_balls": int(balls[e]),
-            "cavity_mm3": hw.rod_fill(Lf, float(check.masses[e]))[1],
-            "buildable_mass": hw.rod_fill(Lf, float(check.masses[e]))[2],
+            "cavity_mm3": fill_e[1],
+            "buildable_mass": fill_e[2],
             "body_length": rn.body_length,
             "diameter": hw.rod_diameter,
             "shape": "straight" if arc is None else "bent",
             "bend": None if arc is None else {"bend": arc.bend, "sagitta": arc.sagitta, "radius": arc.radius,
                                               "half_angle_deg": float(np.degrees(arc.half_angle)),
                                               "plane": "vertical through the chord, bowing down"},
-            "swing_limit_deg": _f(plan.swing_limits[e]) if hw.is_hub else None,
+            "swing_limit_deg": _f(swing_limits[e]) if hw.is_hub else None,
             "swing_deg": _v(check.swing_deg[e]),
         })
     st = check.design.statics

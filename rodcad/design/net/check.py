@@ -179,7 +179,7 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         rounds += more
     turn = 0.0
     if plan.hardware.is_hub:
-        cos = np.sum(lines * plan.pivots, axis=2) / plan.hardware.pivot_radius ** 2
+        cos = np.sum(lines * plan.pivots, axis=2) / plan.end_pivot ** 2
         turn = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
     t = plan.target
     com_rounds = 0
@@ -216,8 +216,15 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
     eq = design.equilibrium
     size = t.size
     if eq.success:
-        node_err = np.linalg.norm(eq.positions - t.positions, axis=1)
-        end_err = np.linalg.norm(eq.ends - plan.target_ends, axis=2)
+        # against the net as drawn: a planner's joint against the drawn surface or edge, a
+        # merged hub against each node drawn (rodcad.design.net.joints)
+        fn, fp = t.fit_pairs
+        node_err = np.zeros(t.n)
+        np.maximum.at(node_err, fn, np.linalg.norm(eq.positions[fn] - fp, axis=1))
+        shift = np.zeros((t.n, 3))
+        np.add.at(shift, fn, fp - t.positions[fn])
+        shift /= np.maximum(np.bincount(fn, minlength=t.n), 1)[:, None]
+        end_err = np.linalg.norm(eq.ends - plan.target_ends - shift[t.edges], axis=2)
         err = float(max(node_err.max(), end_err.max()))
     else:
         node_err = np.full(t.n, np.inf)

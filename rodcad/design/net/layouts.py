@@ -26,12 +26,15 @@ class NetLayout:
         edges: (m, 2) node indices of each rod, i < j.
         sets: named node sets (sorted index arrays) that ``anchored`` keywords name.
         shape: (u, v) cells of a grid, (rings, spokes) of a radial net, () otherwise.
+        surface: z(x, y, near) of a generated surface (mm), or None (set by the design file's
+            checks: :attr:`rodcad.design.net.target.NetTarget.surface`).
     """
 
     positions: np.ndarray
     edges: np.ndarray
     sets: dict[str, np.ndarray] = field(default_factory=dict)
     shape: tuple[int, ...] = ()
+    surface: Callable | None = None
 
 
 def grid_layout(zfun: Callable[[np.ndarray, np.ndarray], np.ndarray], x: tuple[float, float],

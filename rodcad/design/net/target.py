@@ -46,6 +46,12 @@ class NetTarget:
         written: the block as written (for design.json and the report).
         rod_bends: (m,) each rod's bend (sagitta over chord of its body's arc, 0 straight;
             :mod:`rodcad.catalog.net.bend`), or None: every rod straight.
+        surface: z(x, y, near) of a generated net's surface (mm; ``near`` a node whose
+            angle a radial net's expression reads near), or None: the net is its edges.
+        fit_nodes, fit_points: where the fit measures (:attr:`fit_pairs`), or None.
+        source: (m,) the drawn edge each rod lies on (the planner's; None: rod e is edge e).
+        joints: node indices of the two-rod joints the planner added, or None.
+        drawn: the target as drawn, before the planner (None: this is it).
     """
 
     kind: str
@@ -58,6 +64,29 @@ class NetTarget:
     shape: tuple[int, ...] = ()
     written: dict[str, Any] = field(default_factory=dict)
     rod_bends: np.ndarray | None = None
+    surface: Any = None
+    fit_nodes: np.ndarray | None = None
+    fit_points: np.ndarray | None = None
+    source: np.ndarray | None = None
+    joints: np.ndarray | None = None
+    drawn: Any = None
+
+    @property
+    def fit_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(nodes (P,), points (P, 3)): where the fit measures the net, each node against
+        the point drawn for it (the planner's joints against the drawn surface or edge,
+        merged nodes against each node drawn); by default every node against its target."""
+        if self.fit_nodes is None:
+            return np.arange(self.n), self.positions
+        return self.fit_nodes, self.fit_points
+
+    @property
+    def joint_mask(self) -> np.ndarray:
+        """(n,) the two-rod joints the planner added on long edges."""
+        mask = np.zeros(self.n, dtype=bool)
+        if self.joints is not None:
+            mask[self.joints] = True
+        return mask
 
     @property
     def bends(self) -> np.ndarray:
@@ -74,8 +103,10 @@ class NetTarget:
 
     @property
     def size(self) -> float:
-        """The net's size: the largest extent of its target along x, y or z (mm)."""
-        return float(np.max(np.ptp(self.positions, axis=0)))
+        """The net's size: the largest extent of its target along x, y or z (mm; as drawn,
+        where the planner edited it)."""
+        pts = self.positions if self.fit_points is None else self.fit_points
+        return float(np.max(np.ptp(pts, axis=0)))
 
     @property
     def anchored_mask(self) -> np.ndarray:
@@ -114,8 +145,10 @@ def _surface(s: dict[str, Any], v: Any) -> NetLayout | None:
     X, Y = np.meshgrid(xs, ys)
     if _expr(s["z"], {"x": X, "y": Y}, "z(x, y)", "net.surface.z", v) is None or bad:
         return None
-    return grid_layout(lambda x, y: evaluate_expression(s["z"], {"x": x, "y": y}, what="z(x, y)"),
-                       (s["x"][0], s["x"][1]), (s["y"][0], s["y"][1]), u, w)
+    layout = grid_layout(lambda x, y: evaluate_expression(s["z"], {"x": x, "y": y}, what="z(x, y)"),
+                         (s["x"][0], s["x"][1]), (s["y"][0], s["y"][1]), u, w)
+    layout.surface = lambda x, y, near: evaluate_expression(s["z"], {"x": x, "y": y}, what="z(x, y)")
+    return layout
 
 
 def _radial(r: dict[str, Any], v: Any) -> NetLayout | None:
@@ -148,6 +181,18 @@ def _radial(r: dict[str, Any], v: Any) -> NetLayout | None:
     if not np.all(np.isfinite(layout.positions)):
         v.report_at("net.radial.z", "the z(r, a, x, y) expression is not a finite number at every node")
         return None
+    if sweep >= 360 - 1e-9:
+        ang = np.radians(start) + 2 * np.pi * np.arange(spokes) / spokes
+    else:
+        ang = np.radians(start + np.linspace(0.0, sweep, spokes))
+    node_a = np.concatenate([[0.0] if inner == 0 else [], np.tile(ang, rings)])
+
+    def surface(x, y, near):  # the angle read as the layout reads it near node `near`
+        a0 = node_a[near]
+        a = a0 + (np.arctan2(y, x) - a0 + np.pi) % (2 * np.pi) - np.pi
+        return zf(np.hypot(x, y), a, x, y)
+
+    layout.surface = surface
     return layout
 
 
@@ -282,7 +327,7 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
         return None
     return NetTarget(kind=kind, positions=pos, edges=edges, anchored=anchored, anchored_as=anchored_as,
                      dropped=dropped, compression=bool(net.get("compression", False)), shape=layout.shape,
-                     written=dict(net), rod_bends=bends)
+                     written=dict(net), rod_bends=bends, surface=layout.surface)
 
 
 def _bends(net: dict, m: int, v: Any) -> np.ndarray | None:

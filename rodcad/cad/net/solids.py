@@ -244,7 +244,8 @@ def build_net_solids(check, *, progress=None) -> NetSolids:
                 continue
             piv = np.array([plan.pivots[e, c] for e, c in at]).reshape(-1, 3)
             socks, clear = splittable_sockets(socks, piv, hw.clearance, hw.ball)
-            hwk = hw if clear == hw.clearance else dataclasses.replace(hw, clearance=clear)
+            hwk = plan.hub(k)  # its own size of the catalog's hub family
+            hwk = hwk if clear == hw.clearance else dataclasses.replace(hwk, clearance=clear)
             s = hub_solid(hwk, socks, name=f"hub-{k:03d}", pole=split_plane(socks)[0])
             split = split_hub(s, socks, hwk, s.label)
             if not split.split:  # printed whole: a sphere's parametrisation that writes to STEP as built

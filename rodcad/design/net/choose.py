@@ -10,11 +10,13 @@ designed too and the better fit kept.
 
 from __future__ import annotations
 
+import numpy as np
+
 from rodcad.design.net.check import NetCheck, design_net_plan
 from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
 
-__all__ = ["design_drawn_net"]
+__all__ = ["design_drawn_net", "slack_joints"]
 
 
 def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int = 0,
@@ -30,11 +32,46 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g)
     check = design_net_plan(plan, **kw)
     joints = plan.target.joints
-    if not on_surface or joints is None or not len(joints) or check.ok:
+    if joints is None or not len(joints) or check.ok:
         return check
-    other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
-    if other.ok and not check.ok or (other.ok == check.ok and other.rel_size < check.rel_size):
-        other.notes.append("The two-rod joints hang at the funicular sag below their chords: on the target "
-                           f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
-        return other
+    if on_surface:
+        other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
+        if other.ok and not check.ok or (other.ok == check.ok and other.rel_size < check.rel_size):
+            other.notes.append("The two-rod joints hang at the funicular sag below their chords: on the target "
+                               f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
+            check = other
+    if not check.ok:
+        why = slack_joints(check)
+        if why:
+            check.why = why + (" " + check.why if check.why else "")
+            check.notes.append(why)
     return check
+
+
+def slack_joints(check: NetCheck) -> str:
+    """Where two-rod joints cannot hang (their rods slack or pushing at the design), in words with
+    the hardware that would hold them: a rod as long as the edge, or a rigid in-line splice."""
+    from rodcad.design.net.check import SLACK
+
+    plan = check.plan
+    t = plan.target
+    T = check.equilibrium.tensions
+    if t.joints is None or not len(t.joints) or not np.all(np.isfinite(T)):
+        return ""
+    jm = t.joint_mask
+    far = jm & (check.node_error > check.tolerance * t.size)  # joints that hang off the tolerance
+    on_joint = far[t.edges].any(axis=1) | (jm[t.edges].any(axis=1) & (T <= SLACK * float(np.max(np.abs(T), initial=0.0))))
+    weak = on_joint
+    if not weak.any():
+        return ""
+    share = float(np.max(T[weak])) / float(np.max(np.abs(T), initial=1e-300))
+    src = t.source if t.source is not None else np.arange(t.m)
+    edges = sorted({int(x) for x in src[weak]})
+    drawn = t.drawn if t.drawn is not None else t
+    d = np.linalg.norm(drawn.positions[drawn.edges[edges, 1]] - drawn.positions[drawn.edges[edges, 0]], axis=1)
+    need = float(d.max() - 2 * plan.hardware.pivot_limits[0])
+    return (f"The two-rod joints on {len(edges)} drawn edge(s) ({edges[:8]}) cannot hang on the target within the "
+            f"tolerance: their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack "
+            "rung or diagonal), too little to hold a ball joint's weight near its chord. A rod of "
+            f"{need:.4g} mm (the rod family's length.max) or a rigid in-line splice of the two rods (not in this "
+            "catalog) would hold them.")

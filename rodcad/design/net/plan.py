@@ -183,7 +183,7 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     if hw.is_hub:
         t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
     base = t
-    counts = np.ones(base.m, int)
+    counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
     for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
         t, parent = split_long(base, counts)
         node_pivot, problems = size_hubs(t, hw, lo_hw, hi)
@@ -203,12 +203,27 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
                             f"{', '.join(f'{bends[e]:.3g}' for e in flat[:8])}; bend them less, or a catalog with a "
                             "larger node.gap")
     if problems:
-        raise DesignLimit("; ".join(problems))
+        raise DesignLimit("; ".join(problems) + _coarser(target, hw, lo_hw))
     if hang and t.joints is not None and len(t.joints):
         t = _hung(t, base, parent, counts, hw, node_pivot, g)
     plan = _plan(t, hw, node_pivot, (lo_hw, hi))
     plan.merged = merged
     return plan
+
+
+def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:
+    """For a generated net drawn too fine: the cells whose edges the catalog can make ('' else)."""
+    if t.kind not in ("surface", "radial") or not t.shape:
+        return ""
+    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    need = shortest + 2 * (hw.pivot_limits[0] if hw.is_hub else 0.0)
+    if d.min() >= need:
+        return ""
+    f = float(d.min()) / need
+    a, b = (max(1, int(np.floor(x * f))) for x in t.shape)
+    keys = "net.surface.u and v" if t.kind == "surface" else "net.radial.rings and spokes"
+    return (f"; the same surface with about {a} x {b} ({keys}, or fewer) would keep its edges at least "
+            f"{need:.3g} mm long")
 
 
 def _first_count(base: NetTarget, e: int, node_pivot: np.ndarray, rp_min: float, hi: float) -> int:

@@ -17,8 +17,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from rodcad.design.net.layouts import NetLayout, ObjError, grid_layout, mesh_layout, radial_layout, read_obj
-from rodcad.design.net.spec import ANCHOR_SETS, MAX_NET_NODES
+from rodcad.design.net.layouts import (NetLayout, ObjError, grid_layout, mesh_layout, radial_layout, read_obj,
+                                       subdivide_faces)
+from rodcad.design.net.spec import ANCHOR_SETS, MAX_CELLS, MAX_NET_NODES
 from rodcad.design.targets import evaluate_expression
 
 __all__ = ["NetTarget", "net_target"]
@@ -52,6 +53,8 @@ class NetTarget:
         source: (m,) the drawn edge each rod lies on (the planner's; None: rod e is edge e).
         joints: node indices of the two-rod joints the planner added, or None.
         drawn: the target as drawn, before the planner (None: this is it).
+        refine_edges: every edge cut into this many rods in line by the planner (``net.refine``
+            of explicit nodes and edges).
     """
 
     kind: str
@@ -70,6 +73,7 @@ class NetTarget:
     source: np.ndarray | None = None
     joints: np.ndarray | None = None
     drawn: Any = None
+    refine_edges: int = 1
 
     @property
     def fit_pairs(self) -> tuple[np.ndarray, np.ndarray]:
@@ -196,7 +200,7 @@ def _radial(r: dict[str, Any], v: Any) -> NetLayout | None:
     return layout
 
 
-def _mesh(ref: str, base: Path, v: Any) -> NetLayout | None:
+def _mesh(ref: str, base: Path, v: Any, refine: int = 1) -> NetLayout | None:
     from rodcad.errors import Problem
 
     path = base / ref
@@ -214,6 +218,11 @@ def _mesh(ref: str, base: Path, v: Any) -> NetLayout | None:
         v.problems.append(Problem(str(path), err.line, err.column, "", err.message))
         v.failed.add("net.mesh")
         return None
+    if refine > 1:
+        verts, faces = subdivide_faces(verts, faces, refine)
+        if len(verts) > MAX_NET_NODES:
+            v.report_at("net.refine", f"the mesh refined {refine} x makes {len(verts)} nodes; at most {MAX_NET_NODES}")
+            return None
     return mesh_layout(verts, faces)
 
 
@@ -287,6 +296,13 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
               "mesh": lambda: _mesh(net["mesh"], base, v), "radial": lambda: _radial(net["radial"], v)}[kind]()
     if layout is None:
         return None
+    refine = _refine_count(net, layout)
+    split_edges = 1
+    if refine > 1:
+        layout = _refined(net, kind, refine, base, v)
+        if layout is None:
+            return None
+        split_edges = refine if kind == "nodes" else 1
     pos, edges = layout.positions, layout.edges
     n = pos.shape[0]
     anchored_as = ""
@@ -327,7 +343,43 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
         return None
     return NetTarget(kind=kind, positions=pos, edges=edges, anchored=anchored, anchored_as=anchored_as,
                      dropped=dropped, compression=bool(net.get("compression", False)), shape=layout.shape,
-                     written=dict(net), rod_bends=bends, surface=layout.surface)
+                     written=dict(net), rod_bends=bends, surface=layout.surface, refine_edges=split_edges)
+
+
+def _refine_count(net: dict, layout: NetLayout) -> int:
+    """``net.refine``, or the refinement whose edges come nearest ``net.edge_length`` (the larger)."""
+    n = int(net.get("refine", 1))
+    if "edge_length" in net and layout.edges.shape[0]:
+        d = np.linalg.norm(layout.positions[layout.edges[:, 1]] - layout.positions[layout.edges[:, 0]], axis=1)
+        n = max(n, int(round(float(d.mean()) / float(net["edge_length"]))))
+    return max(n, 1)
+
+
+def _refined(net: dict, kind: str, n: int, base: Path, v: Any) -> NetLayout | None:
+    """The net generated (or subdivided) ``n`` times finer (``net.refine``)."""
+    key = "net.refine" if "refine" in net else "net.edge_length"
+    if kind == "surface":
+        s = dict(net["surface"])
+        s["u"], s["v"] = int(s["u"]) * n, int(s["v"]) * n
+        if max(s["u"], s["v"]) > MAX_CELLS:
+            v.report_at(key, f"refined {n} x the grid has {s['u']} x {s['v']} cells; at most {MAX_CELLS} a side")
+            return None
+        return _surface(s, v)
+    if kind == "radial":
+        r = dict(net["radial"])
+        rad = r["radius"]
+        inner = 0.0 if len(rad) == 1 else min(rad)
+        rings, spokes = int(r["rings"]), int(r["spokes"])
+        r["rings"] = rings * n if inner == 0 else (rings - 1) * n + 1
+        r["spokes"] = spokes * n if r.get("sweep_deg", 360.0) >= 360 - 1e-9 else (spokes - 1) * n + 1
+        if r["rings"] > MAX_CELLS or r["spokes"] > 360:
+            v.report_at(key, f"refined {n} x the net has {r['rings']} rings of {r['spokes']} spokes; at most "
+                        f"{MAX_CELLS} rings and 360 spokes")
+            return None
+        return _radial(r, v)
+    if kind == "mesh":
+        return _mesh(net["mesh"], base, v, n)
+    return _explicit(net, v)  # (its edges are cut into rods in line by the planner: NetTarget.refine_edges)
 
 
 def _bends(net: dict, m: int, v: Any) -> np.ndarray | None:

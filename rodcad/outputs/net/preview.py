@@ -42,8 +42,8 @@ def plot_net(check, title: str, *paths: Path) -> None:
             ax.add_collection(lc)
             x = eq.positions
             if plan.hardware.is_hub:
-                for p in x:
-                    ax.add_patch(plt.Circle((p[a], p[b]), plan.hardware.radius, fc="0.85", ec="0.3", lw=0.6, alpha=0.45,
+                for k, p in enumerate(x):
+                    ax.add_patch(plt.Circle((p[a], p[b]), plan.hub(k).radius, fc="0.85", ec="0.3", lw=0.6, alpha=0.45,
                                             zorder=3))
             ax.plot(x[:, a], x[:, b], ".", color="0.2", ms=3, zorder=4)
             anch = x[t.anchored]

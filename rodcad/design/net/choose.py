@@ -36,7 +36,7 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
         return check
     if on_surface:
         other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
-        if other.ok and not check.ok or (other.ok == check.ok and other.rel_size < check.rel_size):
+        if _rank(other) > _rank(check):
             other.notes.append("The two-rod joints hang at the funicular sag below their chords: on the target "
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
             check = other
@@ -46,6 +46,12 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
             check.why = why + (" " + check.why if check.why else "")
             check.notes.append(why)
     return check
+
+
+def _rank(check: NetCheck) -> tuple:
+    """Better first: within the tolerance, then a stable equilibrium, then the nearer fit."""
+    eq = check.equilibrium
+    return (check.ok, bool(eq.success and eq.stable), -check.rel_size)
 
 
 def slack_joints(check: NetCheck) -> str:
@@ -70,8 +76,11 @@ def slack_joints(check: NetCheck) -> str:
     drawn = t.drawn if t.drawn is not None else t
     d = np.linalg.norm(drawn.positions[drawn.edges[edges, 1]] - drawn.positions[drawn.edges[edges, 0]], axis=1)
     need = float(d.max() - 2 * plan.hardware.pivot_limits[0])
+    why = (f"their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack rung "
+           "or diagonal)" if share < 0.1 else
+           f"the net is too light to pull them straighter: its tension holds a joint's weight (hub and rods) only "
+           f"{float(np.max(check.node_error[t.joint_mask])):.3g} mm below its chord")
     return (f"The two-rod joints on {len(edges)} drawn edge(s) ({edges[:8]}) cannot hang on the target within the "
-            f"tolerance: their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack "
-            "rung or diagonal), too little to hold a ball joint's weight near its chord. A rod of "
-            f"{need:.4g} mm (the rod family's length.max) or a rigid in-line splice of the two rods (not in this "
-            "catalog) would hold them.")
+            f"tolerance ({check.tolerance * t.size:.3g} mm): {why}; a ball joint between two rods carries its weight "
+            f"only by a kink below its chord. A rod of {need:.4g} mm (the rod family's length.max) or a rigid "
+            "in-line splice of the two rods (not in this catalog) would hold them.")

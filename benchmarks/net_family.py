@@ -54,9 +54,10 @@ EDGE = (24.0, 150.0)
 FIT = 0.01
 EXIT1_SHARE = 0.10
 SECONDS = 60.0
-#: Words a refusal uses when it names only the rods' length window (not allowed: the planner
-#: must cut long edges and size hubs for short ones before refusing).
-WINDOW_ONLY = ("would be longer than",)
+#: Words a refusal uses when an edge is out of the rods' length window (the bar: none; the
+#: planner cuts long edges and sizes hubs for short ones, but an edge shorter than the shortest
+#: rod between the smallest hubs is refused, naming the rod length or the coarser net that would).
+WINDOW_ONLY = ("would be longer than", "would be shorter than")
 
 
 @dataclass
@@ -337,8 +338,13 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=120)
     ap.add_argument("--only", default="")
     ap.add_argument("--out", default="")
+    ap.add_argument("--part", default="", help="FIRST:LAST (members, from 0) of the family only, e.g. to "
+                    "run it in two processes")
     a = ap.parse_args(argv)
     members = [m for m in family(a.seed, a.n) if a.only in m.kind or a.only in m.name]
+    if a.part:
+        first, last = (int(x) for x in a.part.split(":"))
+        members = members[first:last]
     print(f"# drawn-net family: seed {a.seed}, {len(members)} nets; {platform.node()}, "
           f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}", flush=True)
     outs = []

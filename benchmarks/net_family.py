@@ -21,7 +21,9 @@ Every size, depth and density is drawn from the seeded generator; the drawn edge
 log-uniform over :data:`EDGE`, from shorter than the shortest rod between nominal hubs to twice
 the longest.
 
-Usage: python benchmarks/net_family.py [--seed 0] [--n 120] [--only KIND] [--out DIR]
+Usage: python benchmarks/net_family.py [--seed 0] [--n 120] [--only KIND] [--out DIR] [--cap 180]
+[--memory 6] [--part FIRST:LAST] [--jsonl FILE]; python benchmarks/net_family.py --merge FILE ...
+(each net in a child process, stopped after --cap seconds or at --memory GB: recorded as such)
 
 Done when (issue 33): each net within 1 % of its size or exit 1 naming the hardware that would
 do it; at most 10 % exit 1; none refused only because an edge is out of the rod window; no
@@ -31,6 +33,8 @@ traceback; none over 60 s without CAD.
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 import math
 import platform
 import sys
@@ -276,6 +280,40 @@ def run_member(m: Member, folder: Path) -> Outcome:
                    joints, hubs, "" if b.ok else c.limit())
 
 
+def _child(m: Member, folder: str, queue, memory_gb: float) -> None:
+    import resource
+
+    cap = int(memory_gb * 2 ** 30)
+    resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+    try:
+        queue.put(run_member(m, Path(folder)))
+    except MemoryError:
+        queue.put(Outcome(m.name, m.kind, 3, math.nan, math.nan, 0, 0, 0, 0, f"more than {memory_gb:g} GB"))
+
+
+def run_capped(m: Member, folder: Path, seconds: float, memory_gb: float) -> Outcome:
+    """:func:`run_member` in a child process, stopped after ``seconds`` (code 4) or at
+    ``memory_gb`` of address space (code 3): a net the machine cannot finish is recorded, and
+    the other sessions on the machine keep their memory."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    q = ctx.Queue()
+    p = ctx.Process(target=_child, args=(m, str(folder), q, memory_gb))
+    t0 = time.perf_counter()
+    p.start()
+    try:
+        out = q.get(timeout=seconds)
+    except Exception:  # (queue.Empty: over the cap)
+        out = Outcome(m.name, m.kind, 4, math.nan, time.perf_counter() - t0, 0, 0, 0, 0,
+                      f"stopped after {seconds:g} s")
+    p.join(5)
+    if p.is_alive():
+        p.kill()
+        p.join()
+    return out
+
+
 def verdict(outs: list[Outcome]) -> list[str]:
     """What misses the issue's bars, in words (empty: every bar met)."""
     bad = []
@@ -313,12 +351,12 @@ def distribution(outs: list[Outcome]) -> str:
     secs = np.array([o.seconds for o in outs])
     lines = [f"{n} nets: {len(ok)} designed within {100 * FIT:g} % ({100 * len(ok) / n:.0f} %), "
              f"{len(ones)} exit 1 ({100 * len(ones) / n:.0f} %), "
-             f"{sum(o.code >= 2 for o in outs)} other"]
+             f"{sum(o.code == 4 for o in outs)} stopped at the time cap, {sum(o.code in (2, 3) for o in outs)} other"]
     if rel.size:
         q = np.percentile(rel, [0, 50, 90, 100])
         lines.append(f"fit of the designed (% of size): min {q[0]:.3g}, median {q[1]:.3g}, 90th {q[2]:.3g}, "
                      f"max {q[3]:.3g}; exact (< 1e-4 %): {int(np.sum(rel < 1e-4))}")
-    q = np.percentile(secs, [50, 90, 100])
+    q = np.nanpercentile(secs, [50, 90, 100])
     lines.append(f"time per net (s): median {q[0]:.1f}, 90th {q[1]:.1f}, max {q[2]:.1f}")
     kinds = sorted({o.kind for o in outs})
     lines.append("by kind: " + ", ".join(f"{k} {sum(o.code == 0 for o in outs if o.kind == k)}/"
@@ -338,9 +376,18 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=120)
     ap.add_argument("--only", default="")
     ap.add_argument("--out", default="")
+    ap.add_argument("--cap", type=float, default=180.0, help="stop a net after this many seconds (0: never)")
+    ap.add_argument("--memory", type=float, default=6.0, help="GB of address space a net may use")
+    ap.add_argument("--jsonl", default="", help="append each outcome to this file as a JSON line")
+    ap.add_argument("--merge", nargs="*", default=None, help="print the table of these JSONL files and stop")
     ap.add_argument("--part", default="", help="FIRST:LAST (members, from 0) of the family only, e.g. to "
                     "run it in two processes")
     a = ap.parse_args(argv)
+    if a.merge is not None:
+        outs = [Outcome(**json.loads(line)) for f in a.merge for line in Path(f).read_text().splitlines() if line]
+        order = {m.name: i for i, m in enumerate(family(a.seed, a.n))}
+        outs.sort(key=lambda o: order.get(o.name, 1 << 30))
+        return _summary(outs)
     members = [m for m in family(a.seed, a.n) if a.only in m.kind or a.only in m.name]
     if a.part:
         first, last = (int(x) for x in a.part.split(":"))
@@ -352,11 +399,18 @@ def main(argv=None) -> int:
         folder = Path(a.out) if a.out else Path(tmp)
         folder.mkdir(parents=True, exist_ok=True)
         for m in members:
-            o = run_member(m, folder)
+            o = run_capped(m, folder, a.cap, a.memory) if a.cap > 0 else run_member(m, folder)
             outs.append(o)
+            if a.jsonl:
+                with open(a.jsonl, "a") as f:
+                    f.write(json.dumps(dataclasses.asdict(o)) + "\n")
             fit = f"{100 * o.rel:.3g} %" if np.isfinite(o.rel) else "-"
             print(f"{o.name:36s} exit {o.code} fit {fit:>10s} {o.nodes:4d} nodes {o.joints:3d} joints "
                   f"{o.seconds:5.1f} s {o.reason[:150]}", flush=True)
+    return _summary(outs)
+
+
+def _summary(outs: list[Outcome]) -> int:
     print()
     print(table(outs))
     print()

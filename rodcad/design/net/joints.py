@@ -44,11 +44,15 @@ import numpy as np
 
 from rodcad.design.net.target import NetTarget
 
-__all__ = ["MERGE_SHARE", "drawn_target", "hang_joints", "merge_close", "pieces", "split_long"]
+__all__ = ["MAX_SAG", "MERGE_SHARE", "SLACK", "drawn_target", "hang_joints", "merge_close", "pieces", "split_long"]
 
 #: Nodes merge into one hub only where that moves each by at most this share of the
 #: tolerance (of the net's size).
 MERGE_SHARE = 0.5
+#: A run whose tension is within this share of the net's largest is slack: no funicular sag.
+SLACK = 1e-3
+#: A funicular sag deeper than this share of the edge is no small kink: the joints stay drawn.
+MAX_SAG = 0.25
 
 
 def drawn_target(t: NetTarget) -> NetTarget:
@@ -179,6 +183,7 @@ def hang_joints(t: NetTarget, tensions: np.ndarray, masses: np.ndarray, joint_ma
         return t
     pos = t.positions.copy()
     jm = t.joint_mask
+    top = float(np.max(np.abs(tensions[np.isfinite(tensions)]), initial=0.0))
     for chain in _runs(t):
         rods = [e for e, _, _ in chain]
         nodes = [chain[0][1]] + [b for _, _, b in chain]
@@ -186,15 +191,16 @@ def hang_joints(t: NetTarget, tensions: np.ndarray, masses: np.ndarray, joint_ma
         k = len(rods)
         A, B = pos[nodes[0]], pos[nodes[-1]]
         L = float(np.linalg.norm(B - A))
-        if not np.isfinite(T) or T <= 0 or L <= 0:
-            continue
+        if not np.isfinite(T) or T <= SLACK * top or L <= 0:
+            continue  # (no pull to hang from: the joints stay where drawn, and the fit says so)
         a = np.arange(1, k) / k
         P = g * (float(np.mean(masses[rods])) + joint_mass[nodes[1:-1]])
+        sags = [float(np.sum(P * np.minimum(a, a[q]) * (1 - np.maximum(a, a[q])))) * L / T for q in range(k - 1)]
+        if max(sags) > MAX_SAG * L:
+            continue  # (not a small kink: the run cannot hang near its edge)
         for q, node in enumerate(nodes[1:-1]):
-            if not jm[node]:
-                continue
-            M = float(np.sum(P * np.minimum(a, a[q]) * (1 - np.maximum(a, a[q]))))
-            pos[node] = A + a[q] * (B - A) - np.array([0.0, 0.0, M * L / T])
+            if jm[node]:
+                pos[node] = A + a[q] * (B - A) - np.array([0.0, 0.0, sags[q]])
     return dataclasses.replace(t, positions=pos)
 
 

@@ -343,6 +343,22 @@ def table(outs: list[Outcome]) -> str:
     return "\n".join(rows)
 
 
+#: Exit-1 reasons by the words they use, first match.
+CATEGORIES = (
+    ("rods meet closer than", "tight angles: a hub larger than the family's largest would hold them"),
+    ("would be shorter than", "edges shorter than the shortest rod between the smallest hubs"),
+    ("cannot hang on the target", "two-rod joints that cannot hang within the tolerance (a longer rod or a "
+                                  "rigid splice would)"),
+    ("push (compression)", "rods that push at the design (compression: true, or more anchors)"),
+    ("in its socket", "a rod turning further in its socket than the hub allows"),
+    ("hangs", "the best fit off the tolerance"),
+)
+
+
+def _category(reason: str) -> str:
+    return next((what for words, what in CATEGORIES if words in reason), reason[:80] or "?")
+
+
 def distribution(outs: list[Outcome]) -> str:
     n = len(outs)
     ok = [o for o in outs if o.code == 0]
@@ -363,7 +379,7 @@ def distribution(outs: list[Outcome]) -> str:
                                           f"{sum(o.kind == k for o in outs)}" for k in kinds))
     reasons: dict[str, int] = {}
     for o in ones:
-        key = o.reason.split(":")[0][:80] if o.reason else "?"
+        key = _category(o.reason)
         reasons[key] = reasons.get(key, 0) + 1
     for key, c in sorted(reasons.items(), key=lambda x: -x[1]):
         lines.append(f"exit 1 x {c}: {key}")

@@ -142,7 +142,8 @@ class NetCheck:
         if not eq.success:
             return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})"
         if not eq.stable:
-            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one"
+            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one" + (
+                f": {self.why}" if self.why else "")
         if not self.meets_tolerance and self.why:
             return f"{pct}: {self.why}"
         if not self.meets_tolerance:

@@ -48,6 +48,18 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     return check
 
 
+def _in_line(t) -> np.ndarray:
+    """(n,) the joints whose two rods' node points lie within a degree of one line."""
+    out = np.zeros(t.n, dtype=bool)
+    for k in t.joints:
+        ends = [int(x) for e in np.flatnonzero((t.edges == k).any(axis=1)) for x in t.edges[e] if x != k]
+        if len(ends) == 2:
+            u, v = t.positions[ends[0]] - t.positions[k], t.positions[ends[1]] - t.positions[k]
+            cos = float(u @ v) / float(np.linalg.norm(u) * np.linalg.norm(v))
+            out[k] = cos < -np.cos(np.radians(1.0))
+    return out
+
+
 def _rank(check: NetCheck) -> tuple:
     """Better first: within the tolerance, then a stable equilibrium, then the nearer fit."""
     eq = check.equilibrium
@@ -66,6 +78,8 @@ def slack_joints(check: NetCheck) -> str:
         return ""
     jm = t.joint_mask
     far = jm & (check.node_error > check.tolerance * t.size)  # joints that hang off the tolerance
+    if not check.equilibrium.stable:  # joints in line with their rods balance only inverted
+        far |= _in_line(t)
     on_joint = far[t.edges].any(axis=1) | (jm[t.edges].any(axis=1) & (T <= SLACK * float(np.max(np.abs(T), initial=0.0))))
     weak = on_joint
     if not weak.any():
@@ -76,7 +90,9 @@ def slack_joints(check: NetCheck) -> str:
     drawn = t.drawn if t.drawn is not None else t
     d = np.linalg.norm(drawn.positions[drawn.edges[edges, 1]] - drawn.positions[drawn.edges[edges, 0]], axis=1)
     need = float(d.max() - 2 * plan.hardware.pivot_limits[0])
-    why = (f"their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack rung "
+    why = ("they lie in line with their rods (no kink below their chords: they balance only inverted, an "
+           "unstable equilibrium)" if not check.equilibrium.stable else
+           f"their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack rung "
            "or diagonal)" if share < 0.1 else
            f"the net is too light to pull them straighter: its tension holds a joint's weight (hub and rods) only "
            f"{float(np.max(check.node_error[t.joint_mask])):.3g} mm below its chord")

@@ -225,7 +225,9 @@ def test_the_default_catalog_has_hub_hardware_and_bad_hardware_is_refused(tmp_pa
     text = (CATALOGS / "pla-parametric.yaml").read_text()
     cat = catalog_from_text(text, "c.yaml")
     assert cat.node.kind == "hub" and cat.node.swing_deg > 20 and cat.node.min_angle_deg <= 60 + 1e-9
-    bad = text.replace("  pivot_radius: 7.5", "  pivot_radius: 10").replace("  cone_deg: 55", "  cone_deg: 80")
+    assert "  pivot_radius: {min: 4, max: 16, nominal: 7.5}" in text
+    bad = text.replace("  pivot_radius: {min: 4, max: 16, nominal: 7.5}", "  pivot_radius: 10").replace(
+        "  cone_deg: 55", "  cone_deg: 80")
     with pytest.raises(InputError) as err:
         catalog_from_text(bad, "c.yaml")
     got = [str(p) for p in err.value.problems]

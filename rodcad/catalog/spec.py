@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from rodcad.yamlio import MISSING, Validator
-from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, OneOrList, Str
+from rodcad.yamlspec import Bool, Field, ListOf, Nullable, Num, Obj, OneOrList, Spec, Str
 
 if TYPE_CHECKING:  # pragma: no cover
     pass
@@ -294,6 +294,30 @@ def _partial(spec: Any) -> Any:
     return spec
 
 
+def _size_spec(item: Num, what: str) -> Spec:
+    """One size, or a family ``{min, max, nominal}`` of a node's hub."""
+    return OneOrRange(item, Obj({
+        "min": Field(item, required=True, description=f"Smallest {what}."),
+        "max": Field(item, required=True, description=f"Largest {what}."),
+        "nominal": Field(item, description=f"The {what} a node gets where its rods fit it (default min)."),
+    }, description=f"Any {what} from min to max: every node gets its own hub."))
+
+
+class OneOrRange(Spec):
+    """A number, or a mapping (a range)."""
+
+    def __init__(self, item: Spec, range_: Obj) -> None:
+        self.item, self.range, self.description = item, range_, ""
+
+    def check(self, node: yaml.Node, path: str, v: Validator) -> Any:
+        if isinstance(node, yaml.MappingNode):
+            return self.range.check(node, path, v)
+        return self.item.check(node, path, v)
+
+    def json_schema(self) -> dict[str, Any]:
+        return self._describe({"anyOf": [self.item.json_schema(), self.range.json_schema()]})
+
+
 def node_spec() -> Obj:
     """Spec of a catalog's ``node`` block: the hardware at a net's nodes (see
     :mod:`rodcad.catalog.net.node`; unset keys take :data:`rodcad.catalog.net.node.DEFAULT_NODE`)."""
@@ -307,9 +331,16 @@ def node_spec() -> Obj:
                           "rod, a rigid body whose pose the solver finds; point: the rods pivot about one point "
                           f"(a jump ring, a small shackle) (default {d['kind']})."),
             "name": Field(Str(), description="Free text."),
-            "diameter": Field(Num(**mm), description=f"hub: the sphere's diameter (default {d['diameter']:g} mm)."),
-            "pivot_radius": Field(Num(**mm), description="hub: from the hub's centre to each rod's ball centre, "
-                                  f"its pivot (default {d['pivot_radius']:g} mm)."),
+            "diameter": Field(_size_spec(Num(**mm), "diameter (mm)"),
+                              description=f"hub: the sphere's diameter (default {d['diameter']:g} mm), or a "
+                              "family {min, max, nominal} (see pivot_radius)."),
+            "pivot_radius": Field(_size_spec(Num(**mm), "pivot radius (mm)"),
+                                  description="hub: from the hub's centre to each rod's ball centre, its pivot "
+                                  f"(default {d['pivot_radius']:g} mm); or a family of hubs {{min, max, nominal}}: "
+                                  "every node gets the nominal hub (default min) where its rods fit it, else the "
+                                  "nearest size that does (larger where rods meet at tight angles, smaller where "
+                                  "a rod would be too short); the sizes keep the nominal hub's wall outside their "
+                                  "pivots, so the diameter follows."),
             "ball": Field(Num(**mm), description="hub: diameter of the ball each rod ends in, printed with the rod "
                           f"(default {d['ball']:g} mm)."),
             "clearance": Field(Num(minimum=0, maximum=5, unit="mm"), description="hub: socket diameter minus ball "

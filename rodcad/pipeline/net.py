@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from rodcad.design.model import Design
-from rodcad.design.net.check import NetCheck, design_net_plan
-from rodcad.design.net.plan import plan_net
+from rodcad.design.net.check import NetCheck
+from rodcad.design.net.choose import design_drawn_net
 from rodcad.outputs.design_json import print_profile
 from rodcad.outputs.net.design_json import net_json
 from rodcad.outputs.net.preview import plot_net
@@ -80,11 +80,12 @@ def build_net(design: Design, *, seed: int | None = None, cad: bool = False, job
     progress = progress or Progress(quiet=True)
     seed = design.seed if seed is None else int(seed)
     t = design.net
-    with progress.step(f"laying hubs and rods on the target ({t.n} nodes, {t.m} rods)"):
-        plan = plan_net(t, design.catalog)
-    with progress.step("designing the masses and solving the net (exact equilibrium, multi-start)") as st:
-        st.note(f"{t.m} rods, mass bounds {plan.bounds[:, 0].min():.3g}-{plan.bounds[:, 1].max():.3g} g")
-        check = design_net_plan(plan, g=design.g, seed=seed, tolerance=design.tolerance, note=st.note)
+    with progress.step(f"laying hubs and rods on the target ({t.n} nodes, {t.m} edges), designing the masses "
+                       "and solving the net (exact equilibrium, multi-start)") as st:
+        check = design_drawn_net(t, design.catalog, g=design.g, seed=seed, tolerance=design.tolerance,
+                                 note=st.note)
+        plan = check.plan
+        st.note(f"{plan.target.m} rods, mass bounds {plan.bounds[:, 0].min():.3g}-{plan.bounds[:, 1].max():.3g} g")
     solids = None
     if cad:
         from rodcad.cad.net.build import build_net_solids, distinct_count

@@ -55,7 +55,8 @@ def part_specs(check) -> tuple[list, list]:
         socks = np.array([check.sockets[e, c] for e, c in at]).reshape(-1, 3)
         piv = np.array([plan.pivots[e, c] for e, c in at]).reshape(-1, 3)
         socks, clear = splittable_sockets(socks, piv, hw.clearance, hw.ball)
-        hwk = hw if clear == hw.clearance else dataclasses.replace(hw, clearance=clear)
+        hwk = plan.hub(k)  # its own size of the catalog's hub family
+        hwk = hwk if clear == hw.clearance else dataclasses.replace(hwk, clearance=clear)
         hubs.append(HubSpec(hwk, tuple(map(tuple, np.asarray(socks, float)))))
     return rods, hubs
 

@@ -34,7 +34,7 @@ the hub sphere (apex off the hub's centre) by a 1D integral over the cone's pola
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -124,6 +124,43 @@ class NodeHardware:
     insert_diameter: float = 0.0
     insert_density: float = 0.0
     insert_clearance: float = 0.0
+    pivot_range: tuple[float, float] | None = None
+
+    # ------------------------------------------------------------------ the hub family
+    @property
+    def family(self) -> bool:
+        """Hubs of several sizes (``pivot_range``), else one size."""
+        return self.is_hub and self.pivot_range is not None and self.pivot_range[1] > self.pivot_range[0]
+
+    @property
+    def shell(self) -> float:
+        """The hub's wall outside its pivots, ``radius - pivot_radius`` (mm): every size of the
+        family keeps it, so a rod's end (ball, neck, the gap to its body) is the same whatever
+        hub it enters and the rods stay symmetric."""
+        return self.radius - self.pivot_radius
+
+    @property
+    def pivot_limits(self) -> tuple[float, float]:
+        """(smallest, largest) pivot radius of the family (mm); the one size twice."""
+        return self.pivot_range if self.family else (self.pivot_radius, self.pivot_radius)
+
+    def sized(self, pivot_radius: float) -> "NodeHardware":
+        """The family's hub of ``pivot_radius`` (mm; its diameter follows: the same shell)."""
+        rp = float(pivot_radius)
+        if rp == self.pivot_radius:
+            return self
+        return replace(self, pivot_radius=rp, diameter=2 * (rp + self.shell))
+
+    def pivot_for_angle(self, angle_deg: float) -> float:
+        """The least pivot radius (mm) whose sockets keep ``min_wall`` apart and whose rods'
+        bodies clear each other at rods ``angle_deg`` apart (:attr:`min_angle_deg`, inverted
+        in closed form); may lie outside the family."""
+        if not self.is_hub:
+            return 0.0
+        half = math.radians(max(angle_deg, 1e-6)) / 2
+        sockets = (2 * self.socket_radius + self.min_wall) / (2 * math.sin(half))
+        bodies = (self.rod_diameter / 2) / math.tan(half) - self.gap - self.shell
+        return max(sockets, bodies, self.pivot_limits[0] if self.family else 0.0)
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -335,20 +372,56 @@ def socket_centres(pivots: np.ndarray, forces: np.ndarray, clearance: float) -> 
     return np.asarray(pivots, float) - 0.5 * clearance * unit
 
 
+def _size(value) -> tuple[float, float | None, float | None]:
+    """A ``diameter`` or ``pivot_radius`` as written: (nominal, min, max); a number is one size."""
+    if isinstance(value, dict):
+        lo, hi = float(value["min"]), float(value["max"])
+        return float(value.get("nominal", lo)), lo, hi
+    return float(value), None, None
+
+
 def node_hardware(block: dict, rod, v) -> NodeHardware | None:
     """A catalog's ``node`` block (schema-checked; unset keys from :data:`DEFAULT_NODE`) as
     hardware in the material of ``rod`` (a :class:`rodcad.catalog.model.RodType`), its
-    first ball kind weighing the net rods down; problems reported at ``node.<key>``."""
+    first ball kind weighing the net rods down; problems reported at ``node.<key>``.
+
+    ``diameter`` and ``pivot_radius`` are each a number (one size) or ``{min, max}`` with an
+    optional ``nominal`` (the size a node gets where its rods fit it; default min): a family
+    of hubs that keep the nominal hub's wall outside their pivots (:attr:`NodeHardware.shell`),
+    between the two ranges."""
     d = {**DEFAULT_NODE, **block}
     balls = rod.balls
-    hw = NodeHardware(kind=d["kind"], name=d["name"], diameter=float(d["diameter"]),
-                      pivot_radius=float(d["pivot_radius"]), ball=float(d["ball"]), clearance=float(d["clearance"]),
+    dia, dlo, dhi = _size(d["diameter"])
+    rp, plo, phi = _size(d["pivot_radius"])
+    pivot_range = None
+    for key, nom, lo, hi in (("diameter", dia, dlo, dhi), ("pivot_radius", rp, plo, phi)):
+        if lo is not None and not lo <= nom <= hi:
+            v.report_at(f"node.{key}", f"expected min <= nominal <= max, got {lo:g}, {nom:g}, {hi:g}",
+                        fallback="node")
+            return None
+    if dlo is not None or plo is not None:
+        shell = dia / 2 - rp
+        lo = max(plo if plo is not None else rp, (dlo / 2 - shell) if dlo is not None else -math.inf)
+        hi = min(phi if phi is not None else rp, (dhi / 2 - shell) if dhi is not None else math.inf)
+        if plo is None:  # a diameter range alone: the pivots follow it
+            lo, hi = dlo / 2 - shell, dhi / 2 - shell
+        if hi < lo - 1e-9:
+            v.report_at("node", f"no hub keeps the {shell:g} mm wall outside its pivots within both ranges "
+                        "(diameter = 2 (pivot_radius + wall))", fallback="node")
+            return None
+        pivot_range = (float(lo), float(hi))
+    hw = NodeHardware(kind=d["kind"], name=d["name"], diameter=dia,
+                      pivot_radius=rp, ball=float(d["ball"]), clearance=float(d["clearance"]),
                       cone_deg=float(d["cone_deg"]), neck=float(d["neck"]), rod_diameter=float(d["rod_diameter"]),
                       gap=float(d["gap"]), mass=float(d["mass"]), density=rod.material.density,
                       min_wall=rod.material.min_wall, insert_diameter=balls.diameter if balls else 0.0,
                       insert_density=balls.density if balls else 0.0,
-                      insert_clearance=balls.clearance if balls else 0.0)
+                      insert_clearance=balls.clearance if balls else 0.0, pivot_range=pivot_range)
     bad = hw.problems()
+    if hw.family and not bad:  # every size of the family must hold its balls too
+        for end in hw.pivot_range:
+            for key, message in hw.sized(end).problems():
+                bad.append((key, f"the family's hub of pivot radius {end:g} mm: {message}"))
     for key, message in bad:
         v.report_at(f"node.{key}" if key in block else "node", message if key in block else
                     f"{key}: {message}", fallback="node")

@@ -143,7 +143,8 @@ class NetCheck:
         if not eq.success:
             return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})"
         if not eq.stable:
-            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one"
+            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one" + (
+                f": {self.why}" if self.why else "")
         if not self.meets_tolerance and self.why:
             return f"{pct}: {self.why}"
         if not self.meets_tolerance:
@@ -200,7 +201,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
         rounds += more
     turn = 0.0
     if plan.hardware.is_hub:
-        cos = np.sum(lines * plan.pivots, axis=2) / plan.hardware.pivot_radius ** 2
+        cos = np.sum(lines * plan.pivots, axis=2) / plan.end_pivot ** 2
         turn = float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max())
     t = plan.target
     com_rounds = 0
@@ -241,8 +242,15 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     eq = design.equilibrium
     size = t.size
     if eq.success:
-        node_err = np.linalg.norm(eq.positions - t.positions, axis=1)
-        end_err = np.linalg.norm(eq.ends - plan.target_ends, axis=2)
+        # against the net as drawn: a planner's joint against the drawn surface or edge, a
+        # merged hub against each node drawn (rodcad.design.net.joints)
+        fn, fp = t.fit_pairs
+        node_err = np.zeros(t.n)
+        np.maximum.at(node_err, fn, np.linalg.norm(eq.positions[fn] - fp, axis=1))
+        shift = np.zeros((t.n, 3))
+        np.add.at(shift, fn, fp - t.positions[fn])
+        shift /= np.maximum(np.bincount(fn, minlength=t.n), 1)[:, None]
+        end_err = np.linalg.norm(eq.ends - plan.target_ends - shift[t.edges], axis=2)
         err = float(max(node_err.max(), end_err.max()))
     else:
         node_err = np.full(t.n, np.inf)

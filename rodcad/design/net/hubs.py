@@ -59,7 +59,8 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     t, hw = plan.target, plan.hardware
     if not hw.is_hub:
         return plan, 0, float("nan")
-    r = hw.pivot_radius
+    r = float(plan.end_pivot.max())  # (the scale of the pivot changes; each hub keeps its own radius)
+    rk = plan.end_pivot
     free = ~t.anchored_mask
     axis = plan.pivots.copy()  # along the rods' lines between node points
     rounds = 0
@@ -104,12 +105,13 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             cw = np.cross(plan.node_com[k], [0.0, 0.0, -g * plan.node_masses[k]])
             A = np.hstack([-_skew(fq) for fq in f])
             AAt = A @ A.T
+            rad = plan.hub(int(k)).pivot_radius
             for _ in range(6):  # the least turn from the rods' lines that cancels the moments
                 M = cw + np.sum(np.cross(a, f), axis=0)
                 if np.max(np.abs(M)) <= 1e-15 * float(norm.max()) * r:
                     break
                 a = a + (A.T @ np.linalg.lstsq(AAt, -M, rcond=None)[0]).reshape(-1, 3)
-                a *= r / np.linalg.norm(a, axis=1, keepdims=True)
+                a *= rad / np.linalg.norm(a, axis=1, keepdims=True)
             for q, (e, c) in enumerate(at):
                 new[e, c] = a[q]
         change = float(np.max(np.abs(new - plan.pivots))) / r
@@ -128,7 +130,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             gamma = np.linalg.lstsq(dF, fs[-1], rcond=None)[0]
             nxt = (gs[-1] - dG @ gamma).reshape(new.shape)
             on = free[t.edges]
-            nxt[on] *= r / np.linalg.norm(nxt[on], axis=1, keepdims=True)
+            nxt[on] *= rk[on][:, None] / np.linalg.norm(nxt[on], axis=1, keepdims=True)
             nxt[~on] = new[~on]
         plan = replan(plan, nxt)
     if t.n > JOINT_NODES and best_res > JOINT_FAR:
@@ -161,13 +163,14 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     socket_com = np.zeros(t.n)
     for k in np.flatnonzero(plan.degree > 0):
         deg = int(plan.degree[k])
-        socket_com[k] = hw.hub_mass(np.tile([1.0, 0.0, 0.0], (deg, 1)))[1][0] / deg
+        socket_com[k] = plan.hub(int(k)).hub_mass(np.tile([1.0, 0.0, 0.0], (deg, 1)))[1][0] / deg
     # the turns are measured from the lines between the node points, and kept within half the
     # swing the sockets allow (the net still swings its rods as it hangs)
     x = t.positions
     line = x[t.edges[:, 1]] - x[t.edges[:, 0]]
-    line *= hw.pivot_radius / np.linalg.norm(line, axis=1, keepdims=True)
-    lines = np.stack([line, -line], axis=1)
+    nrm = np.linalg.norm(line, axis=1, keepdims=True)
+    ep = plan.end_pivot
+    lines = np.stack([line * (ep[:, :1] / nrm), -(line * (ep[:, 1:] / nrm))], axis=1)
     cap = 0.5 * float(plan.swing_limits.min())
     best, best_res = plan, st.residual
     cur = plan
@@ -235,7 +238,8 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
         if not moved:
             break
     return NetPlan(t, hw, plan.pivots, plan.lengths, plan.rods, best[0], plan.node_masses, plan.node_com,
-                   plan.length_range, plan.degree, np.array(best[1], int), plan.com), snapped
+                   plan.length_range, plan.degree, np.array(best[1], int), plan.com, node_pivot=plan.node_pivot,
+                   merged=plan.merged), snapped
 
 
 def _shares(masses: np.ndarray, g: float, u: np.ndarray, com, lengths: np.ndarray) -> np.ndarray:

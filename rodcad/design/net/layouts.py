@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["NetLayout", "ObjError", "grid_layout", "mesh_layout", "radial_layout", "read_obj"]
+__all__ = ["NetLayout", "ObjError", "grid_layout", "mesh_layout", "radial_layout", "read_obj", "subdivide_faces"]
 
 
 @dataclass
@@ -26,12 +26,15 @@ class NetLayout:
         edges: (m, 2) node indices of each rod, i < j.
         sets: named node sets (sorted index arrays) that ``anchored`` keywords name.
         shape: (u, v) cells of a grid, (rings, spokes) of a radial net, () otherwise.
+        surface: z(x, y, near) of a generated surface (mm), or None (set by the design file's
+            checks: :attr:`rodcad.design.net.target.NetTarget.surface`).
     """
 
     positions: np.ndarray
     edges: np.ndarray
     sets: dict[str, np.ndarray] = field(default_factory=dict)
     shape: tuple[int, ...] = ()
+    surface: Callable | None = None
 
 
 def grid_layout(zfun: Callable[[np.ndarray, np.ndarray], np.ndarray], x: tuple[float, float],
@@ -218,3 +221,47 @@ def mesh_layout(vertices: np.ndarray, faces: list[list[int]]) -> NetLayout:
     edges = np.array([[new[a], new[b]] for a, b in keys], int).reshape(-1, 2)
     border = np.unique(np.array([new[k] for e in keys if count[e] == 1 for k in e], int))
     return NetLayout(vertices[used].copy(), edges, {"boundary": border}, ())
+
+
+def subdivide_faces(vertices: np.ndarray, faces: list[list[int]], n: int) -> tuple[np.ndarray, list[list[int]]]:
+    """Every face cut into ``n`` x ``n``: a triangle into ``n**2`` triangles on its barycentric
+    grid (midpoint subdivision for ``n = 2``), a quad into ``n**2`` quads on its bilinear grid,
+    a larger polygon fanned into triangles first. The new vertices lie on the faces (flat);
+    a vertex shared by faces is one vertex (merged where they coincide).
+
+    Returns:
+        (vertices (V', 3), faces).
+    """
+    if n <= 1:
+        return vertices, faces
+    pts: list[np.ndarray] = []
+    out: list[list[int]] = []
+    for f in faces:
+        P = vertices[f]
+        if len(f) == 4:
+            idx = {}
+            for i in range(n + 1):
+                for j in range(n + 1):
+                    a, b = i / n, j / n
+                    idx[i, j] = len(pts)
+                    pts.append((1 - a) * (1 - b) * P[0] + a * (1 - b) * P[1] + a * b * P[2] + (1 - a) * b * P[3])
+            out += [[idx[i, j], idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]] for i in range(n) for j in range(n)]
+            continue
+        for q in range(1, len(f) - 1):  # a triangle, or a fan of them
+            A, B, C = P[0], P[q], P[q + 1]
+            idx = {}
+            for i in range(n + 1):
+                for j in range(n + 1 - i):
+                    idx[i, j] = len(pts)
+                    pts.append(A + (B - A) * i / n + (C - A) * j / n)
+            for i in range(n):
+                for j in range(n - i):
+                    out.append([idx[i, j], idx[i + 1, j], idx[i, j + 1]])
+                    if i + j < n - 1:
+                        out.append([idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]])
+    X = np.asarray(pts, float)
+    scale = max(float(np.max(np.abs(X))), 1.0)
+    key = np.round(X / (1e-9 * scale)).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inverse = np.asarray(inverse).ravel()
+    return X[first], [[int(inverse[k]) for k in face] for face in out]

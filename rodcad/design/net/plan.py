@@ -12,12 +12,13 @@ moves the pivots (the hubs' sockets, :mod:`rodcad.design.net.hubs`) and updates 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
 from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
+from rodcad.design.net.joints import hang_joints, merge_close, pieces, split_long
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
@@ -44,6 +45,9 @@ class NetPlan:
             or None: the whole range (see :func:`rodcad.design.net.hubs.buildable_bounds`).
         com: (m, 3) each rod's centre of mass (along, below the chord, 0) (mm) the statics use
             (:meth:`rod_com` of the masses designed last; straight rods at mid-length).
+        node_pivot: (n,) each node's hub's pivot radius (mm; the catalog's hub family,
+            :meth:`hub`), or None: the catalog's one size.
+        merged: groups of drawn nodes merged into one hub (:mod:`rodcad.design.net.joints`).
     """
 
     target: NetTarget
@@ -58,6 +62,21 @@ class NetPlan:
     degree: np.ndarray
     segment: np.ndarray | None = None
     com: np.ndarray | None = None
+    node_pivot: np.ndarray | None = None
+    merged: list = field(default_factory=list)
+
+    def hub(self, k: int) -> NodeHardware:
+        """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`)."""
+        if self.node_pivot is None or not self.hardware.is_hub:
+            return self.hardware
+        return self.hardware.sized(float(self.node_pivot[k]))
+
+    @property
+    def end_pivot(self) -> np.ndarray:
+        """(m, 2) the pivot radius of the hub at each rod's two ends (mm)."""
+        if self.node_pivot is None:
+            return np.full((self.target.m, 2), self.hardware.pivot)
+        return self.node_pivot[self.target.edges]
 
     @property
     def target_ends(self) -> np.ndarray:
@@ -82,9 +101,14 @@ class NetPlan:
     def swing_limits(self) -> np.ndarray:
         """(m,) how far each rod may turn in its sockets (deg): a bent rod's tilted end face
         comes nearer the hub (:func:`rodcad.catalog.net.bend.bent_swing_deg`)."""
-        hw = self.hardware
-        return np.array([hw.swing_deg if a is None else min(hw.swing_deg, bent_swing_deg(hw, a))
-                         for a in self.arcs], float)
+        out = []
+        for e, a in enumerate(self.arcs):
+            lim = np.inf
+            for k in self.target.edges[e]:
+                hw = self.hub(int(k))
+                lim = min(lim, hw.swing_deg if a is None else min(hw.swing_deg, bent_swing_deg(hw, a)))
+            out.append(lim)
+        return np.array(out, float)
 
     def rod_com(self, masses) -> np.ndarray:
         """(m, 3) each rod's centre of mass at ``masses`` (g): (along, below the chord, 0) mm,
@@ -125,60 +149,51 @@ def length_range(catalog) -> tuple[float, float]:
     return float(min(lengths)), float(max(lengths))
 
 
-def plan_net(target: NetTarget, catalog) -> NetPlan:
-    """Hardware, lengths, mass bounds and hub masses for a net's target.
+def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang: bool = False,
+             g: float = 9.81) -> NetPlan:
+    """Hardware, lengths, mass bounds and hub masses for a net's target, the drawn net made
+    buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.sizing`): nodes
+    nearly on top of each other merged into one hub, edges longer than the longest rod cut
+    into rods in line joined by two-rod joints, and every node given the hub of the
+    catalog's family its rods fit.
+
+    Args:
+        target: the net as drawn (or generated).
+        catalog: the catalog (its node hardware and the rods' length range).
+        tolerance: the design's tolerance (None: 1 %), which bounds how far a merge moves nodes.
+        hang: put the joints at the funicular sag below their chords (:func:`rodcad.design.net.
+            joints.hang_joints`, from the statics of the net as drawn) instead of on the target
+            surface (a generated net) or the edge.
+        g: gravity (for ``hang``).
 
     Raises:
-        DesignLimit: rods shorter or longer than the catalog prints, or rods meeting at a
-            node closer than its hub's sockets allow (every such rod and node named).
+        DesignLimit: what no hardware in the catalog can do (every such rod and node named,
+            with the hardware that would do it).
     """
+    from rodcad.design.fit import DEFAULT_TOLERANCE
+    from rodcad.design.net.sizing import size_hubs
+
     hw: NodeHardware = catalog.node
-    pos, edges = target.positions, target.edges
-    n, m = target.n, target.m
-    d = pos[edges[:, 1]] - pos[edges[:, 0]]
-    dist = np.linalg.norm(d, axis=1)
-    u = d / dist[:, None]
-    r = hw.pivot
-    pivots = np.stack([r * u, -r * u], axis=1)
-    lengths = dist - 2 * r
+    tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
     lo, hi = length_range(catalog)
     lo_hw = max(lo, hw.shortest_rod())
-    problems = []
-    short = np.flatnonzero(lengths < lo_hw * (1 - 1e-9))
-    long = np.flatnonzero(lengths > hi * (1 + 1e-9))
-    extra = f" (node to node: {2 * r:g} mm more, the hubs)" if r else ""
-    if short.size:
-        problems.append(f"{short.size} rod(s) would be shorter than the {lo_hw:g} mm the catalog prints: "
-                        f"rods {short[:8].tolist()} need {', '.join(f'{x:.4g}' for x in lengths[short[:8]])} mm "
-                        f"pivot to pivot{extra}; use fewer cells or draw the net larger")
-    if long.size:
-        problems.append(f"{long.size} rod(s) would be longer than the {hi:g} mm the catalog prints: rods "
-                        f"{long[:8].tolist()} need {', '.join(f'{x:.4g}' for x in lengths[long[:8]])} mm; use more "
-                        "cells or draw the net smaller")
-    degree = np.bincount(edges.ravel(), minlength=n)
-    # directions of the rods at every node (from the node toward the rod's other end)
-    dirs: list[list[np.ndarray]] = [[] for _ in range(n)]
-    for e, (i, j) in enumerate(edges):
-        dirs[i].append(u[e])
-        dirs[j].append(-u[e])
+    rp_min = hw.pivot_limits[0] if hw.is_hub else 0.0
+    merged: list[list[int]] = []
+    t = target
     if hw.is_hub:
-        need = hw.min_angle_deg
-        worst = []
-        for k in range(n):
-            if len(dirs[k]) < 2:
-                continue
-            D = np.asarray(dirs[k])
-            cos = np.clip(D @ D.T, -1, 1)
-            np.fill_diagonal(cos, -1)
-            ang = float(np.degrees(np.arccos(cos.max())))
-            if ang < need - 1e-9:
-                worst.append((ang, k))
-        if worst:
-            worst.sort()
-            problems.append(f"at {len(worst)} node(s) rods meet closer than the hub's sockets allow ({need:.3g} deg): "
-                            + ", ".join(f"node {k} at {a:.3g} deg" for a, k in worst[:6])
-                            + "; a larger hub (node.diameter and node.pivot_radius) or a net with wider angles")
-    bends = target.bends
+        t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
+    base = t
+    counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
+    for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
+        t, parent = split_long(base, counts)
+        node_pivot, problems = size_hubs(t, hw, lo_hw, hi)
+        lengths = _lengths(t, node_pivot)
+        long = np.flatnonzero(lengths > hi * (1 + 1e-9))
+        if not long.size:
+            break
+        grow = np.unique(parent[long])
+        counts[grow] = np.maximum(counts[grow] + 1, [_first_count(base, e, node_pivot, rp_min, hi) for e in grow])
+    bends = t.bends
     if np.any(bends > 0):
         flat = [int(e) for e in np.flatnonzero(bends > 0) if lengths[e] - 2 * hw.end_offset <= 0
                 or bent_swing_deg(hw, rod_arc(hw, float(lengths[e]), float(bends[e]))) <= 0]
@@ -188,16 +203,110 @@ def plan_net(target: NetTarget, catalog) -> NetPlan:
                             f"{', '.join(f'{bends[e]:.3g}' for e in flat[:8])}; bend them less, or a catalog with a "
                             "larger node.gap")
     if problems:
-        raise DesignLimit("; ".join(problems))
-    rods = [hw.rod_numbers(float(L)) for L in fill_lengths(hw, lengths, bends)]
+        raise DesignLimit("; ".join(problems) + _coarser(target, hw, lo_hw))
+    if hang and t.joints is not None and len(t.joints):
+        t = _hung(t, base, parent, counts, hw, node_pivot, g)
+    plan = _plan(t, hw, node_pivot, (lo_hw, hi))
+    plan.merged = merged
+    return plan
+
+
+def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:
+    """For a generated net drawn too fine: the cells whose edges the catalog can make ('' else)."""
+    if t.kind not in ("surface", "radial") or not t.shape:
+        return ""
+    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    need = shortest + 2 * (hw.pivot_limits[0] if hw.is_hub else 0.0)
+    if d.min() >= need:
+        return ""
+    f = float(d.min()) / need
+    a, b = (max(1, int(np.floor(x * f))) for x in t.shape)
+    keys = "net.surface.u and v" if t.kind == "surface" else "net.radial.rings and spokes"
+    return (f"; the same surface with about {a} x {b} ({keys}, or fewer) would keep its edges at least "
+            f"{need:.3g} mm long")
+
+
+def _first_count(base: NetTarget, e: int, node_pivot: np.ndarray, rp_min: float, hi: float) -> int:
+    """The pieces edge ``e`` of ``base`` needs with its end hubs' pivots and joints of the
+    smallest hubs: ``k (hi + 2 rp_min) >= d - rp_i - rp_j + 2 rp_min``."""
+    i, j = (int(x) for x in base.edges[e])
+    d = float(np.linalg.norm(base.positions[j] - base.positions[i]))
+    free = d - node_pivot[i] - node_pivot[j] + 2 * rp_min
+    return pieces(free, 0.97 * hi + 2 * rp_min)
+
+
+def _lengths(t: NetTarget, node_pivot: np.ndarray) -> np.ndarray:
+    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    return d - node_pivot[t.edges[:, 0]] - node_pivot[t.edges[:, 1]]
+
+
+def _plan(t: NetTarget, hw: NodeHardware, node_pivot: np.ndarray, window: tuple[float, float]) -> NetPlan:
+    """The plan on a buildable target with each node's pivot radius."""
+    pos, edges = t.positions, t.edges
+    n = t.n
+    d = pos[edges[:, 1]] - pos[edges[:, 0]]
+    dist = np.linalg.norm(d, axis=1)
+    u = d / dist[:, None]
+    r = node_pivot[edges]
+    pivots = np.stack([r[:, :1] * u, -r[:, 1:] * u], axis=1)
+    lengths = dist - r.sum(axis=1)
+    degree = np.bincount(edges.ravel(), minlength=n)
+    rods = [hw.rod_numbers(float(L)) for L in fill_lengths(hw, lengths, t.bends)]
     bounds = np.array([rn.mass_range for rn in rods], float)
-    node_masses = np.zeros(n)
-    node_com = np.zeros((n, 3))
+    plan = NetPlan(t, hw, pivots, lengths, rods, bounds, np.zeros(n), np.zeros((n, 3)), window, degree,
+                   node_pivot=np.asarray(node_pivot, float))
+    dirs: list[list[np.ndarray]] = [[] for _ in range(n)]
+    for e, (i, j) in enumerate(edges):
+        dirs[i].append(u[e])
+        dirs[j].append(-u[e])
     for k in range(n):
-        mass, com = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
-        node_masses[k] = mass
-        node_com[k] = com
-    return NetPlan(target, hw, pivots, lengths, rods, bounds, node_masses, node_com, (lo_hw, hi), degree)
+        plan.node_masses[k], plan.node_com[k] = plan.hub(k).hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
+    return plan
+
+
+def _directions(t: NetTarget, pivots: np.ndarray) -> list[np.ndarray]:
+    """Per node, (k, 3) unit directions of its rods' pivots from it."""
+    dirs: list[list[np.ndarray]] = [[] for _ in range(t.n)]
+    for e, (i, j) in enumerate(t.edges):
+        for c, k in ((0, i), (1, j)):
+            p = pivots[e, c]
+            nrm = float(np.linalg.norm(p))
+            dirs[k].append(p / nrm if nrm > 0 else np.zeros(3))
+    return [np.asarray(x, float).reshape(-1, 3) for x in dirs]
+
+
+def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw: NodeHardware,
+          node_pivot: np.ndarray, g: float) -> NetTarget:
+    """The joints moved to their funicular sag, from the statics of ``base`` with each split
+    edge one rod of its pieces' mass ranges and joints (:func:`rodcad.design.net.joints.hang_joints`)."""
+    from optimize import design_net_masses
+
+    rp = node_pivot[: base.n]
+    d = np.linalg.norm(base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]], axis=1)
+    u = (base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]]) / d[:, None]
+    r = rp[base.edges]
+    pivots = np.stack([r[:, :1] * u, -r[:, 1:] * u], axis=1)
+    lengths = d - r.sum(axis=1)
+    full = _lengths(t, node_pivot)
+    jm = t.joint_mask
+    joint_mass = np.array([hw.sized(node_pivot[k]).hub_mass(np.array([[1.0, 0, 0], [-1.0, 0, 0]]))[0]
+                           if jm[k] else 0.0 for k in range(t.n)])
+    bounds = np.zeros((base.m, 2))
+    for e in range(base.m):
+        rods = np.flatnonzero(src == e)
+        for q in rods:
+            bounds[e] += hw.rod_numbers(float(full[q])).mass_range
+        bounds[e] += (len(rods) - 1) * float(joint_mass[jm].mean() if jm.any() else 0.0)
+    node_masses = np.zeros(base.n)
+    dirs = _directions(base, pivots)
+    for k in range(base.n):
+        node_masses[k] = hw.sized(rp[k]).hub_mass(dirs[k])[0]
+    st = design_net_masses(base.positions, base.edges, lengths, bounds, base.anchored, node_masses=node_masses,
+                           pivots=pivots, allow_compression=base.compression, g=g, forces_only=True)
+    T = st.tensions[src]
+    per_piece = np.array([(st.masses[src[q]] - (counts[src[q]] - 1) * joint_mass[jm].mean()) / counts[src[q]]
+                          for q in range(t.m)])
+    return hang_joints(t, T, per_piece, joint_mass, g)
 
 
 #: A buildable interval narrower than this (relative) is one mass; it is given this width
@@ -233,10 +342,10 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
         dirs[i].append(pivots[e, 0] / np.linalg.norm(pivots[e, 0]))
         dirs[j].append(pivots[e, 1] / np.linalg.norm(pivots[e, 1]))
     for k in range(t.n):
-        node_masses[k], node_com[k] = hw.hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
+        node_masses[k], node_com[k] = plan.hub(k).hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
     bounds = rod_bounds(plan, lengths, rods)
     return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,
-                   plan.segment)
+                   plan.segment, node_pivot=plan.node_pivot, merged=plan.merged)
 
 
 def rod_bounds(plan: NetPlan, lengths: np.ndarray, rods: list[NetRodNumbers] | None = None) -> np.ndarray:

@@ -17,7 +17,7 @@ from rodcad.catalog.net.bend import MAX_BEND
 from rodcad.yamlio import MISSING, TAG_NULL, Validator
 from rodcad.yamlspec import Bool, Field, ListOf, Num, Obj, OneOrList, Spec, Str
 
-__all__ = ["ANCHOR_SETS", "AnchoredSpec", "MAX_CELLS", "MAX_NET_NODES", "net_spec"]
+__all__ = ["ANCHOR_SETS", "AnchoredSpec", "MAX_CELLS", "MAX_NET_NODES", "MAX_REFINE", "net_spec"]
 
 #: ``anchored`` keywords: which generated node set each names.
 ANCHOR_SETS = {
@@ -30,6 +30,9 @@ ANCHOR_SETS = {
 
 #: Most cells along one side of a generated grid, most rings or spokes of a radial net.
 MAX_CELLS = 100
+
+#: The finest refinement asked of a net (net.refine).
+MAX_REFINE = 20
 
 #: Most nodes of a net (explicit or generated).
 MAX_NET_NODES = 5000
@@ -119,6 +122,15 @@ def net_spec() -> Obj:
                               description="Their bend (sagitta over chord; 0: straight)."),
             }, description="A bend for some rods."), min_items=1),
                 description="Bends per rod, over 'bend' (later entries over earlier ones)."),
+            "refine": Field(Num(integer=True, minimum=1, maximum=MAX_REFINE),
+                            description="A finer net of the same surface: every edge cut into N. A generated "
+                            "net is generated with N times the cells (a surface grid's u and v, a radial net's "
+                            "spokes and the gaps between its rings); a mesh's triangles are cut into N x N "
+                            "(midpoint subdivision for 2; quads into N x N quads); explicit edges into N rods in "
+                            "line (their new nodes hang as the planner's two-rod joints)."),
+            "edge_length": Field(Num(exclusive_minimum=0, maximum=10000, unit="mm"),
+                                 description="Refine to the finer net whose mean edge is nearest this length (mm): "
+                                 "refine N = the mean edge over it, rounded (at least 1); with 'refine', the larger."),
             "compression": Field(Bool(), default=False,
                                  description="Let rods push (by default every rod of a hanging net stays in "
                                  "tension)."),

@@ -17,8 +17,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from rodcad.design.net.layouts import NetLayout, ObjError, grid_layout, mesh_layout, radial_layout, read_obj
-from rodcad.design.net.spec import ANCHOR_SETS, MAX_NET_NODES
+from rodcad.design.net.layouts import (NetLayout, ObjError, grid_layout, mesh_layout, radial_layout, read_obj,
+                                       subdivide_faces)
+from rodcad.design.net.spec import ANCHOR_SETS, MAX_CELLS, MAX_NET_NODES
 from rodcad.design.targets import evaluate_expression
 
 __all__ = ["NetTarget", "net_target"]
@@ -46,6 +47,14 @@ class NetTarget:
         written: the block as written (for design.json and the report).
         rod_bends: (m,) each rod's bend (sagitta over chord of its body's arc, 0 straight;
             :mod:`rodcad.catalog.net.bend`), or None: every rod straight.
+        surface: z(x, y, near) of a generated net's surface (mm; ``near`` a node whose
+            angle a radial net's expression reads near), or None: the net is its edges.
+        fit_nodes, fit_points: where the fit measures (:attr:`fit_pairs`), or None.
+        source: (m,) the drawn edge each rod lies on (the planner's; None: rod e is edge e).
+        joints: node indices of the two-rod joints the planner added, or None.
+        drawn: the target as drawn, before the planner (None: this is it).
+        refine_edges: every edge cut into this many rods in line by the planner (``net.refine``
+            of explicit nodes and edges).
     """
 
     kind: str
@@ -58,6 +67,30 @@ class NetTarget:
     shape: tuple[int, ...] = ()
     written: dict[str, Any] = field(default_factory=dict)
     rod_bends: np.ndarray | None = None
+    surface: Any = None
+    fit_nodes: np.ndarray | None = None
+    fit_points: np.ndarray | None = None
+    source: np.ndarray | None = None
+    joints: np.ndarray | None = None
+    drawn: Any = None
+    refine_edges: int = 1
+
+    @property
+    def fit_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(nodes (P,), points (P, 3)): where the fit measures the net, each node against
+        the point drawn for it (the planner's joints against the drawn surface or edge,
+        merged nodes against each node drawn); by default every node against its target."""
+        if self.fit_nodes is None:
+            return np.arange(self.n), self.positions
+        return self.fit_nodes, self.fit_points
+
+    @property
+    def joint_mask(self) -> np.ndarray:
+        """(n,) the two-rod joints the planner added on long edges."""
+        mask = np.zeros(self.n, dtype=bool)
+        if self.joints is not None:
+            mask[self.joints] = True
+        return mask
 
     @property
     def bends(self) -> np.ndarray:
@@ -74,8 +107,10 @@ class NetTarget:
 
     @property
     def size(self) -> float:
-        """The net's size: the largest extent of its target along x, y or z (mm)."""
-        return float(np.max(np.ptp(self.positions, axis=0)))
+        """The net's size: the largest extent of its target along x, y or z (mm; as drawn,
+        where the planner edited it)."""
+        pts = self.positions if self.fit_points is None else self.fit_points
+        return float(np.max(np.ptp(pts, axis=0)))
 
     @property
     def anchored_mask(self) -> np.ndarray:
@@ -114,8 +149,10 @@ def _surface(s: dict[str, Any], v: Any) -> NetLayout | None:
     X, Y = np.meshgrid(xs, ys)
     if _expr(s["z"], {"x": X, "y": Y}, "z(x, y)", "net.surface.z", v) is None or bad:
         return None
-    return grid_layout(lambda x, y: evaluate_expression(s["z"], {"x": x, "y": y}, what="z(x, y)"),
-                       (s["x"][0], s["x"][1]), (s["y"][0], s["y"][1]), u, w)
+    layout = grid_layout(lambda x, y: evaluate_expression(s["z"], {"x": x, "y": y}, what="z(x, y)"),
+                         (s["x"][0], s["x"][1]), (s["y"][0], s["y"][1]), u, w)
+    layout.surface = lambda x, y, near: evaluate_expression(s["z"], {"x": x, "y": y}, what="z(x, y)")
+    return layout
 
 
 def _radial(r: dict[str, Any], v: Any) -> NetLayout | None:
@@ -148,10 +185,22 @@ def _radial(r: dict[str, Any], v: Any) -> NetLayout | None:
     if not np.all(np.isfinite(layout.positions)):
         v.report_at("net.radial.z", "the z(r, a, x, y) expression is not a finite number at every node")
         return None
+    if sweep >= 360 - 1e-9:
+        ang = np.radians(start) + 2 * np.pi * np.arange(spokes) / spokes
+    else:
+        ang = np.radians(start + np.linspace(0.0, sweep, spokes))
+    node_a = np.concatenate([[0.0] if inner == 0 else [], np.tile(ang, rings)])
+
+    def surface(x, y, near):  # the angle read as the layout reads it near node `near`
+        a0 = node_a[near]
+        a = a0 + (np.arctan2(y, x) - a0 + np.pi) % (2 * np.pi) - np.pi
+        return zf(np.hypot(x, y), a, x, y)
+
+    layout.surface = surface
     return layout
 
 
-def _mesh(ref: str, base: Path, v: Any) -> NetLayout | None:
+def _mesh(ref: str, base: Path, v: Any, refine: int = 1) -> NetLayout | None:
     from rodcad.errors import Problem
 
     path = base / ref
@@ -169,6 +218,11 @@ def _mesh(ref: str, base: Path, v: Any) -> NetLayout | None:
         v.problems.append(Problem(str(path), err.line, err.column, "", err.message))
         v.failed.add("net.mesh")
         return None
+    if refine > 1:
+        verts, faces = subdivide_faces(verts, faces, refine)
+        if len(verts) > MAX_NET_NODES:
+            v.report_at("net.refine", f"the mesh refined {refine} x makes {len(verts)} nodes; at most {MAX_NET_NODES}")
+            return None
     return mesh_layout(verts, faces)
 
 
@@ -242,6 +296,13 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
               "mesh": lambda: _mesh(net["mesh"], base, v), "radial": lambda: _radial(net["radial"], v)}[kind]()
     if layout is None:
         return None
+    refine = _refine_count(net, layout)
+    split_edges = 1
+    if refine > 1:
+        layout = _refined(net, kind, refine, base, v)
+        if layout is None:
+            return None
+        split_edges = refine if kind == "nodes" else 1
     pos, edges = layout.positions, layout.edges
     n = pos.shape[0]
     anchored_as = ""
@@ -282,7 +343,43 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
         return None
     return NetTarget(kind=kind, positions=pos, edges=edges, anchored=anchored, anchored_as=anchored_as,
                      dropped=dropped, compression=bool(net.get("compression", False)), shape=layout.shape,
-                     written=dict(net), rod_bends=bends)
+                     written=dict(net), rod_bends=bends, surface=layout.surface, refine_edges=split_edges)
+
+
+def _refine_count(net: dict, layout: NetLayout) -> int:
+    """``net.refine``, or the refinement whose edges come nearest ``net.edge_length`` (the larger)."""
+    n = int(net.get("refine", 1))
+    if "edge_length" in net and layout.edges.shape[0]:
+        d = np.linalg.norm(layout.positions[layout.edges[:, 1]] - layout.positions[layout.edges[:, 0]], axis=1)
+        n = max(n, int(round(float(d.mean()) / float(net["edge_length"]))))
+    return max(n, 1)
+
+
+def _refined(net: dict, kind: str, n: int, base: Path, v: Any) -> NetLayout | None:
+    """The net generated (or subdivided) ``n`` times finer (``net.refine``)."""
+    key = "net.refine" if "refine" in net else "net.edge_length"
+    if kind == "surface":
+        s = dict(net["surface"])
+        s["u"], s["v"] = int(s["u"]) * n, int(s["v"]) * n
+        if max(s["u"], s["v"]) > MAX_CELLS:
+            v.report_at(key, f"refined {n} x the grid has {s['u']} x {s['v']} cells; at most {MAX_CELLS} a side")
+            return None
+        return _surface(s, v)
+    if kind == "radial":
+        r = dict(net["radial"])
+        rad = r["radius"]
+        inner = 0.0 if len(rad) == 1 else min(rad)
+        rings, spokes = int(r["rings"]), int(r["spokes"])
+        r["rings"] = rings * n if inner == 0 else (rings - 1) * n + 1
+        r["spokes"] = spokes * n if r.get("sweep_deg", 360.0) >= 360 - 1e-9 else (spokes - 1) * n + 1
+        if r["rings"] > MAX_CELLS or r["spokes"] > 360:
+            v.report_at(key, f"refined {n} x the net has {r['rings']} rings of {r['spokes']} spokes; at most "
+                        f"{MAX_CELLS} rings and 360 spokes")
+            return None
+        return _radial(r, v)
+    if kind == "mesh":
+        return _mesh(net["mesh"], base, v, n)
+    return _explicit(net, v)  # (its edges are cut into rods in line by the planner: NetTarget.refine_edges)
 
 
 def _bends(net: dict, m: int, v: Any) -> np.ndarray | None:

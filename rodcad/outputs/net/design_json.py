@@ -26,6 +26,28 @@ def _v(a) -> list[float | None]:
     return [_f(x) for x in np.asarray(a, float).ravel()]
 
 
+def _joint_kind(t, k: int) -> str | None:
+    """'ball' for a two-rod ball joint the planner put on a long edge, else None."""
+    return "ball" if t.joint_mask[k] else None
+
+
+def planner_json(plan) -> dict[str, Any]:
+    """What the planner did to the drawn net (rodcad.design.net.joints, rodcad.design.net.sizing)."""
+    t = plan.target
+    drawn = t.drawn if t.drawn is not None else t
+    src = t.source if t.source is not None else np.arange(t.m)
+    split = np.bincount(src, minlength=drawn.m)
+    sizes = sorted({round(float(x), 4) for x in plan.node_pivot}) if plan.node_pivot is not None else []
+    return {
+        "drawn": {"nodes": drawn.n, "edges": drawn.m},
+        "split_edges": [{"edge": int(e), "rods": int(split[e]), "joints": "ball"} for e in np.flatnonzero(split > 1)],
+        "joints": [int(k) for k in (t.joints if t.joints is not None else [])],
+        "merged_nodes": [[int(x) for x in g] for g in plan.merged],
+        "rod_edge": [int(x) for x in src],
+        "hub_pivot_radii": sizes,
+    }
+
+
 def rod_balls(check) -> np.ndarray:
     """(m,) the steel balls each rod holds at its designed mass (the fewest whose range holds
     it: :meth:`rodcad.catalog.net.node.NodeHardware.rod_fill`)."""
@@ -47,6 +69,14 @@ def net_bill(check, catalog) -> dict[str, Any]:
         held = plan.degree > 0  # a node no rod reaches (an anchor between anchors) needs no hub
         out["hubs"] = int(np.count_nonzero(held))
         out["hub_plastic_g"] = float(plan.node_masses[held].sum())
+        joint = plan.target.joint_mask & held
+        out["two_rod_joints"] = int(np.count_nonzero(joint))
+        sizes: dict[str, int] = {}
+        for k in np.flatnonzero(held):
+            h = plan.hub(int(k))
+            key = f"{h.diameter:.4g} mm (pivot radius {h.pivot_radius:.4g} mm)"
+            sizes[key] = sizes.get(key, 0) + 1
+        out["hub_sizes"] = sizes
         out["filament_g"] = rod_plastic + float(plan.node_masses.sum())
     else:
         out["point_parts"] = plan.target.n
@@ -78,6 +108,9 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "com": _v(plan.node_com[k]),
             "rods": int(plan.degree[k]),
             "error_mm": _f(check.node_error[k]),
+            "hub": {"diameter": plan.hub(k).diameter, "pivot_radius": plan.hub(k).pivot_radius}
+            if hw.is_hub else None,
+            "joint": _joint_kind(t, k),
         })
     balls = rod_balls(check)
     rods = []
@@ -161,7 +194,9 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
                           "design: loaded balls sit on the pivots exactly; an unloaded ball rattles by up to "
                           f"{hw.clearance / 2:g} mm") if hw.is_hub else None,
             "rod_length_range": list(plan.length_range),
+            "pivot_radius_range": list(hw.pivot_limits) if hw.is_hub else None,
         },
+        "planner": planner_json(plan),
         "print": print_profile,
         "bill_of_materials": net_bill(check, catalog),
         "cad": None,

@@ -42,7 +42,7 @@ def plot_net(check, title: str, *paths: Path) -> None:
             ax.add_collection(lc)
             x = eq.positions
             if plan.hardware.is_hub:  # (one collection: a patch per hub took seconds for a thousand)
-                d = np.full(len(x), 2 * plan.hardware.radius)
+                d = np.array([2 * plan.hub(k).radius for k in range(len(x))])
                 ax.add_collection(EllipseCollection(d, d, np.zeros(len(x)), units="xy", offsets=x[:, [a, b]],
                                                     offset_transform=ax.transData, facecolors="0.85", edgecolors="0.3",
                                                     linewidths=0.6, alpha=0.45, zorder=3))

@@ -44,6 +44,26 @@ def _list(xs: list[int], most: int = 24) -> str:
     return s + (f", ... ({len(xs)} in all)" if len(xs) > most else "")
 
 
+def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
+    """What the planner changed in the drawn net, in words (empty when nothing)."""
+    pl = data.get("planner") or {}
+    out = []
+    if pl.get("split_edges"):
+        out.append(f"- {len(pl['split_edges'])} drawn edge(s) longer than the longest rod "
+                   f"({plan.length_range[1]:g} mm) are rods in line joined by {len(pl['joints'])} two-rod ball "
+                   "joints (a hub with two sockets; nodes flagged 'joint' in design.json), each placed where it "
+                   "hangs and counted in the fit against the drawn surface or edge.")
+    if pl.get("merged_nodes"):
+        out.append(f"- {len(pl['merged_nodes'])} group(s) of drawn nodes too close for any hub were merged into one "
+                   f"hub: {pl['merged_nodes'][:6]}; the fit counts each drawn node.")
+    sizes = pl.get("hub_pivot_radii") or []
+    if len(sizes) > 1:
+        out.append(f"- Hubs of {len(sizes)} sizes from the catalog's family (pivot radius "
+                   f"{', '.join(f'{x:g}' for x in sizes)} mm): larger where rods meet at tight angles, smaller "
+                   "where a rod would be too short and at the two-rod joints.")
+    return ["The planner made the drawn net buildable:", ""] + out + [""] if out else []
+
+
 def net_report(check, data: dict[str, Any], *, title: str) -> str:
     """report.md of a designed net."""
     plan, eq = check.plan, check.equilibrium
@@ -73,6 +93,7 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     for note in check.notes[1:]:
         lines.append(f"- {note}")
     lines += ["", "## Node hardware", ""]
+    lines += _planner_lines(plan, data)
     if hw.is_hub:
         lines += [f"Every node is a printed hub ({hw.name}): a {hw.diameter:g} mm sphere with one ball socket per rod, "
                   f"its pivot {hw.pivot_radius:g} mm from the hub's centre along the rod's target direction. Each rod "
@@ -116,7 +137,10 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     lines.append(f"- {bom['rods']} rods ({bom['rod_plastic_g']:.1f} g of {bom['material']})")
     if "hubs" in bom:
         lines.append(f"- {bom['hubs']} printed hubs ({bom['hub_plastic_g']:.1f} g of {bom['material']}), each in two "
-                     "halves glued together over its rods' balls (a glue for the material, e.g. cyanoacrylate)")
+                     "halves glued together over its rods' balls (a glue for the material, e.g. cyanoacrylate)"
+                     + (f", {bom['two_rod_joints']} of them two-rod ball joints on long edges"
+                        if bom.get("two_rod_joints") else "") + ": "
+                     + ", ".join(f"{c} x {k}" for k, c in bom.get("hub_sizes", {}).items()))
     else:
         lines.append(f"- {bom['point_parts']} x {bom['point_part']}")
     if bom["steel_balls"]:

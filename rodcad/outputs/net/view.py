@@ -81,13 +81,17 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
                 parts.append(ViewPart(f"rod-{e:03d}", "rods", f"bent:{a.length:.3f}:{a.bend:.5f}:{step}",
                                       tube(_bent_line(a), rod_d / 2, 12), m, color))
     if simple_hubs:
-        ball = sphere(node_d / 2, 8, 14)
+        balls: dict[float, Any] = {}
         for k, nd in enumerate(nodes):
             if hub and not nd.get("rods", 1):
                 continue  # an anchor no rod reaches: no hub is printed
+            d = float((nd.get("hub") or {}).get("diameter") or node_d)  # (its own size of the hub family)
+            if d not in balls:
+                balls[d] = sphere(d / 2, 8, 14)
             m = np.eye(4)
             m[:3, 3] = pos[k]
-            parts.append(ViewPart(f"hub-{k:03d}" if hub else f"node-{k:03d}", "hubs", "hub", ball, m, GREY))
+            parts.append(ViewPart(f"hub-{k:03d}" if hub else f"node-{k:03d}", "hubs", f"hub:{d:g}" if d != node_d
+                                  else "hub", balls[d], m, GREY))
     hanger = cylinder([0, 0, 0.4 * node_d], [0, 0, 0.4 * node_d + 1.2 * max(node_d, 10.0)], max(0.1 * node_d, 1.2), 10)
     for k, nd in enumerate(nodes):
         if nd.get("anchored") and nd.get("rods", 1):  # (an anchor no rod reaches holds nothing)

@@ -1,0 +1,104 @@
+"""Where the planner's joints hang: the choice per net, checked against the physics.
+
+A generated net's joints go on its target surface first (:func:`rodcad.design.net.plan.
+plan_net`), where the design's masses can kink the rods to it; a net given by its edges
+(explicit nodes, a mesh) has no surface between its nodes, and a joint on a straight edge
+cannot hang (:mod:`rodcad.design.net.joints`): its joints go to the funicular sag below the
+edge. Where the surface's joints leave the net off its tolerance, the funicular sag is
+designed too and the better fit kept.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rodcad.design.net.check import NetCheck, design_net_plan
+from rodcad.design.net.plan import plan_net
+from rodcad.design.net.target import NetTarget
+
+__all__ = ["design_drawn_net", "slack_joints"]
+
+
+def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int = 0,
+                     tolerance: float | None = None, n_starts: int | None = None, note=None) -> NetCheck:
+    """The drawn net planned (:func:`rodcad.design.net.plan.plan_net`) and designed
+    (:func:`rodcad.design.net.check.design_net_plan`), its joints where they hang best.
+
+    ``note`` (a progress step's) hears how the design goes.
+
+    Raises:
+        DesignLimit: what no hardware in the catalog can do.
+    """
+    kw = dict(g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=note)
+    on_surface = target.surface is not None
+    plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g)
+    check = design_net_plan(plan, **kw)
+    joints = plan.target.joints
+    if joints is None or not len(joints) or check.ok:
+        return check
+    if on_surface:
+        other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
+        if _rank(other) > _rank(check):
+            other.notes.append("The two-rod joints hang at the funicular sag below their chords: on the target "
+                               f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
+            check = other
+    if not check.ok:
+        why = slack_joints(check)
+        if why:
+            check.why = why + (" " + check.why if check.why else "")
+            check.notes.append(why)
+    return check
+
+
+def _in_line(t) -> np.ndarray:
+    """(n,) the joints whose two rods' node points lie within a degree of one line."""
+    out = np.zeros(t.n, dtype=bool)
+    for k in t.joints:
+        ends = [int(x) for e in np.flatnonzero((t.edges == k).any(axis=1)) for x in t.edges[e] if x != k]
+        if len(ends) == 2:
+            u, v = t.positions[ends[0]] - t.positions[k], t.positions[ends[1]] - t.positions[k]
+            cos = float(u @ v) / float(np.linalg.norm(u) * np.linalg.norm(v))
+            out[k] = cos < -np.cos(np.radians(1.0))
+    return out
+
+
+def _rank(check: NetCheck) -> tuple:
+    """Better first: within the tolerance, then a stable equilibrium, then the nearer fit."""
+    eq = check.equilibrium
+    return (check.ok, bool(eq.success and eq.stable), -check.rel_size)
+
+
+def slack_joints(check: NetCheck) -> str:
+    """Where two-rod joints cannot hang (their rods slack or pushing at the design), in words with
+    the hardware that would hold them: a rod as long as the edge, or a rigid in-line splice."""
+    from rodcad.design.net.check import SLACK
+
+    plan = check.plan
+    t = plan.target
+    T = check.equilibrium.tensions
+    if t.joints is None or not len(t.joints) or not np.all(np.isfinite(T)):
+        return ""
+    jm = t.joint_mask
+    far = jm & (check.node_error > check.tolerance * t.size)  # joints that hang off the tolerance
+    if not check.equilibrium.stable:  # joints in line with their rods balance only inverted
+        far |= _in_line(t)
+    on_joint = far[t.edges].any(axis=1) | (jm[t.edges].any(axis=1) & (T <= SLACK * float(np.max(np.abs(T), initial=0.0))))
+    weak = on_joint
+    if not weak.any():
+        return ""
+    share = float(np.max(T[weak])) / float(np.max(np.abs(T), initial=1e-300))
+    src = t.source if t.source is not None else np.arange(t.m)
+    edges = sorted({int(x) for x in src[weak]})
+    drawn = t.drawn if t.drawn is not None else t
+    d = np.linalg.norm(drawn.positions[drawn.edges[edges, 1]] - drawn.positions[drawn.edges[edges, 0]], axis=1)
+    need = float(d.max() - 2 * plan.hardware.pivot_limits[0])
+    why = ("they lie in line with their rods (no kink below their chords: they balance only inverted, an "
+           "unstable equilibrium)" if not check.equilibrium.stable else
+           f"their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack rung "
+           "or diagonal)" if share < 0.1 else
+           f"the net is too light to pull them straighter: its tension holds a joint's weight (hub and rods) only "
+           f"{float(np.max(check.node_error[t.joint_mask])):.3g} mm below its chord")
+    return (f"The two-rod joints on {len(edges)} drawn edge(s) ({edges[:8]}) cannot hang on the target within the "
+            f"tolerance ({check.tolerance * t.size:.3g} mm): {why}; a ball joint between two rods carries its weight "
+            f"only by a kink below its chord. A rod of {need:.4g} mm (the rod family's length.max) or a rigid "
+            "in-line splice of the two rods (not in this catalog) would hold them.")

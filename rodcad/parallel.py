@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["PARTS_PER_WORKER", "KeyValueStore", "cached_map", "default_jobs", "task_runner", "worker_pool"]
+__all__ = ["PARTS_PER_WORKER", "KeyValueStore", "cached_map", "default_jobs", "in_process", "task_runner", "worker_pool"]
 
 #: A build starts a local Dask cluster by default when it has at least this many tasks per
 #: CPU (a distinct net part: 0.5-2 s of kernel work each); fewer run in this process, where
@@ -111,11 +111,20 @@ def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[st
     return [found[key] for key in keys]
 
 
-Runner = Callable[[Callable[[Any], Any], Sequence[Any]], list[Any]]
+#: ``runner(fn, items, progress=None) -> results`` in item order; ``progress(done, total)``
+#: hears each result as it arrives.
+Runner = Callable[..., list[Any]]
 
 
-def _in_process(fn: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
-    return [fn(x) for x in items]
+def in_process(fn: Callable[[Any], Any], items: Sequence[Any],
+                progress: Callable[[int, int], None] | None = None) -> list[Any]:
+    """The runner of :func:`task_runner` that runs every item here, one after the other."""
+    out = []
+    for x in items:
+        out.append(fn(x))
+        if progress is not None:
+            progress(len(out), len(items))
+    return out
 
 
 @contextmanager
@@ -148,7 +157,7 @@ def task_runner(tasks: int, *, jobs: int | None = None, scheduler: str | None = 
     n = jobs if jobs is not None else (cpus if tasks >= PARTS_PER_WORKER * cpus else 1)
     n = max(1, min(int(n), tasks))
     if n == 1:
-        yield _in_process, "in this process"
+        yield in_process, "in this process"
         return
     import logging
 
@@ -167,8 +176,14 @@ def task_runner(tasks: int, *, jobs: int | None = None, scheduler: str | None = 
 def _dask(client) -> Runner:
     """A runner submitting each item as a task to ``client``; results gathered in item order."""
 
-    def run(fn: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
+    def run(fn: Callable[[Any], Any], items: Sequence[Any],
+            progress: Callable[[int, int], None] | None = None) -> list[Any]:
+        from distributed import as_completed
+
         futures = client.map(fn, list(items), pure=False)
+        if progress is not None:  # counted as they finish, in any order
+            for done, _ in enumerate(as_completed(futures), 1):
+                progress(done, len(futures))
         return list(client.gather(futures))
 
     return run

@@ -247,3 +247,24 @@ def test_prusaslicer_prints_a_part_once_per_copy_from_one_mesh(tmp_path):
     assert {"External perimeter", "Perimeter"} <= set(sliced.filament)
     got = sliced.grams(1.75, 1.24, skip=NOT_ROD)
     assert got == pytest.approx(3 * 1.24e-3 * rod.volume, rel=0.03)
+
+
+def test_the_runners_count_each_task_as_it_finishes():
+    """Long CAD work shows progress: both runners of rodcad.parallel.task_runner call
+    ``progress(done, total)`` once per task (Dask's as the tasks finish, in any order) and
+    return the results in item order."""
+    from distributed import Client, LocalCluster
+
+    from rodcad.parallel import _dask, in_process
+
+    items = list(range(-5, 7))
+    for make in ("here", "dask"):
+        seen = []
+        if make == "here":
+            got = in_process(abs, items, progress=lambda d, t: seen.append((d, t)))
+        else:
+            with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as c, \
+                    Client(c) as client:
+                got = _dask(client)(abs, items, progress=lambda d, t: seen.append((d, t)))
+        assert got == [abs(x) for x in items]
+        assert seen == [(k, len(items)) for k in range(1, len(items) + 1)]

@@ -156,8 +156,11 @@ def _instance(solid, R: np.ndarray, label: str):
 def _run(tasks: list, owners: list, runner, progress) -> list:
     """The tasks' results, in order; members whose B-rep does not confirm their group's part
     are built again as parts of their own (``owners`` and ``tasks`` updated to match)."""
-    run = runner or (lambda fn, items: [fn(x) for x in items])
-    results = list(run(build_group, tasks))
+    from rodcad.parallel import in_process
+
+    run = runner or in_process
+    count = None if progress is None else progress.count
+    results = list(run(build_group, tasks, progress=count))
     extra_tasks, extra_owners = [], []
     for task, (kind, members, rotations), res in zip(list(tasks), list(owners), list(results)):
         for i in [i for i, ok in enumerate(res.confirmed) if not ok]:
@@ -172,7 +175,7 @@ def _run(tasks: list, owners: list, runner, progress) -> list:
             res.com = res.com[keep]
         tasks += extra_tasks
         owners += extra_owners
-        results += list(run(build_group, extra_tasks))
+        results += list(run(build_group, extra_tasks, progress=count))
     if progress is not None:
         progress.count(len(tasks), len(tasks))
     return results

@@ -22,7 +22,7 @@ the free middle in 1-degree steps until the outlines overlap and bisects the con
 steps at once where a quick test (every :data:`COARSE_STRIDE`-th boundary sample, against
 the other outline grown by what the samples left out and the stride's motion could cover:
 :meth:`_Pair.clear_over`) proves that none of them overlaps, and every single step is first
-tried that way (:meth:`_Pair.clear_coarse`); only where a quick test cannot rule out an
+tried that way (the same test over no turn); only where a quick test cannot rule out an
 overlap does the full test run. The march stops at the same step, and the limits are the
 same, as with the full test at every step.
 It agrees with the B-rep search of :mod:`rodcad.catalog.limits` within 0.002 degrees on
@@ -422,7 +422,6 @@ class _Pair:
         reach = self.left_gap + (self.left_radius + self.left_gap) * turn
         return not _inside(self.right, self.right_box, l_in_r, self.right.growth * reach)
 
-    clear_coarse = clear_over
 
 
 def _thinned(pts: np.ndarray) -> tuple[np.ndarray, float]:
@@ -461,7 +460,7 @@ def _contact(pair: _Pair, start: float, direction: float, bound: float) -> float
             b = direction * bound
             if not pair.overlaps(b):
                 return None
-        if not pair.clear_coarse(b) and pair.overlaps(b):
+        if not pair.clear_over(b) and pair.overlaps(b):
             break
         a = b
     while abs(b - a) > BISECT_DEG:

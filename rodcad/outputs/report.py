@@ -347,6 +347,8 @@ def summary_text(r, outdir: Path | None) -> str:
 
 def chandelier_summary(b, outdir: Path) -> str:
     """The summary printed at the end of ``rodcad build`` for a chandelier."""
+    from rodcad.design.shell import curve_size
+
     res = b.result
     L = [f"rodcad: {b.design.name}: chandelier of {len(res.chains)} chains, {res.bom.n_rods} rods, "
          f"method {res.method}, {b.time_s:.1f} s"]
@@ -361,7 +363,7 @@ def chandelier_summary(b, outdir: Path) -> str:
             if hw:
                 L.append(f"  {'':<10} joints   {hw}")
             if ap is not None:
-                L.append(f"  {'':<10} printed  {printed_summary(ap, curve_size_of(r))}")
+                L.append(f"  {'':<10} printed  {printed_summary(ap, curve_size(r.plan.curve))}")
     L.append("  rods      " + ", ".join(f"{v} x {k}" for k, v in res.bom.rods_by_type.items()))
     if b.fabrications is not None:
         filament = sum(f.filament_mass for fab in b.fabrications for f in fab.rods)
@@ -370,13 +372,6 @@ def chandelier_summary(b, outdir: Path) -> str:
         L.append(f"  note: {note}")
     L.append(f"  files     {outdir}/")
     return "\n".join(L)
-
-
-def curve_size_of(r) -> float:
-    """A designed chain's target size (mm): design.json's ``curve.size_mm``."""
-    from rodcad.design.shell import curve_size
-
-    return float(curve_size(r.plan.curve))
 
 
 def _chandelier_hardware(b, data_chains: list[dict[str, Any]]) -> list[str]:

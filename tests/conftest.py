@@ -31,7 +31,9 @@ import pytest
 # the benchmarks' generators (random chains, drawn shapes) are shared with the tests
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-from figure_clip import saved_figures  # noqa: E402 - tests/ is on sys.path
+import suite_tables  # noqa: E402 - tests/ is on sys.path
+from figure_clip import saved_figures  # noqa: E402
+from rodcad.catalog.cache import register_seed  # noqa: E402
 from rodcad.cli import main
 
 if os.environ.get("PYTEST_XDIST_WORKER"):
@@ -60,7 +62,11 @@ def session_cache(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("RODCAD_CACHE_DIR", str(folder))
         mp.setenv("RODCAD_SEED_CACHE", "1")
+        if not suite_tables.writing():  # the tables the CAD builds need (tests/suite_tables.py)
+            register_seed(suite_tables.SEED)
         yield folder
+    if suite_tables.writing():  # each worker as it ends: the last one writes every table
+        suite_tables.collect(folder)
 
 
 @pytest.fixture(scope="session")

@@ -200,8 +200,11 @@ def read_stl(data: bytes, deflection: float = DEFLECTION) -> TriangleMesh:
     corners = np.ascontiguousarray(np.frombuffer(data, dtype=rec, count=count, offset=84)["v"].reshape(-1, 3))
     key = corners.view(np.dtype((np.void, corners.itemsize * 3))).ravel()  # a corner's 12 bytes
     _, first, index = np.unique(key, return_index=True, return_inverse=True)
-    vertices = corners[first]
-    t = index.reshape(-1, 3).astype(np.int64)
+    order = np.argsort(first)  # vertices in the order the STL first names them (as meshed: it packs tighter)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    vertices = corners[first[order]]
+    t = rank[index.ravel()].reshape(-1, 3).astype(np.int64)
     if not closed_oriented(t):
         raise GeometryError("the STL's mesh is not closed and oriented")
     return TriangleMesh(vertices.astype(float), t, float(deflection))

@@ -222,9 +222,13 @@ def _tensions(sysm: _System, x, R) -> np.ndarray:
     return lsqr(A, -base, atol=1e-12, btol=1e-12, iter_lim=20000)[0]
 
 
-def solve_balance(net: WrittenNet, *, seed: int = 0, amplitude: float = 0.002, noise: float = 0.01,
-                  turn: float = 0.05, g: float = 9.81, tol: float = 1e-12, max_iter: int = 60, verbose: bool = False) -> dict:
-    """Newton on the balance system from a perturbed start (module docstring).
+def solve_balance(net: WrittenNet, *, seed: int = 0, amplitude: float = 0.003, noise: float = 0.01,
+                  turn: float = 0.05, g: float = 9.81, tol: float = 1e-12, max_iter: int = 60, max_move: float = 0.1, max_turn: float = 0.1,
+                  verbose: bool = False) -> dict:
+    """Newton on the balance system from a perturbed start (module docstring), each step cut
+    so that no node moves more than ``max_move`` mean rods and no hub turns more than
+    ``max_turn`` rad (a full Newton step from far off throws the net about), then halved until
+    the residual falls.
 
     Returns:
         dict: positions (n, 3), rotations, tensions, converged, iterations, residual (the
@@ -256,7 +260,9 @@ def solve_balance(net: WrittenNet, *, seed: int = 0, amplitude: float = 0.002, n
         J = approx_derivative(fun, z, method="3-point", sparsity=sysm.sparsity, f0=r)
         dz = -splu(sp.csc_matrix(J)).solve(r)
         norm0 = float(r @ r)
-        alpha = 1.0
+        move = float(np.max(np.abs(dz[:3 * sysm.nf]), initial=0.0)) / (max_move * sysm.lbar)
+        turn_ = float(np.max(np.abs(dz[3 * sysm.nf:3 * sysm.nf + 3 * sysm.nh]), initial=0.0)) / max_turn
+        alpha = min(1.0, 1.0 / max(move, turn_, 1e-300))  # no node further than max_move rods a step
         while alpha > 1e-4:
             trial = fun(z + alpha * dz)
             if float(trial @ trial) < (1 - 1e-4 * alpha) * norm0:

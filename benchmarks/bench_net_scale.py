@@ -162,7 +162,7 @@ def main(argv=None) -> int:
         print("|---|---|---|---|---|---|---|---|---|")
         for r in rows:
             for q in r.get("independent", []):
-                print(f"| {r['name']} | {q['seed']} | {q['started']:.3g} | {q['iterations']} "
+                print(f"| {r['name']} | {q['seed']} | {q['started']:.3g} | {q['steps']} "
                       f"{'' if q['converged'] else '(not converged)'} | {q['residual']:.2g} | {q['distance']:.2g} | "
                       f"{q['distance'] / q['size']:.2g} | {q['tension_change']:.2g} | {q['wall']:.1f} |")
     return 0

@@ -231,7 +231,7 @@ def solve_balance(net: WrittenNet, *, seed: int = 0, amplitude: float = 0.003, n
     the residual falls.
 
     Returns:
-        dict: positions (n, 3), rotations, tensions, converged, iterations, residual (the
+        dict: positions (n, 3), rotations, tensions, converged, steps (Newton's), residual (the
         largest scaled residual), started (largest node distance of the start from the
         written equilibrium, mm), distance (of the result, mm), wall (s).
     """
@@ -272,7 +272,7 @@ def solve_balance(net: WrittenNet, *, seed: int = 0, amplitude: float = 0.003, n
         if verbose:
             print(f"    newton {it}: residual {res:.3g}, step {alpha:g}", flush=True)
         T = T.copy()
-    return {"positions": x, "rotations": R, "tensions": T, "converged": converged, "iterations": it,
+    return {"positions": x, "rotations": R, "tensions": T, "converged": converged, "steps": it - 1 if converged else it,
             "residual": res, "started": started, "distance": float(np.max(np.linalg.norm(x - net.x, axis=1))),
             "tension_change": float(np.max(np.abs(T - net.tensions)) / np.max(np.abs(net.tensions))),
             "wall": time.perf_counter() - t0}

@@ -223,7 +223,8 @@ def _tensions(sysm: _System, x, R) -> np.ndarray:
 
 
 def solve_balance(net: WrittenNet, *, seed: int = 0, amplitude: float = 0.003, noise: float = 0.01,
-                  turn: float = 0.05, g: float = 9.81, tol: float = 1e-12, max_iter: int = 60, max_move: float = 0.1, max_turn: float = 0.1,
+                  turn: float = 0.05, g: float = 9.81, tol: float = 1e-12, max_iter: int = 60, max_move: float = 0.1,
+                  max_turn: float = 0.1,
                   verbose: bool = False) -> dict:
     """Newton on the balance system from a perturbed start (module docstring), each step cut
     so that no node moves more than ``max_move`` mean rods and no hub turns more than

@@ -14,7 +14,13 @@ free node's force balance recomputed in plain numpy from the written rods' ends,
 masses and the hubs' masses, over the force scale; each hub's moment balance about its node
 point; every rod's length from its written ends.
 
+Nets of 2,000 rods or more (``--independent``) are then solved again by a method of their own
+(:mod:`net_balance`: the balance equations by Newton with a finite-difference Jacobian, no
+rodcad code) from perturbed starts, and the largest node distance from rodcad's equilibrium
+is reported.
+
 Usage: python benchmarks/bench_net_scale.py [--nets grid10 grid22 grid33 web] [--keep DIR]
+[--independent RODS]
 Target (issue 33): a net of 2,000+ rods designs without CAD in under 60 s on 2 cores.
 """
 
@@ -34,6 +40,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from net_balance import balance, force_scale, read_net, solve_balance  # noqa: E402  (benchmarks/)
 
 NETS = {
     "grid10": {"surface": {"z": "0.0015 * ((x - 200)**2 + (y - 200)**2) - 60", "x": [0, 400], "y": [0, 400],
@@ -85,49 +94,35 @@ def check_balance(path: Path, g: float = 9.81) -> dict:
     along / L``: straight rods, their centre of mass on the axis); a hub adds its own weight
     at its centre of mass (its rotation times its body-frame ``com``). A free node's residual
     is the sum of those forces, a hub's moment residual the sum of their moments about its
-    node point. Returns the largest of each over the force scale (the larger of the largest
-    tension and the net's weight; moments over that times the mean rod length)."""
+    node point (:func:`net_balance.balance`, the rods' ends as written). Returns the largest of
+    each over the force scale (the larger of the largest tension and the net's weight; moments
+    over that times the mean rod length)."""
     d = json.loads((path / "design.json").read_text())
-    nodes, rods = d["net"]["nodes"], d["net"]["rods"]
-    n = len(nodes)
-    edges = np.array([r["nodes"] for r in rods], int)
-    ends = np.array([r["ends"] for r in rods], float)
-    T = np.array([r["tension"] for r in rods], float)
-    mass = np.array([r["mass"] for r in rods], float)
-    L = np.array([r["length"] for r in rods], float)
-    t = np.array([r["com"][0] for r in rods], float) / L
-    x = np.array([nd["simulated"] for nd in nodes], float)
-    free = ~np.array([nd["anchored"] for nd in nodes], bool)
-    M = np.array([nd["mass"] or 0.0 for nd in nodes], float)
-    dv = ends[:, 1] - ends[:, 0]
-    dist = np.linalg.norm(dv, axis=1)
-    u = dv / dist[:, None]
-    share = np.column_stack([1 - t, t]) * (g * mass)[:, None]
-    force, moment = np.zeros((n, 3)), np.zeros((n, 3))
-    for k, sign in ((0, 1.0), (1, -1.0)):
-        F = sign * T[:, None] * u
-        F[:, 2] -= share[:, k]
-        np.add.at(force, edges[:, k], F)
-        np.add.at(moment, edges[:, k], np.cross(ends[:, k] - x[edges[:, k]], F))
-    w = np.zeros((n, 3))
-    w[:, 2] = -g * M
-    force += w
-    for k, nd in enumerate(nodes):
-        if nd.get("rotation") is not None:
-            moment[k] += np.cross(np.asarray(nd["rotation"], float) @ np.asarray(nd["com"], float), w[k])
-    scale = max(float(np.max(np.abs(T))), g * float(mass.sum() + M.sum()))
+    net = read_net(path)
+    force, moment, dl = balance(net, net.x, net.rotations, net.ends[:, 0], net.ends[:, 1], net.tensions, g)
+    free = ~net.anchored
+    scale = force_scale(net, g)
     return {"force": float(np.max(np.linalg.norm(force[free], axis=1)) / scale),
-            "moment": float(np.max(np.linalg.norm(moment[free], axis=1)) / (scale * float(L.mean()))),
-            "length": float(np.max(np.abs(dist - L) / L)), "rods": len(rods), "nodes": n,
+            "moment": float(np.max(np.linalg.norm(moment[free], axis=1)) / (scale * float(net.lengths.mean()))),
+            "length": float(np.max(np.abs(dl) / net.lengths)), "rods": len(net.edges), "nodes": len(net.x),
             "kkt": d["net"]["kkt_residual"], "error_rel": d["net"]["error"]["max_rel_size"],
             "stable": d["net"]["stable"], "starts": d["net"]["alternatives"]["starts"],
             "alternatives": d["net"]["alternatives"]["count"]}
+
+
+def independent(path: Path, seeds=(0, 1)) -> list[dict]:
+    """The written net solved again by :func:`net_balance.solve_balance` (Newton on the balance
+    equations, finite-difference Jacobian) from perturbed starts, one per seed."""
+    net = read_net(path)
+    return [dict(solve_balance(net, seed=s), seed=s, size=net.size) for s in seeds]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--nets", nargs="+", default=list(NETS), choices=list(NETS))
     ap.add_argument("--keep", type=Path, help="build into this folder (kept) instead of a temporary one")
+    ap.add_argument("--independent", type=int, default=2000, metavar="RODS",
+                    help="solve the nets of at least this many rods again independently (net_balance; 0: all)")
     args = ap.parse_args(argv)
     print(f"# {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}, "
           f"numpy {np.__version__}; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}", flush=True)
@@ -140,6 +135,8 @@ def main(argv=None) -> int:
             if not (r["out"] / "design.json").exists():
                 print(r["stderr"], file=sys.stderr)
             r["check"] = check_balance(r["out"]) if (r["out"] / "design.json").exists() else None
+            if r["check"] and r["check"]["rods"] >= args.independent:
+                r["independent"] = independent(r["out"])
             print(f"  {name}: exit {r['rc']}, {r['wall']:.1f} s", file=sys.stderr, flush=True)
             rows.append(r)
         print("\n| net | rods | nodes | exit | wall s | CPU s | peak MB | steps (s) |")
@@ -158,6 +155,16 @@ def main(argv=None) -> int:
             if c:
                 print(f"| {r['name']} | {c['force']:.2g} | {c['moment']:.2g} | {c['length']:.2g} | {c['kkt']:.2g} | "
                       f"{c['error_rel']:.3g} | {c['stable']} | {c['starts']}, {c['alternatives']} |")
+        print("\nThe written equilibrium solved again independently (benchmarks/net_balance.py: Newton on the "
+              "balance equations with a finite-difference Jacobian) from perturbed starts:\n")
+        print("| net | seed | start off (mm) | Newton steps | scaled residual | off rodcad's equilibrium (mm) | "
+              "/ size | tensions off (rel) | wall s |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for r in rows:
+            for q in r.get("independent", []):
+                print(f"| {r['name']} | {q['seed']} | {q['started']:.3g} | {q['steps']} "
+                      f"{'' if q['converged'] else '(not converged)'} | {q['residual']:.2g} | {q['distance']:.2g} | "
+                      f"{q['distance'] / q['size']:.2g} | {q['tension_change']:.2g} | {q['wall']:.1f} |")
     return 0
 
 

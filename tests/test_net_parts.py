@@ -249,6 +249,44 @@ def test_prusaslicer_prints_a_part_once_per_copy_from_one_mesh(tmp_path):
     assert got == pytest.approx(3 * 1.24e-3 * rod.volume, rel=0.03)
 
 
+def test_a_parts_3mf_mesh_is_the_one_its_stl_holds_and_reads_back_closed(tmp_path):
+    """The print files place the mesh a part's STL holds (read back exactly, not meshed again),
+    written as 3MF XML that lib3mf reads as the same closed, oriented mesh; an open mesh is refused."""
+    import lib3mf
+
+    from rodcad.cad.mesh import mesh_solid, read_stl, write_stl
+    from rodcad.cad.net.print_files import NetPrintPart
+    from rodcad.cad.net.solids import net_rod_solid
+    from rodcad.cad.printfile import write_print_3mf
+    from rodcad.cad.slicer import SlicerObject, model_xml
+
+    hw = load_catalog("pla-parametric").node
+    rod = net_rod_solid(hw, 40.0, 1, 150.0, name="rod-007")
+    mesh = mesh_solid(rod, deflection=0.03, angular=0.2)
+    write_stl(mesh, tmp_path / "rod.stl")
+    back = read_stl((tmp_path / "rod.stl").read_bytes(), 0.03)
+    assert back.vertices.shape == mesh.vertices.shape and back.triangles.shape == mesh.triangles.shape
+    assert np.abs(back.vertices[back.triangles] - mesh.vertices[mesh.triangles]).max() < 1e-5  # float32
+    assert back.volume == pytest.approx(mesh.volume, rel=1e-6)
+    turn = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
+    part = NetPrintPart(7, rod, float(rod.volume), turn, "rod-007", "rods", "007", mesh=back,
+                        mesh_deflection=(0.03, 0.2))
+    (path,) = write_print_3mf([part], tmp_path / "print.3mf")
+    model = lib3mf.get_wrapper().CreateModel()
+    model.QueryReader("3mf").ReadFromFile(str(path))
+    objects = model.GetMeshObjects()
+    assert objects.MoveNext()
+    read = objects.GetCurrentMeshObject()
+    assert read.GetName() == "rod-007" and read.IsManifoldAndOriented()
+    assert read.GetTriangleCount() == len(back.triangles) and read.GetVertexCount() == len(back.vertices)
+    verts = read.GetVertices()
+    v = np.frombuffer((type(verts[0]) * len(verts))(*verts), dtype=np.float32).reshape(-1, 3)
+    placed = back.moved(turn).vertices
+    assert np.abs(np.ptp(v, axis=0) - np.ptp(placed, axis=0)).max() < 1e-5 and v[:, 2].min() == pytest.approx(0.0)
+    with pytest.raises(ValueError, match="not closed"):
+        model_xml([SlicerObject("open", back.vertices, back.triangles[1:])])
+
+
 def test_the_runners_count_each_task_as_it_finishes():
     """Long CAD work shows progress: both runners of rodcad.parallel.task_runner call
     ``progress(done, total)`` once per task (Dask's as the tasks finish, in any order) and

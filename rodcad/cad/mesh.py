@@ -27,7 +27,7 @@ from build123d import Solid
 from rodcad.cad.solids import GeometryError
 
 __all__ = ["DEFLECTION", "ANGULAR", "PRINT_ANGLE_DEG", "PRINT_LAYER_SHARE", "WELD", "TriangleMesh",
-           "mesh_solid", "print_deflection", "write_stl"]
+           "closed_oriented", "mesh_solid", "print_deflection", "read_stl", "write_stl"]
 
 #: Linear deflection of every mesh rodcad writes (mm, absolute: a fifth of a 0.05 mm print
 #: resolution): a mesh's volume is then within this times the solid's area of the solid's
@@ -134,7 +134,7 @@ def _weld(points: np.ndarray, tol: float) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
-def _closed(triangles: np.ndarray) -> bool:
+def closed_oriented(triangles: np.ndarray) -> bool:
     """Every directed edge once, and its reverse once: closed and consistently oriented."""
     e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
     key = e[:, 0] * (int(e.max()) + 1) + e[:, 1]
@@ -173,13 +173,41 @@ def mesh_solid(solid: Solid, *, deflection: float = DEFLECTION, angular: float =
     keep = (t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])
     t = t[keep]
     mesh = TriangleMesh(vertices, t, float(deflection))
-    if not _closed(t):
+    if not closed_oriented(t):
         raise GeometryError(f"the mesh of {solid.label or 'a solid'} does not close after welding")
     volume, area = float(solid.volume), float(solid.area)
     if abs(mesh.volume - volume) > deflection * area:
         raise GeometryError(f"the mesh of {solid.label or 'a solid'} encloses {mesh.volume:.4f} mm^3, the solid "
                             f"{volume:.4f} mm^3: more than its deflection ({deflection:g} mm) times its area")
     return mesh
+
+
+def read_stl(data: bytes, deflection: float = DEFLECTION) -> TriangleMesh:
+    """The mesh of a binary STL that :func:`write_stl` wrote (``deflection``: the one it was
+    meshed with), its vertices rejoined: a welded mesh's corners are written as the same
+    float32 numbers wherever they recur, and distinct ones lie :data:`WELD` apart (far above
+    float32's 1e-5 mm at a metre), so equal numbers are one vertex and nothing else is.
+
+    Raises:
+        GeometryError: the data is not a binary STL, or its mesh is not closed and oriented.
+    """
+    if len(data) < 84:
+        raise GeometryError("not a binary STL: shorter than its header")
+    (count,) = struct.unpack_from("<I", data, 80)
+    rec = np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    if len(data) != 84 + count * rec.itemsize:
+        raise GeometryError(f"not a binary STL of {count} triangles: {len(data)} bytes")
+    corners = np.ascontiguousarray(np.frombuffer(data, dtype=rec, count=count, offset=84)["v"].reshape(-1, 3))
+    key = corners.view(np.dtype((np.void, corners.itemsize * 3))).ravel()  # a corner's 12 bytes
+    _, first, index = np.unique(key, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # vertices in the order the STL first names them (as meshed: it packs tighter)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    vertices = corners[first[order]]
+    t = rank[index.ravel()].reshape(-1, 3).astype(np.int64)
+    if not closed_oriented(t):
+        raise GeometryError("the STL's mesh is not closed and oriented")
+    return TriangleMesh(vertices.astype(float), t, float(deflection))
 
 
 def write_stl(mesh: TriangleMesh, path: str | os.PathLike[str], name: str = "rodcad") -> Path:

@@ -20,7 +20,8 @@ the print stands at least at ``r - h/2``, the balls lie in the open sockets, and
 layer closes them. The fabrication puts the roofs of a chain's sockets on as few layers as
 the rods allow (:mod:`rodcad.fabrication.roofs`), so a plate pauses seldom.
 
-The meshes are tessellated by OCC (welded, checked closed); the print settings,
+The meshes are tessellated by OCC (welded, checked closed), or, for a part that brings its
+mesh (a net's, the one its STL holds), placed from it; the print settings,
 pauses and object names are PrusaSlicer's metadata files (:mod:`rodcad.cad.slicer`).
 Sliced alone, the shipped catalogs' rods use filament within 1 % of their designed
 plastic mass (tests/test_printfile.py). Support is off but for rods that rest on their
@@ -32,7 +33,7 @@ Units: mm, g, g/cm^3.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -119,13 +120,21 @@ class _Mesh:
 def _mesh(rod: FabricatedRod) -> _Mesh:
     """The rod's solid on the bed (its print matrix), tessellated to an absolute deflection
     (:func:`rodcad.cad.mesh.mesh_solid`: closed, oriented, within the deflection times its
-    area of the solid's volume), moved onto Z = 0 (where a slicer drops it)."""
+    area of the solid's volume), moved onto Z = 0 (where a slicer drops it). A part that
+    carries its ``mesh`` already (a net's: its STL's, meshed and checked where it was built)
+    is placed by its print matrix instead of being meshed again; either mesh's volume is
+    checked against the solid's."""
     from rodcad.cad.export import transformed
     from rodcad.cad.mesh import mesh_solid
 
+    known = getattr(rod, "mesh", None)
     defl = getattr(rod, "mesh_deflection", None)  # a net part's: as coarse as the print allows
-    mesh = (mesh_solid(transformed(rod.solid, rod.print_matrix)) if defl is None else
-            mesh_solid(transformed(rod.solid, rod.print_matrix), deflection=defl[0], angular=defl[1]))
+    if known is not None:
+        mesh = known.moved(rod.print_matrix)
+    elif defl is None:
+        mesh = mesh_solid(transformed(rod.solid, rod.print_matrix))
+    else:
+        mesh = mesh_solid(transformed(rod.solid, rod.print_matrix), deflection=defl[0], angular=defl[1])
     if abs(mesh.volume - rod.plastic_volume) > VOLUME_TOL * rod.plastic_volume:
         raise ValueError(f"rod {rod.file_stem}: its mesh encloses {mesh.volume:.2f} mm^3, the solid "
                          f"{rod.plastic_volume:.2f} mm^3")
@@ -325,11 +334,14 @@ def _write_plate(plate: Plate, path: Path, printer: Printer | None, prof: PrintP
 
 
 def _write_plates(rods: Sequence[FabricatedRod], path: str | Path, printer: Printer | None, prof: PrintProfile,
-                  gap: float, margin: float, meshes: dict[int, _Mesh]) -> list[Path]:
+                  gap: float, margin: float, meshes: dict[int, _Mesh],
+                  progress: Callable[[int, int], None] | None = None, total: int = 0) -> list[Path]:
     plates = _plan(rods, prof, printer, gap, margin, meshes)
     paths = plate_paths(path, len(plates))
-    for plate, out in zip(plates, paths):
+    for k, (plate, out) in enumerate(zip(plates, paths), 1):
         _write_plate(plate, out, printer, prof, meshes)
+        if progress is not None:
+            progress(k, len(plates) + total)
     k = len(paths) + 1
     while (stale := plate_paths(path, k)[-1]).exists():  # plates of an earlier, longer run
         stale.unlink()
@@ -384,12 +396,14 @@ def write_rod_3mf(rod: FabricatedRod, path: str | Path, *, printer: Printer | No
 
 
 def write_print_files(rods: Sequence[FabricatedRod], outdir: str | Path, *, printer: Printer | None = None,
-                      profile: Mapping[str, Any] | PrintProfile | None = None) -> list[Path]:
+                      profile: Mapping[str, Any] | PrintProfile | None = None,
+                      progress: Callable[[int, int], None] | None = None) -> list[Path]:
     """Write OUTDIR/print.3mf (and print-2.3mf, ... when one bed is not enough; see
     :func:`write_print_3mf`) and OUTDIR/rods/NN_TYPE.3mf for every rod, each a project of
     that rod alone with the same settings and its own pauses (:func:`write_rod_3mf`); each
     distinct solid is tessellated once. A part with a ``print_folder`` (e.g. a net's hub
-    parts: 'hubs') has its own project there instead of in rods/.
+    parts: 'hubs') has its own project there instead of in rods/. ``progress(done, total)``
+    hears each file written (the plates, then the rods' projects).
 
     Returns:
         The paths written: the plates, then the rods' 3MF files.
@@ -397,9 +411,12 @@ def write_print_files(rods: Sequence[FabricatedRod], outdir: str | Path, *, prin
     outdir = Path(outdir)
     prof = PrintProfile.from_mapping(profile)
     meshes: dict[int, _Mesh] = {}
-    written = _write_plates(rods, outdir / "print.3mf", printer, prof, 5.0, 5.0, meshes)
-    for rod in rods:  # rods sharing a solid share its mesh, each under its own name
+    written = _write_plates(rods, outdir / "print.3mf", printer, prof, 5.0, 5.0, meshes, progress, len(rods))
+    plates = len(written)
+    for k, rod in enumerate(rods, 1):  # rods sharing a solid share its mesh, each under its own name
         (plate,) = _plan([rod], prof, printer, 5.0, 5.0, meshes, single=True)
         folder = str(getattr(rod, "print_folder", "") or "rods")
         written.append(_write_plate(plate, outdir / folder / f"{rod.file_stem}.3mf", printer, prof, meshes))
+        if progress is not None:
+            progress(plates + k, plates + len(rods))
     return written

@@ -1,8 +1,11 @@
 """PrusaSlicer's side of the slicer files: the print profile the masses assume, the
 metadata files PrusaSlicer reads from a 3MF project, and the 3MF package itself.
 
-The meshes are written by lib3mf (the library behind build123d's Mesher); the PrusaSlicer
-metadata files are then added to the zip archive:
+The package is written here, one zip archive compressed once: the 3MF core parts
+(``[Content_Types].xml``, ``_rels/.rels`` and ``3D/3dmodel.model``, the meshes and build items,
+:func:`model_xml`; lib3mf, which wrote them before, spent most of a big net's print files'
+time converting vertices to and from Python objects, and its archive was then unpacked and
+packed again to add) and the PrusaSlicer metadata files:
 
 - ``Metadata/Slic3r_PE.config``: the print settings, one ``; key = value`` line each
   (PrusaSlicer reads them bottom up and stops at the first line of another form, so the
@@ -30,7 +33,6 @@ Units: mm, g, g/cm^3.
 
 from __future__ import annotations
 
-import io
 import math
 import zipfile
 from collections.abc import Mapping, Sequence
@@ -41,14 +43,15 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from rodcad.cad.mesh import closed_oriented
 from rodcad.fabrication.layers import LayerGrid
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import Printer
 
-__all__ = ["CONFIG_FILE", "DEFAULT_BUILD_VOLUME", "DEFAULT_NOZZLE", "MODEL_CONFIG_FILE", "PAUSES_FILE",
-           "PrintProfile", "SlicerObject", "bed", "model_config", "package_3mf", "pause_xml", "slicer_config",
-           "write_3mf"]
+__all__ = ["CONFIG_FILE", "CONTENT_TYPES", "DEFAULT_BUILD_VOLUME", "DEFAULT_NOZZLE", "MODEL_CONFIG_FILE",
+           "MODEL_FILE", "PAUSES_FILE", "RELS", "PrintProfile", "SlicerObject", "bed", "model_config", "model_xml",
+           "pause_xml", "slicer_config", "write_3mf"]
 
 #: Build volume (x, y, z, mm) assumed when the catalog names no printer.
 DEFAULT_BUILD_VOLUME = (220.0, 220.0, 250.0)
@@ -256,44 +259,62 @@ def model_config(objects: Sequence[tuple[Any, ...]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _transform(matrix: np.ndarray):
-    """lib3mf's Transform of a rigid 4 x 4 (3MF multiplies row vectors: its rows are the
-    rotation's columns, then the translation)."""
-    from lib3mf import Lib3MF
+#: The 3MF package's fixed parts: its content types and its root relationship to the model.
+CONTENT_TYPES = ('<?xml version="1.0" encoding="UTF-8"?>\n'
+                 '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">\n'
+                 ' <Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/>\n'
+                 ' <Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>\n'
+                 ' <Default Extension="png" ContentType="image/png"/>\n'
+                 '</Types>\n')
+RELS = ('<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">\n'
+        ' <Relationship Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel" '
+        'Target="/3D/3dmodel.model" Id="rel0"/>\n'
+        '</Relationships>\n')
+MODEL_FILE = "3D/3dmodel.model"
 
+
+def _transform(matrix: np.ndarray) -> str:
+    """A rigid 4 x 4 as a build item's ``transform``: 3MF multiplies row vectors, so it lists
+    the rotation's columns, then the translation."""
     m = np.asarray(matrix, float)
-    t = Lib3MF.Transform()
-    for i in range(3):
-        for j in range(3):
-            t.Fields[i][j] = float(m[j, i])
-        t.Fields[3][i] = float(m[i, 3])
-    return t
+    return " ".join(f"{x:.9g}" for x in [*m[:3, :3].T.ravel(), *m[:3, 3]])
 
 
-def package_3mf(objects: Sequence[SlicerObject]) -> tuple[bytes, list[tuple[int, str, int]]]:
-    """A 3MF package (lib3mf, through build123d's Mesher) of named meshes, each a build item
-    with the identity transform. Returns (bytes, [(resource id, name, triangles)])."""
-    from build123d import Mesher
-    from lib3mf import Lib3MF
+def _rows(fmt: str, values: np.ndarray) -> str:
+    """``fmt`` once per row of ``values``, formatted in one pass."""
+    return (fmt * len(values)) % tuple(values.ravel().tolist())
 
-    mesher = Mesher()
-    model = mesher.model
-    identity = mesher.wrapper.GetIdentityTransform()
-    info = []
-    for obj in objects:
-        mo = model.AddMeshObject()
-        mo.SetName(obj.name)
-        v = np.ascontiguousarray(obj.vertices, dtype=np.float32)
-        t = np.ascontiguousarray(obj.triangles, dtype=np.uint32)
-        mo.SetGeometry(list((Lib3MF.Position * len(v)).from_buffer_copy(v.tobytes())),
-                       list((Lib3MF.Triangle * len(t)).from_buffer_copy(t.tobytes())))
-        mo.SetType(Lib3MF.ObjectType.Model)
-        if not mo.IsManifoldAndOriented():
+
+def model_xml(objects: Sequence[SlicerObject]) -> tuple[str, list[tuple[int, str, int]]]:
+    """3D/3dmodel.model (the 3MF core specification's XML) of named meshes: each object one
+    mesh resource and one build item per instance (without a transform where it has none: the
+    vertices already on the bed). Vertices are written to 1e-6 mm, as lib3mf writes them.
+    Returns (XML, [(resource id, name, triangles)]).
+
+    Raises:
+        ValueError: a mesh is not closed and oriented (every edge in two triangles, once each
+            way: lib3mf's ``IsManifoldAndOriented``), or indexes a vertex it does not have.
+    """
+    out = ['<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" '
+           'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n <resources>\n']
+    items, info = [], []
+    for rid, obj in enumerate(objects, 1):
+        v = np.asarray(obj.vertices, dtype=float).reshape(-1, 3)
+        t = np.asarray(obj.triangles, dtype=np.int64).reshape(-1, 3)
+        if not len(t) or t.min() < 0 or t.max() >= len(v) or not closed_oriented(t):
             raise ValueError(f"{obj.name}: the mesh is not closed and oriented")
+        out.append(f'  <object id="{rid}" name={quoteattr(obj.name)} type="model">\n   <mesh>\n    <vertices>\n')
+        out.append(_rows('     <vertex x="%.6f" y="%.6f" z="%.6f"/>\n', v))
+        out.append("    </vertices>\n    <triangles>\n")
+        out.append(_rows('     <triangle v1="%d" v2="%d" v3="%d"/>\n', t))
+        out.append("    </triangles>\n   </mesh>\n  </object>\n")
         for m in obj.instances if len(obj.instances) else [None]:
-            model.AddBuildItem(mo, identity if m is None else _transform(m))
-        info.append((int(mo.GetModelResourceID()), obj.name, len(t)))
-    return bytes(model.QueryWriter("3mf").WriteToBuffer()), info
+            items.append(f'  <item objectid="{rid}"/>\n' if m is None else
+                         f'  <item objectid="{rid}" transform="{_transform(m)}"/>\n')
+        info.append((rid, obj.name, len(t)))
+    out += [" </resources>\n <build>\n", *items, " </build>\n</model>\n"]
+    return "".join(out), info
 
 
 def write_3mf(path: str | Path, objects: Sequence[SlicerObject], pauses: Mapping[float, str], *,
@@ -307,21 +328,18 @@ def write_3mf(path: str | Path, objects: Sequence[SlicerObject], pauses: Mapping
         ``path``.
     """
     prof = PrintProfile.from_mapping(profile)
-    package, info = package_3mf(objects)
-    extra = {CONFIG_FILE: slicer_config(prof, printer, pauses=bool(pauses)),
+    model, info = model_xml(objects)
+    files = {"[Content_Types].xml": CONTENT_TYPES, "_rels/.rels": RELS, MODEL_FILE: model,
+             CONFIG_FILE: slicer_config(prof, printer, pauses=bool(pauses)),
              MODEL_CONFIG_FILE: model_config([(*i, o.support, o.settings, max(1, len(o.instances)))
                                                for i, o in zip(info, objects)])}
     if pauses:
-        extra[PAUSES_FILE] = pause_xml(pauses, prof.pause_gcode)
+        files[PAUSES_FILE] = pause_xml(pauses, prof.pause_gcode)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".part")
-    with zipfile.ZipFile(io.BytesIO(package)) as src, \
-            zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as out:
-        for item in src.infolist():
-            if item.filename not in extra:
-                out.writestr(item, src.read(item.filename), compress_type=zipfile.ZIP_DEFLATED)
-        for name, text in extra.items():
+    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as out:
+        for name, text in files.items():
             out.writestr(name, text)
     tmp.replace(path)
     return path

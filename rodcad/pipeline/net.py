@@ -114,9 +114,11 @@ def write_net_outputs(b: NetBuild, outdir: str | Path, *, progress: Progress | N
 
             with progress.step("writing and checking rods/*, hubs/* (STEP, STL) and assembly.step") as st:
                 files = write_net_files(b.check, b.solids, tmp, name=d.name, progress=st)
-            with progress.step("writing print.3mf (PrusaSlicer projects, one per bed) and rods/*.3mf, hubs/*.3mf"):
+            what = "writing print.3mf (PrusaSlicer projects, one per bed) and rods/*.3mf, hubs/*.3mf"
+            with progress.step(what) as st:
                 files += write_net_print_files(b.check, b.solids, tmp, printer=d.catalog.printer,
-                                               profile=print_profile(d.catalog), ball_name=_ball_name(d.catalog))
+                                               profile=print_profile(d.catalog), ball_name=_ball_name(d.catalog),
+                                               progress=st.count)
         with progress.step("writing design.json, report.md, preview.png"):
             data = _write(b, tmp, files)
             write_net_view(b, data, tmp)  # assembly.glb, view.html

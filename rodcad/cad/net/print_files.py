@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rodcad.cad.mesh import TriangleMesh, read_stl
 from rodcad.cad.net.solids import ball_positions
 from rodcad.cad.net.bent import bent_socket_centres
 from rodcad.cad.printfile import write_print_files
@@ -69,6 +70,8 @@ class NetPrintPart:
         print_settings: PrusaSlicer per-object settings.
         copies: how many to print (its members); copy_tags: each copy's tag in pause messages.
         mesh_deflection: (linear mm, angular rad) of its mesh (:func:`rodcad.cad.mesh.print_deflection`).
+        mesh: its mesh in its own frame, the one its STL holds (built and checked by its task,
+            :func:`rodcad.cad.net.build.build_group`), or None: meshed from ``solid``.
     """
 
     index: int
@@ -92,6 +95,7 @@ class NetPrintPart:
     copies: int = 1
     copy_tags: tuple = ()
     mesh_deflection: tuple | None = None
+    mesh: TriangleMesh | None = None
 
 
 def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]:
@@ -113,6 +117,7 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
     for part in (p for p in solids.parts if p.kind == "rod"):
         e = part.members[0]
         s = part.solids[0]
+        (mesh,) = _meshes(part, solids.deflection)
         k = int(solids.rod_balls[e]) if solids.rod_balls else 0
         if arcs[e] is None:
             centres = np.column_stack([ball_positions(hw, float(plan.lengths[e]), k), np.zeros((k, 2))])
@@ -129,28 +134,36 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
             socket_centers=centres if k else np.zeros((0, 3)),
             socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0,
             copies=part.count, copy_tags=tuple(f"{i:03d}" for i in part.members),
-            mesh_deflection=tuple(solids.deflection)))
+            mesh_deflection=tuple(solids.deflection), mesh=mesh))
     for part in (p for p in solids.parts if p.kind == "hub"):
         whole = len(part.solids) == 1
-        for s, matrix in zip(part.solids, part.print_matrices):
+        for s, matrix, mesh in zip(part.solids, part.print_matrices, _meshes(part, solids.deflection)):
             parts.append(NetPrintPart(
                 len(solids.rods) + len(parts), s, float(s.volume), np.asarray(matrix, float), s.label, "hubs",
                 print_note=("a sphere: support from the bed" if whole else ""),
                 print_settings=dict(ROD_SETTINGS) if whole else {},
                 copies=part.count, copy_tags=tuple(f"hub {i:03d}" for i in part.members),
-                mesh_deflection=tuple(solids.deflection)))
+                mesh_deflection=tuple(solids.deflection), mesh=mesh))
     return parts
 
 
+def _meshes(part, deflection) -> list:
+    """Each of a part's printed solids' mesh, read from the STL its task wrote (None where it
+    has none: meshed again from the solid)."""
+    return [read_stl(files[".stl"], float(deflection[0])) if ".stl" in files else None
+            for files in (part.files or [{} for _ in part.solids])]
+
+
 def write_net_print_files(check, solids, outdir: str | Path, *, printer=None, profile=None,
-                          ball_name: str = "") -> list[str]:
+                          ball_name: str = "", progress=None) -> list[str]:
     """print.3mf (and print-2.3mf, ...), rods/rod-NNN.3mf and hubs/<part>.3mf of a built net
-    (:func:`rodcad.cad.printfile.write_print_files`).
+    (:func:`rodcad.cad.printfile.write_print_files`; ``progress(done, total)`` hears each
+    file written).
 
     Returns:
         The files written, relative to ``outdir``.
     """
     outdir = Path(outdir)
     parts = net_print_parts(check, solids, ball_name=ball_name)
-    paths = write_print_files(parts, outdir, printer=printer, profile=profile)
+    paths = write_print_files(parts, outdir, printer=printer, profile=profile, progress=progress)
     return [str(Path(p).relative_to(outdir)) for p in paths]

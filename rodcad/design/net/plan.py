@@ -100,13 +100,19 @@ class NetPlan:
     @property
     def swing_limits(self) -> np.ndarray:
         """(m,) how far each rod may turn in its sockets (deg): a bent rod's tilted end face
-        comes nearer the hub (:func:`rodcad.catalog.net.bend.bent_swing_deg`)."""
+        comes nearer the hub (:func:`rodcad.catalog.net.bend.bent_swing_deg`). Each hub size's
+        own swing (a bisection) is found once, not once per rod end."""
+        sizes: dict[float | None, tuple[NodeHardware, float]] = {}
         out = []
         for e, a in enumerate(self.arcs):
             lim = np.inf
             for k in self.target.edges[e]:
-                hw = self.hub(int(k))
-                lim = min(lim, hw.swing_deg if a is None else min(hw.swing_deg, bent_swing_deg(hw, a)))
+                size = None if self.node_pivot is None else float(self.node_pivot[k])  # what hub(k) depends on
+                if size not in sizes:
+                    hw = self.hub(int(k))
+                    sizes[size] = (hw, hw.swing_deg)
+                hw, swing = sizes[size]
+                lim = min(lim, swing if a is None else min(swing, bent_swing_deg(hw, a)))
             out.append(lim)
         return np.array(out, float)
 

@@ -167,7 +167,7 @@ def test_a_tight_angle_gets_a_larger_hub_whose_sockets_hold(cat):
         plan_net(_pair(15.0), cat)
 
 
-def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_names_what_would(cat):
+def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_is_collapsed_into_one_hub(cat):
     x = np.array([[0.0, 0, 0], [50, 0, -30], [83, 0, -30], [133, 0, 0], [50, 40, -60], [83, 40, -60]])
     t = NetTarget("nodes", x, np.array([[0, 1], [1, 2], [2, 3], [1, 4], [2, 5]]), np.array([0, 3, 4, 5]))
     plan = plan_net(t, cat)  # 33 mm between nodes 1 and 2: 18 mm with nominal hubs, under 20 mm
@@ -177,8 +177,14 @@ def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_names_what_would(cat)
     assert plan.hub(1).problems() == []
     pos = x.copy()
     pos[2:, 0] -= 10.0  # 23 mm apart: the rod's ends alone take 17.4 mm, the smallest hubs 10.6
-    with pytest.raises(DesignLimit, match="ball ends alone take 17.4 mm"):
-        plan_net(NetTarget("nodes", pos, t.edges, t.anchored), cat)
+    pos[4, 0] -= 20.0  # (and the rods to the anchors below 40 deg apart, which the largest hub holds)
+    short = plan_net(NetTarget("nodes", pos, t.edges, t.anchored), cat)
+    # no rod can be that short: nodes 1 and 2 are one hub on the drawn edge between them
+    (c,) = short.collapsed
+    assert c.drawn == (1, 2) and np.allclose(c.point, 0.5 * (pos[1] + pos[2])) and c.moved_mm == pytest.approx(11.5)
+    assert short.target.n == 5 and short.target.m == 4 and np.all(short.lengths >= short.length_range[0] - 1e-9)
+    nodes, points = short.target.fit_pairs
+    assert np.allclose(points[nodes == c.node], c.point)  # measured against its point on the drawing
 
 
 def test_hubs_of_their_own_size_are_built_in_cad(cat):

@@ -12,12 +12,15 @@ moves the pivots (the hubs' sockets, :mod:`rodcad.design.net.hubs`) and updates 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
 from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
+from rodcad.design.net.collapse import (MAX_ROUNDS, added_anchors, anchor_pairs, collapse_short, collapses,
+                                       join_anchor_pairs, tight_triangles)
 from rodcad.design.net.joints import hang_joints, merge_close, pieces, split_long
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
@@ -47,7 +50,13 @@ class NetPlan:
             (:meth:`rod_com` of the masses designed last; straight rods at mid-length).
         node_pivot: (n,) each node's hub's pivot radius (mm; the catalog's hub family,
             :meth:`hub`), or None: the catalog's one size.
-        merged: groups of drawn nodes merged into one hub (:mod:`rodcad.design.net.joints`).
+        merged: groups of drawn nodes nearly on top of each other merged into one hub
+            (:func:`rodcad.design.net.joints.merge_close`).
+        collapsed: the hubs short edges collapsed into (:mod:`rodcad.design.net.collapse`).
+        between_anchors: rods a collapse left out because they joined two anchors.
+        added_anchors: anchor points added midway between two drawn anchors, (node, (a, b)),
+            where two rods to them met tighter than the largest hub allows
+            (:func:`rodcad.design.net.collapse.join_anchor_pairs`).
     """
 
     target: NetTarget
@@ -64,6 +73,9 @@ class NetPlan:
     com: np.ndarray | None = None
     node_pivot: np.ndarray | None = None
     merged: list = field(default_factory=list)
+    collapsed: list = field(default_factory=list)
+    between_anchors: int = 0
+    added_anchors: list = field(default_factory=list)
 
     def hub(self, k: int) -> NodeHardware:
         """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`)."""
@@ -152,8 +164,10 @@ def length_range(catalog) -> tuple[float, float]:
 def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang: bool = False,
              g: float = 9.81) -> NetPlan:
     """Hardware, lengths, mass bounds and hub masses for a net's target, the drawn net made
-    buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.sizing`): nodes
-    nearly on top of each other merged into one hub, edges longer than the longest rod cut
+    buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.collapse`,
+    :mod:`rodcad.design.net.sizing`): nodes nearly on top of each other merged into one hub,
+    edges shorter than the shortest rod between the smallest hubs collapsed (their two nodes
+    one hub on the drawn surface or edges), edges longer than the longest rod cut
     into rods in line joined by two-rod joints, and every node given the hub of the
     catalog's family its rods fit.
 
@@ -182,11 +196,15 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     t = target
     if hw.is_hub:
         t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
+    t, between = _collapsed(t, hw, lo_hw, hi)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
+    rp_base = size_hubs(base, hw, lo_hw, hi)[0]
     for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
-        t, parent = split_long(base, counts)
+        # (the first and last joints set in by how much larger their end hubs are than a joint's)
+        t, parent = split_long(base, counts, rp_base[base.edges] - rp_min)
         node_pivot, problems = size_hubs(t, hw, lo_hw, hi)
+        rp_base = node_pivot[: base.n]
         lengths = _lengths(t, node_pivot)
         long = np.flatnonzero(lengths > hi * (1 + 1e-9))
         if not long.size:
@@ -208,7 +226,40 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         t = _hung(t, base, parent, counts, hw, node_pivot, g)
     plan = _plan(t, hw, node_pivot, (lo_hw, hi))
     plan.merged = merged
+    plan.collapsed = collapses(base, merged)
+    plan.between_anchors = between
+    plan.added_anchors = added_anchors(base)
     return plan
+
+
+def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -> tuple[NetTarget, int]:
+    """The net with every edge shorter than the shortest rod between the smallest hubs its
+    nodes' angles allow collapsed (:mod:`rodcad.design.net.collapse`), and every thin
+    triangle whose rods meet tighter than the largest hub allows, round by round until none
+    is left. Returns (the net, rods left out between two anchors)."""
+    from rodcad.design.net.sizing import size_hubs
+
+    between = 0
+    for _ in range(MAX_ROUNDS):
+        rp, _ = size_hubs(t, hw, shortest, longest)
+        d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+        short = np.flatnonzero(d - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
+        least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0
+        if hw.is_hub:  # (a thin triangle whose rods meet tighter than the largest hub allows)
+            short = np.union1d(short, tight_triangles(t, least))
+        if not short.size:
+            pairs = anchor_pairs(t, least) if hw.is_hub else []
+            if not pairs:
+                break
+            t = join_anchor_pairs(t, pairs)
+            continue
+        t, dropped = collapse_short(t, short)
+        between += dropped
+        if t.m == 0 or t.anchored_mask.all():
+            raise DesignLimit("every drawn edge is shorter than the shortest rod between the smallest hubs "
+                              f"({shortest:g} mm pivot to pivot): collapsed, nothing is left to hang; draw the net "
+                              "larger, or with fewer cells")
+    return t, between
 
 
 def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:
@@ -344,8 +395,8 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     for k in range(t.n):
         node_masses[k], node_com[k] = plan.hub(k).hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
     bounds = rod_bounds(plan, lengths, rods)
-    return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,
-                   plan.segment, node_pivot=plan.node_pivot, merged=plan.merged)
+    return dataclasses.replace(plan, pivots=pivots, lengths=lengths, rods=rods, bounds=bounds,
+                               node_masses=node_masses, node_com=node_com, com=None)
 
 
 def rod_bounds(plan: NetPlan, lengths: np.ndarray, rods: list[NetRodNumbers] | None = None) -> np.ndarray:

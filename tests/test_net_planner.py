@@ -163,8 +163,16 @@ def test_a_tight_angle_gets_a_larger_hub_whose_sockets_hold(cat):
     assert chord >= 2 * big.socket_radius + big.min_wall - 1e-9
     # the anchors' ends keep the nominal hub where their rods fit it
     assert np.allclose(plan.node_pivot[1:], hw.pivot_radius)
+    # 15 deg to two anchors: one rod to a point midway between them (the planner's, named)
+    joined = plan_net(_pair(15.0), cat)
+    assert joined.added_anchors == [(4, (1, 2))] and np.unique(joined.target.source).size == 2
+    assert np.allclose(joined.target.positions[4], _pair(15.0).positions[1:3].mean(axis=0))
+    # 15 deg between rods to two free nodes (each hung from its own anchor): no hub holds them
+    t = _pair(15.0)
+    x = np.vstack([t.positions, t.positions[1:3] + [0.0, 0.0, 100.0]])
+    free = NetTarget("nodes", x, np.array([[0, 1], [0, 2], [0, 3], [1, 4], [2, 5]]), np.array([3, 4, 5]))
     with pytest.raises(DesignLimit, match=r"pivot radius .* mm \(diameter .* node\.pivot_radius\.max"):
-        plan_net(_pair(15.0), cat)
+        plan_net(free, cat)
 
 
 def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_is_collapsed_into_one_hub(cat):

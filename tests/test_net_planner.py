@@ -126,6 +126,30 @@ def test_drawn_edges_get_joints_at_their_funicular_sag_and_the_fit_counts_it(cat
 # --------------------------------------------------------------------------- the hub family
 
 
+def test_a_slack_diagonal_whose_joint_cannot_hang_is_one_rod_between_larger_hubs():
+    """A strip's end diagonals (78 mm) barely pull: a two-rod joint on them cannot hang on the
+    drawn edge. One rod between hubs of the family made larger (each taking half of what the edge
+    is longer than the longest rod) holds them straight, and the net hangs exact."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_net_collapse import _strip
+
+    d = load_design("s.yaml", text=_strip(55.0, 220.0, 4, 40.0))
+    check = design_drawn_net(d.net, d.catalog, seed=0)
+    plan, t = check.plan, check.plan.target
+    assert check.ok and check.rel_size < 1e-9
+    assert t.joints is None or not len(t.joints)  # no two-rod joint left
+    hi = plan.length_range[1]
+    src = t.source if t.source is not None else np.arange(t.m)
+    for e in (2, 14):  # the end diagonals, from an anchor: one rod each
+        (rod,) = np.flatnonzero(src == e)
+        i, j = t.edges[rod]
+        drawn = float(np.linalg.norm(t.positions[j] - t.positions[i]))
+        assert drawn > hi + 2 * d.catalog.node.pivot_radius  # (too long for one rod between nominal hubs)
+        rp = plan.node_pivot[[i, j]]
+        assert np.all(rp >= (drawn - hi) / 2 - 1e-9) and np.all(rp <= d.catalog.node.pivot_limits[1] + 1e-9)
+    assert any("one rod each, between hubs of the family made larger" in n for n in check.notes)
+
+
 def test_the_default_catalog_has_a_hub_family_and_bad_ranges_are_refused_at_their_key():
     text = (default_catalog_dir() / "pla-parametric.yaml").read_text()
     hw = catalog_from_text(text, "c.yaml").node

@@ -162,7 +162,7 @@ def length_range(catalog) -> tuple[float, float]:
 
 
 def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang: bool = False,
-             g: float = 9.81) -> NetPlan:
+             g: float = 9.81, whole: frozenset[int] = frozenset()) -> NetPlan:
     """Hardware, lengths, mass bounds and hub masses for a net's target, the drawn net made
     buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.collapse`,
     :mod:`rodcad.design.net.sizing`): nodes nearly on top of each other merged into one hub,
@@ -179,6 +179,9 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
             joints.hang_joints`, from the statics of the net as drawn) instead of on the target
             surface (a generated net) or the edge.
         g: gravity (for ``hang``).
+        whole: drawn edges to be one rod each, not rods in line, their end hubs made larger
+            (within the family) to take what the rod cannot (:func:`_whole_floor`); where the
+            family's largest hubs do not, they are cut into rods in line as the others.
 
     Raises:
         DesignLimit: what no hardware in the catalog can do (every such rod and node named,
@@ -199,17 +202,22 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     t, between = _collapsed(t, hw, lo_hw, hi)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
-    rp_base = size_hubs(base, hw, lo_hw, hi)[0]
+    one, floor = _whole_floor(base, hw, hi, whole)
+    counts[one] = 1
+    rp_base = size_hubs(base, hw, lo_hw, hi, floor)[0]
     for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
         # (the first and last joints set in by how much larger their end hubs are than a joint's)
         t, parent = split_long(base, counts, rp_base[base.edges] - rp_min)
-        node_pivot, problems = size_hubs(t, hw, lo_hw, hi)
+        node_pivot, problems = size_hubs(t, hw, lo_hw, hi, np.concatenate([floor, np.zeros(t.n - base.n)]))
         rp_base = node_pivot[: base.n]
         lengths = _lengths(t, node_pivot)
         long = np.flatnonzero(lengths > hi * (1 + 1e-9))
         if not long.size:
             break
         grow = np.unique(parent[long])
+        if one[grow].any():  # pragma: no cover - (_whole_floor makes them fit)
+            raise DesignLimit(f"drawn edges {sorted(set(grow[one[grow]].tolist()))} stay longer than the longest rod "
+                              "with the family's largest hubs")
         counts[grow] = np.maximum(counts[grow] + 1, [_first_count(base, e, node_pivot, rp_min, hi) for e in grow])
     bends = t.bends
     if np.any(bends > 0):
@@ -260,6 +268,26 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
                               f"({shortest:g} mm pivot to pivot): collapsed, nothing is left to hang; draw the net "
                               "larger, or with fewer cells")
     return t, between
+
+
+def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int]
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of ``base`` on the drawn edges ``whole`` that one rod between larger hubs of
+    the family spans (node to node at most the longest rod plus two of the largest pivot
+    radii), and (n,) the least pivot radius each node then needs: half of what the edge is
+    longer than the longest rod, at each end (mm)."""
+    one = np.zeros(base.m, dtype=bool)
+    floor = np.zeros(base.n)
+    if not whole or not hw.is_hub:
+        return one, floor
+    src = base.source if base.source is not None else np.arange(base.m)
+    d = np.linalg.norm(base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]], axis=1)
+    half = (d - 0.97 * longest) / 2  # (the margin _first_count keeps: the sockets turned lengthen rods)
+    one = np.isin(src, sorted(whole)) & (half <= hw.pivot_limits[1])
+    for e in np.flatnonzero(one):
+        for k in base.edges[e]:
+            floor[k] = max(floor[k], half[e])
+    return one, floor
 
 
 def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:

@@ -4,8 +4,10 @@
 rod's pivot ``pivot_radius`` from the hub's centre along the rod's target direction; a point
 node: the node itself), gives every rod its pivot-to-pivot length and its mass bounds
 (:meth:`rodcad.catalog.net.node.NodeHardware.rod_numbers`) and every node its hub's mass and
-centre of mass, and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) rods the catalog
-cannot print and nodes whose rods meet closer than the hub's sockets allow. :func:`replan`
+centre of mass, after making the drawn net buildable (short edges collapsed:
+:mod:`rodcad.design.net.collapse`; long ones cut into rods in line: :mod:`rodcad.design.net.joints`),
+and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) what is left that no hardware can do
+(nodes whose rods meet closer than the largest hub's sockets allow). :func:`replan`
 moves the pivots (the hubs' sockets, :mod:`rodcad.design.net.hubs`) and updates the rest;
 :func:`mass_segments` are the masses a rod can be built at.
 """

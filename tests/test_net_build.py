@@ -18,7 +18,6 @@ from rodcad.design.loader import load_design
 from rodcad.design.net.target import NetTarget
 from rodcad.design.net.check import design_net_plan
 from rodcad.design.net.plan import plan_net
-from rodcad.errors import DesignLimit
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
@@ -170,14 +169,16 @@ def test_a_grid_hung_from_its_corners_cannot_hang_in_a_surface_over_a_rectangle(
     assert check.equilibrium.stable and 0.01 < check.rel_size < 0.2
 
 
-def test_rods_the_catalog_cannot_print_are_a_design_limit(point_catalog):
-    t = NetTarget("nodes", np.array([[0.0, 0, 0], [70, 0, -10], [140, 0, 0], [70, 15, -20]]),
-                  np.array([[0, 1], [1, 2], [1, 3]]), np.array([0, 2]))
-    # (a rod longer than the catalog prints is cut into rods in line: tests/test_net_planner.py)
-    with pytest.raises(DesignLimit, match=r"1 rod\(s\) would be shorter than the 20 mm .* rod 2 .* 18 mm apart"):
-        plan_net(t, point_catalog)
-    with pytest.raises(DesignLimit, match=r"shorter than the 20 mm"):
-        plan_net(t, load_catalog("pla-parametric"))  # 15 mm between nodes 1 and 3 (less the hubs)
+def test_rods_shorter_than_the_catalog_prints_are_collapsed(point_catalog):
+    x = np.array([[0.0, 0, 0], [70, 0, -10], [140, 0, 0], [70, 15, -20]])
+    t = NetTarget("nodes", x, np.array([[0, 1], [1, 2], [1, 3]]), np.array([0, 2]))
+    # (a rod longer than the catalog prints is cut into rods in line: tests/test_net_planner.py; a short
+    # one collapsed, its two nodes one node on the drawn edge: tests/test_net_collapse.py)
+    for cat in (point_catalog, load_catalog("pla-parametric")):  # 18 mm between nodes 1 and 3 (less the hubs)
+        plan = plan_net(t, cat)
+        (c,) = plan.collapsed
+        assert c.drawn == (1, 3) and np.allclose(c.point, 0.5 * (x[1] + x[3]))
+        assert np.unique(plan.target.source).size == 2 and np.all(plan.lengths >= plan.length_range[0] - 1e-9)
 
 
 # --------------------------------------------------------------------------- the command

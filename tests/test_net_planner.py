@@ -126,6 +126,30 @@ def test_drawn_edges_get_joints_at_their_funicular_sag_and_the_fit_counts_it(cat
 # --------------------------------------------------------------------------- the hub family
 
 
+def test_a_slack_diagonal_whose_joint_cannot_hang_is_one_rod_between_larger_hubs():
+    """A strip's end diagonals (78 mm) barely pull: a two-rod joint on them cannot hang on the
+    drawn edge. One rod between hubs of the family made larger (each taking half of what the edge
+    is longer than the longest rod) holds them straight, and the net hangs exact."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_net_collapse import _strip
+
+    d = load_design("s.yaml", text=_strip(55.0, 220.0, 4, 40.0))
+    check = design_drawn_net(d.net, d.catalog, seed=0)
+    plan, t = check.plan, check.plan.target
+    assert check.ok and check.rel_size < 1e-9
+    assert t.joints is None or not len(t.joints)  # no two-rod joint left
+    hi = plan.length_range[1]
+    src = t.source if t.source is not None else np.arange(t.m)
+    for e in (2, 14):  # the end diagonals, from an anchor: one rod each
+        (rod,) = np.flatnonzero(src == e)
+        i, j = t.edges[rod]
+        drawn = float(np.linalg.norm(t.positions[j] - t.positions[i]))
+        assert drawn > hi + 2 * d.catalog.node.pivot_radius  # (too long for one rod between nominal hubs)
+        rp = plan.node_pivot[[i, j]]
+        assert np.all(rp >= (drawn - hi) / 2 - 1e-9) and np.all(rp <= d.catalog.node.pivot_limits[1] + 1e-9)
+    assert any("one rod each, between hubs of the family made larger" in n for n in check.notes)
+
+
 def test_the_default_catalog_has_a_hub_family_and_bad_ranges_are_refused_at_their_key():
     text = (default_catalog_dir() / "pla-parametric.yaml").read_text()
     hw = catalog_from_text(text, "c.yaml").node
@@ -163,11 +187,19 @@ def test_a_tight_angle_gets_a_larger_hub_whose_sockets_hold(cat):
     assert chord >= 2 * big.socket_radius + big.min_wall - 1e-9
     # the anchors' ends keep the nominal hub where their rods fit it
     assert np.allclose(plan.node_pivot[1:], hw.pivot_radius)
+    # 15 deg to two anchors: one rod to a point midway between them (the planner's, named)
+    joined = plan_net(_pair(15.0), cat)
+    assert joined.added_anchors == [(4, (1, 2))] and np.unique(joined.target.source).size == 2
+    assert np.allclose(joined.target.positions[4], _pair(15.0).positions[1:3].mean(axis=0))
+    # 15 deg between rods to two free nodes (each hung from its own anchor): no hub holds them
+    t = _pair(15.0)
+    x = np.vstack([t.positions, t.positions[1:3] + [0.0, 0.0, 100.0]])
+    free = NetTarget("nodes", x, np.array([[0, 1], [0, 2], [0, 3], [1, 4], [2, 5]]), np.array([3, 4, 5]))
     with pytest.raises(DesignLimit, match=r"pivot radius .* mm \(diameter .* node\.pivot_radius\.max"):
-        plan_net(_pair(15.0), cat)
+        plan_net(free, cat)
 
 
-def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_names_what_would(cat):
+def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_is_collapsed_into_one_hub(cat):
     x = np.array([[0.0, 0, 0], [50, 0, -30], [83, 0, -30], [133, 0, 0], [50, 40, -60], [83, 40, -60]])
     t = NetTarget("nodes", x, np.array([[0, 1], [1, 2], [2, 3], [1, 4], [2, 5]]), np.array([0, 3, 4, 5]))
     plan = plan_net(t, cat)  # 33 mm between nodes 1 and 2: 18 mm with nominal hubs, under 20 mm
@@ -177,8 +209,14 @@ def test_a_short_edge_gets_smaller_hubs_and_a_hopeless_one_names_what_would(cat)
     assert plan.hub(1).problems() == []
     pos = x.copy()
     pos[2:, 0] -= 10.0  # 23 mm apart: the rod's ends alone take 17.4 mm, the smallest hubs 10.6
-    with pytest.raises(DesignLimit, match="ball ends alone take 17.4 mm"):
-        plan_net(NetTarget("nodes", pos, t.edges, t.anchored), cat)
+    pos[4, 0] -= 20.0  # (and the rods to the anchors below 40 deg apart, which the largest hub holds)
+    short = plan_net(NetTarget("nodes", pos, t.edges, t.anchored), cat)
+    # no rod can be that short: nodes 1 and 2 are one hub on the drawn edge between them
+    (c,) = short.collapsed
+    assert c.drawn == (1, 2) and np.allclose(c.point, 0.5 * (pos[1] + pos[2])) and c.moved_mm == pytest.approx(11.5)
+    assert short.target.n == 5 and short.target.m == 4 and np.all(short.lengths >= short.length_range[0] - 1e-9)
+    nodes, points = short.target.fit_pairs
+    assert np.allclose(points[nodes == c.node], c.point)  # measured against its point on the drawing
 
 
 def test_hubs_of_their_own_size_are_built_in_cad(cat):
@@ -299,10 +337,11 @@ def test_a_sample_of_the_drawn_net_family_is_designed_or_refused_naming_what_wou
     assert sum(o.code == 0 for o in outs) >= 2  # (a grid over a bowl and one over a cosine bowl: exact)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 33's bars of at most 10 % exit 1 and none refused for an edge out of "
-                   "the rod window are not met: 3 of these 5 exit 1 (an inner ring of 12 mm edges, shorter than any "
-                   "rod between two hubs; two nets whose two-rod joints cannot hang within the tolerance, which a "
-                   "rigid in-line splice would hold); the full family's figures are in benchmarks/RESULTS.md")
+@pytest.mark.xfail(strict=True, reason="issue 33's bar of at most 10 % exit 1 is not met: 2 of these 5 exit 1 (a "
+                   "strip and a Delaunay mesh, 2 % and 1.8 % off, whose two-rod joints cannot hang within the "
+                   "tolerance even after the planner's retry with one rod between larger hubs: a rigid in-line "
+                   "splice would hold them, not built); none is refused for an edge out of the rod window any more (short edges are collapsed); "
+                   "the full family's figures are in benchmarks/RESULTS.md")
 def test_at_most_a_tenth_of_the_drawn_net_family_sample_exits_1(family_sample):
     net_family, outs = family_sample
     assert sum(o.code == 1 for o in outs) <= 0.1 * len(outs)

@@ -5,7 +5,12 @@ plan_net`), where the design's masses can kink the rods to it; a net given by it
 (explicit nodes, a mesh) has no surface between its nodes, and a joint on a straight edge
 cannot hang (:mod:`rodcad.design.net.joints`): its joints go to the funicular sag below the
 edge. Where the surface's joints leave the net off its tolerance, the funicular sag is
-designed too and the better fit kept.
+designed too and the better fit kept. Where two-rod joints still cannot hang within the
+tolerance (their edge barely pulls, or the net is too light to kink it), their drawn edges are
+planned again as one rod each between hubs of the family made larger, each taking half of what
+the edge is longer than the longest rod (:func:`rodcad.design.net.plan.plan_net`'s ``whole``),
+where the family's largest hubs reach, and the better design kept; beyond that reach only a
+rigid in-line splice would hold them (not in the catalog), and the refusal says so.
 """
 
 from __future__ import annotations
@@ -15,8 +20,9 @@ import numpy as np
 from rodcad.design.net.check import NetCheck, design_net_plan
 from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
+from rodcad.errors import DesignLimit
 
-__all__ = ["design_drawn_net", "slack_joints"]
+__all__ = ["design_drawn_net", "slack_joints", "weak_edges"]
 
 
 def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int = 0,
@@ -41,6 +47,23 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
         if _rank(other) > _rank(check):
             other.notes.append("The two-rod joints hang at the funicular sag below their chords: on the target "
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
+            check = other
+    tried: frozenset[int] = frozenset()
+    for _ in range(2):  # joints that cannot hang: their edges one rod between larger hubs, where the family's do
+        weak = frozenset(weak_edges(check)) | tried
+        if check.ok or weak == tried:
+            break
+        tried = weak
+        try:
+            plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak)
+        except DesignLimit:
+            break
+        other = design_net_plan(plan, **kw)
+        if _rank(other) > _rank(check):
+            other.notes.append(f"The two-rod joints on drawn edge(s) {sorted(weak)[:8]} could not hang on the target "
+                               f"within the tolerance (the net hung {100 * check.rel_size:.3g} % of its size off it): "
+                               "those edges are one rod each, between hubs of the family made larger to take what "
+                               "the rod cannot.")
             check = other
     if not check.ok:
         why = slack_joints(check)
@@ -68,22 +91,38 @@ def _rank(check: NetCheck) -> tuple:
     return (check.ok, bool(eq.success and eq.stable), -check.rel_size)
 
 
+def _weak(check: NetCheck) -> np.ndarray:
+    """(m,) the rods on two-rod joints that hang off the tolerance or pull slack (module
+    docstring), none where the net has no joints or no equilibrium."""
+    from rodcad.design.net.check import SLACK
+
+    t = check.plan.target
+    T = check.equilibrium.tensions
+    if t.joints is None or not len(t.joints) or not np.all(np.isfinite(T)):
+        return np.zeros(t.m, dtype=bool)
+    jm = t.joint_mask
+    far = jm & (check.node_error > check.tolerance * t.size)  # joints that hang off the tolerance
+    if not check.equilibrium.stable:  # joints in line with their rods balance only inverted
+        far |= _in_line(t)
+    return far[t.edges].any(axis=1) | (jm[t.edges].any(axis=1) & (T <= SLACK * float(np.max(np.abs(T), initial=0.0))))
+
+
+def weak_edges(check: NetCheck) -> list[int]:
+    """The drawn edges whose two-rod joints cannot hang on the target within the tolerance."""
+    t = check.plan.target
+    src = t.source if t.source is not None else np.arange(t.m)
+    return sorted({int(x) for x in src[_weak(check)]})
+
+
 def slack_joints(check: NetCheck) -> str:
     """Where two-rod joints cannot hang (their rods slack or pushing at the design), in words with
     the hardware that would hold them: a rod as long as the edge, or a rigid in-line splice."""
-    from rodcad.design.net.check import SLACK
-
     plan = check.plan
     t = plan.target
     T = check.equilibrium.tensions
     if t.joints is None or not len(t.joints) or not np.all(np.isfinite(T)):
         return ""
-    jm = t.joint_mask
-    far = jm & (check.node_error > check.tolerance * t.size)  # joints that hang off the tolerance
-    if not check.equilibrium.stable:  # joints in line with their rods balance only inverted
-        far |= _in_line(t)
-    on_joint = far[t.edges].any(axis=1) | (jm[t.edges].any(axis=1) & (T <= SLACK * float(np.max(np.abs(T), initial=0.0))))
-    weak = on_joint
+    weak = _weak(check)
     if not weak.any():
         return ""
     share = float(np.max(T[weak])) / float(np.max(np.abs(T), initial=1e-300))
@@ -91,7 +130,8 @@ def slack_joints(check: NetCheck) -> str:
     edges = sorted({int(x) for x in src[weak]})
     drawn = t.drawn if t.drawn is not None else t
     d = np.linalg.norm(drawn.positions[drawn.edges[edges, 1]] - drawn.positions[drawn.edges[edges, 0]], axis=1)
-    need = float(d.max() - 2 * plan.hardware.pivot_limits[0])
+    big = plan.hardware.pivot_limits[1]
+    need = float(d.max() - 2 * big)
     why = ("they lie in line with their rods (no kink below their chords: they balance only inverted, an "
            "unstable equilibrium)" if not check.equilibrium.stable else
            f"their rods pull with at most {100 * max(share, 0):.2g} % of the net's largest tension (a slack rung "
@@ -100,5 +140,6 @@ def slack_joints(check: NetCheck) -> str:
            f"{float(np.max(check.node_error[t.joint_mask])):.3g} mm below its chord")
     return (f"The two-rod joints on {len(edges)} drawn edge(s) ({edges[:8]}) cannot hang on the target within the "
             f"tolerance ({check.tolerance * t.size:.3g} mm): {why}; a ball joint between two rods carries its weight "
-            f"only by a kink below its chord. A rod of {need:.4g} mm (the rod family's length.max) or a rigid "
-            "in-line splice of the two rods (not in this catalog) would hold them.")
+            f"only by a kink below its chord. A rod of {need:.4g} mm between the family's largest hubs (pivot radius "
+            f"{big:g} mm; the rod family's length.max) or a rigid in-line splice of the rods (not in this catalog) "
+            "would hold them.")

@@ -4,6 +4,8 @@ narrowed to masses they can be built at (see :func:`orient_sockets`, :func:`buil
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from rodcad.design.net.plan import NetPlan, mass_segments, replan, rod_bounds
@@ -237,9 +239,7 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
                 moved += 1
         if not moved:
             break
-    return NetPlan(t, hw, plan.pivots, plan.lengths, plan.rods, best[0], plan.node_masses, plan.node_com,
-                   plan.length_range, plan.degree, np.array(best[1], int), plan.com, node_pivot=plan.node_pivot,
-                   merged=plan.merged), snapped
+    return dataclasses.replace(plan, bounds=best[0], segment=np.array(best[1], int)), snapped
 
 
 def _shares(masses: np.ndarray, g: float, u: np.ndarray, com, lengths: np.ndarray) -> np.ndarray:

@@ -44,7 +44,7 @@ import numpy as np
 
 from rodcad.design.net.target import NetTarget
 
-__all__ = ["MAX_SAG", "MERGE_SHARE", "SLACK", "drawn_target", "hang_joints", "merge_close", "pieces", "split_long"]
+__all__ = ["MAX_SAG", "MERGE_SHARE", "ReindexedSurface", "SLACK", "drawn_target", "hang_joints", "merge_close", "pieces", "split_long"]
 
 #: Nodes merge into one hub only where that moves each by at most this share of the
 #: tolerance (of the net's size).
@@ -53,6 +53,18 @@ MERGE_SHARE = 0.5
 SLACK = 1e-3
 #: A funicular sag deeper than this share of the edge is no small kink: the joints stay drawn.
 MAX_SAG = 0.25
+
+
+@dataclasses.dataclass(frozen=True)
+class ReindexedSurface:
+    """A surface z(x, y, near) whose ``near`` is a node of a net with nodes merged: passed on
+    as the node ``keep[near]`` of the net before (a radial net reads its angle near it)."""
+
+    surface: object
+    keep: np.ndarray
+
+    def __call__(self, x, y, near):
+        return self.surface(x, y, int(self.keep[near]))  # type: ignore[operator]
 
 
 def drawn_target(t: NetTarget) -> NetTarget:
@@ -103,6 +115,7 @@ def merge_close(t: NetTarget, shortest: float, tolerance: float) -> tuple[NetTar
     rods = np.flatnonzero(ok)[np.sort(first)]
     anchored = np.unique(new[t.anchored])
     out = dataclasses.replace(t, positions=positions, edges=e2[rods], anchored=anchored,
+                              surface=None if t.surface is None else ReindexedSurface(t.surface, keep),
                               rod_bends=None if t.rod_bends is None else t.rod_bends[rods],
                               fit_nodes=new.copy(), fit_points=pos.copy(), source=rods,
                               drawn=drawn_target(t))
@@ -115,11 +128,14 @@ def pieces(length: float, longest: float) -> int:
     return max(1, int(math.ceil(length / longest - 1e-9)))
 
 
-def split_long(t: NetTarget, counts: np.ndarray) -> tuple[NetTarget, np.ndarray]:
+def split_long(t: NetTarget, counts: np.ndarray, offsets: np.ndarray | None = None) -> tuple[NetTarget, np.ndarray]:
     """Each edge ``e`` cut into ``counts[e]`` rods in line joined by two-rod joints (module
     docstring): on the target surface under the chord for a generated net, on the edge
     otherwise. Rods keep their edge's index (its first piece) and bend; the other pieces
     follow at the end, in order; the fit measures each joint against where it was put.
+    ``offsets`` (m, 2): how much further (mm, along the chord) the first and the last joint
+    sit from the edge's two nodes than the pieces between joints are long (an end hub larger
+    than a joint's by that much leaves every rod of the edge as long; None: equal pieces).
     Returns (the target, (m,) the edge of ``t`` each rod lies on)."""
     counts = np.asarray(counts, int)
     if np.all(counts <= 1):
@@ -136,6 +152,11 @@ def split_long(t: NetTarget, counts: np.ndarray) -> tuple[NetTarget, np.ndarray]
         i, j = int(edges[e, 0]), int(edges[e, 1])
         k = int(counts[e])
         a = np.arange(1, k)[:, None] / k
+        if offsets is not None:
+            d = float(np.linalg.norm(pos[j] - pos[i]))
+            o = np.clip(offsets[e], 0.0, None)
+            if o.sum() < 0.5 * d:
+                a = (o[0] + a * (d - o.sum())) / d
         pts = pos[i] + a * (pos[j] - pos[i])
         if t.surface is not None:
             pts[:, 2] = np.asarray(t.surface(pts[:, 0], pts[:, 1], i), float) * np.ones(k - 1)

@@ -4,20 +4,25 @@
 rod's pivot ``pivot_radius`` from the hub's centre along the rod's target direction; a point
 node: the node itself), gives every rod its pivot-to-pivot length and its mass bounds
 (:meth:`rodcad.catalog.net.node.NodeHardware.rod_numbers`) and every node its hub's mass and
-centre of mass, and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) rods the catalog
-cannot print and nodes whose rods meet closer than the hub's sockets allow. :func:`replan`
+centre of mass, after making the drawn net buildable (short edges collapsed:
+:mod:`rodcad.design.net.collapse`; long ones cut into rods in line: :mod:`rodcad.design.net.joints`),
+and refuses (:class:`rodcad.errors.DesignLimit`, exit 1) what is left that no hardware can do
+(nodes whose rods meet closer than the largest hub's sockets allow). :func:`replan`
 moves the pivots (the hubs' sockets, :mod:`rodcad.design.net.hubs`) and updates the rest;
 :func:`mass_segments` are the masses a rod can be built at.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
 from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
+from rodcad.design.net.collapse import (MAX_ROUNDS, added_anchors, anchor_pairs, collapse_short, collapses,
+                                       join_anchor_pairs, tight_triangles)
 from rodcad.design.net.joints import hang_joints, merge_close, pieces, split_long
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
@@ -47,7 +52,13 @@ class NetPlan:
             (:meth:`rod_com` of the masses designed last; straight rods at mid-length).
         node_pivot: (n,) each node's hub's pivot radius (mm; the catalog's hub family,
             :meth:`hub`), or None: the catalog's one size.
-        merged: groups of drawn nodes merged into one hub (:mod:`rodcad.design.net.joints`).
+        merged: groups of drawn nodes nearly on top of each other merged into one hub
+            (:func:`rodcad.design.net.joints.merge_close`).
+        collapsed: the hubs short edges collapsed into (:mod:`rodcad.design.net.collapse`).
+        between_anchors: rods a collapse left out because they joined two anchors.
+        added_anchors: anchor points added midway between two drawn anchors, (node, (a, b)),
+            where two rods to them met tighter than the largest hub allows
+            (:func:`rodcad.design.net.collapse.join_anchor_pairs`).
     """
 
     target: NetTarget
@@ -64,6 +75,9 @@ class NetPlan:
     com: np.ndarray | None = None
     node_pivot: np.ndarray | None = None
     merged: list = field(default_factory=list)
+    collapsed: list = field(default_factory=list)
+    between_anchors: int = 0
+    added_anchors: list = field(default_factory=list)
 
     def hub(self, k: int) -> NodeHardware:
         """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`)."""
@@ -156,10 +170,12 @@ def length_range(catalog) -> tuple[float, float]:
 
 
 def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang: bool = False,
-             g: float = 9.81) -> NetPlan:
+             g: float = 9.81, whole: frozenset[int] = frozenset()) -> NetPlan:
     """Hardware, lengths, mass bounds and hub masses for a net's target, the drawn net made
-    buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.sizing`): nodes
-    nearly on top of each other merged into one hub, edges longer than the longest rod cut
+    buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.collapse`,
+    :mod:`rodcad.design.net.sizing`): nodes nearly on top of each other merged into one hub,
+    edges shorter than the shortest rod between the smallest hubs collapsed (their two nodes
+    one hub on the drawn surface or edges), edges longer than the longest rod cut
     into rods in line joined by two-rod joints, and every node given the hub of the
     catalog's family its rods fit.
 
@@ -171,6 +187,9 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
             joints.hang_joints`, from the statics of the net as drawn) instead of on the target
             surface (a generated net) or the edge.
         g: gravity (for ``hang``).
+        whole: drawn edges to be one rod each, not rods in line, their end hubs made larger
+            (within the family) to take what the rod cannot (:func:`_whole_floor`); where the
+            family's largest hubs do not, they are cut into rods in line as the others.
 
     Raises:
         DesignLimit: what no hardware in the catalog can do (every such rod and node named,
@@ -188,16 +207,25 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     t = target
     if hw.is_hub:
         t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
+    t, between = _collapsed(t, hw, lo_hw, hi)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
+    one, floor = _whole_floor(base, hw, hi, whole)
+    counts[one] = 1
+    rp_base = size_hubs(base, hw, lo_hw, hi, floor)[0]
     for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
-        t, parent = split_long(base, counts)
-        node_pivot, problems = size_hubs(t, hw, lo_hw, hi)
+        # (the first and last joints set in by how much larger their end hubs are than a joint's)
+        t, parent = split_long(base, counts, rp_base[base.edges] - rp_min)
+        node_pivot, problems = size_hubs(t, hw, lo_hw, hi, np.concatenate([floor, np.zeros(t.n - base.n)]))
+        rp_base = node_pivot[: base.n]
         lengths = _lengths(t, node_pivot)
         long = np.flatnonzero(lengths > hi * (1 + 1e-9))
         if not long.size:
             break
         grow = np.unique(parent[long])
+        if one[grow].any():  # pragma: no cover - (_whole_floor makes them fit)
+            raise DesignLimit(f"drawn edges {sorted(set(grow[one[grow]].tolist()))} stay longer than the longest rod "
+                              "with the family's largest hubs")
         counts[grow] = np.maximum(counts[grow] + 1, [_first_count(base, e, node_pivot, rp_min, hi) for e in grow])
     bends = t.bends
     if np.any(bends > 0):
@@ -214,7 +242,60 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         t = _hung(t, base, parent, counts, hw, node_pivot, g)
     plan = _plan(t, hw, node_pivot, (lo_hw, hi))
     plan.merged = merged
+    plan.collapsed = collapses(base, merged)
+    plan.between_anchors = between
+    plan.added_anchors = added_anchors(base)
     return plan
+
+
+def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -> tuple[NetTarget, int]:
+    """The net with every edge shorter than the shortest rod between the smallest hubs its
+    nodes' angles allow collapsed (:mod:`rodcad.design.net.collapse`), and every thin
+    triangle whose rods meet tighter than the largest hub allows, round by round until none
+    is left. Returns (the net, rods left out between two anchors)."""
+    from rodcad.design.net.sizing import size_hubs
+
+    between = 0
+    for _ in range(MAX_ROUNDS):
+        rp, _ = size_hubs(t, hw, shortest, longest)
+        d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+        short = np.flatnonzero(d - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
+        least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0
+        if hw.is_hub:  # (a thin triangle whose rods meet tighter than the largest hub allows)
+            short = np.union1d(short, tight_triangles(t, least))
+        if not short.size:
+            pairs = anchor_pairs(t, least) if hw.is_hub else []
+            if not pairs:
+                break
+            t = join_anchor_pairs(t, pairs)
+            continue
+        t, dropped = collapse_short(t, short)
+        between += dropped
+        if t.m == 0 or t.anchored_mask.all():
+            raise DesignLimit("every drawn edge is shorter than the shortest rod between the smallest hubs "
+                              f"({shortest:g} mm pivot to pivot): collapsed, nothing is left to hang; draw the net "
+                              "larger, or with fewer cells")
+    return t, between
+
+
+def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int]
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of ``base`` on the drawn edges ``whole`` that one rod between larger hubs of
+    the family spans (node to node at most the longest rod plus two of the largest pivot
+    radii), and (n,) the least pivot radius each node then needs: half of what the edge is
+    longer than the longest rod, at each end (mm)."""
+    one = np.zeros(base.m, dtype=bool)
+    floor = np.zeros(base.n)
+    if not whole or not hw.is_hub:
+        return one, floor
+    src = base.source if base.source is not None else np.arange(base.m)
+    d = np.linalg.norm(base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]], axis=1)
+    half = (d - 0.97 * longest) / 2  # (the margin _first_count keeps: the sockets turned lengthen rods)
+    one = np.isin(src, sorted(whole)) & (half <= hw.pivot_limits[1])
+    for e in np.flatnonzero(one):
+        for k in base.edges[e]:
+            floor[k] = max(floor[k], half[e])
+    return one, floor
 
 
 def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:
@@ -350,8 +431,8 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     for k in range(t.n):
         node_masses[k], node_com[k] = plan.hub(k).hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
     bounds = rod_bounds(plan, lengths, rods)
-    return NetPlan(t, hw, pivots, lengths, rods, bounds, node_masses, node_com, plan.length_range, plan.degree,
-                   plan.segment, node_pivot=plan.node_pivot, merged=plan.merged)
+    return dataclasses.replace(plan, pivots=pivots, lengths=lengths, rods=rods, bounds=bounds,
+                               node_masses=node_masses, node_com=node_com, com=None)
 
 
 def rod_bounds(plan: NetPlan, lengths: np.ndarray, rods: list[NetRodNumbers] | None = None) -> np.ndarray:

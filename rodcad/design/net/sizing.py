@@ -40,13 +40,16 @@ def least_angles(t: NetTarget) -> np.ndarray:
     return out
 
 
-def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -> tuple[np.ndarray, list[str]]:
+def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float,
+              floor: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
     """Each node's pivot radius and what no hub of the catalog can do.
 
     Args:
         t: the target (with the planner's joints).
         hw: the catalog's node hardware (a family or one size; a point node: every pivot 0).
         shortest, longest: the rods' pivot-to-pivot window (mm).
+        floor: (n,) the least pivot radius per node (mm; a long edge made one rod between
+            larger hubs), or None.
 
     Returns:
         (node pivot radii (n,) mm, problems in words: empty when every rod is printable and
@@ -62,6 +65,8 @@ def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -
     jm = t.joint_mask
     rp = np.where(jm, need, np.maximum(need, hw.pivot_radius))
     rp = np.minimum(rp, max(hi, lo))
+    if floor is not None:
+        rp = np.maximum(rp, floor)
     d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
     for _ in range(3):  # a short rod's nodes get the least hubs their angles allow
         short = d - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9)
@@ -69,6 +74,8 @@ def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -
             break
         ends = np.unique(t.edges[short])
         rp[ends] = np.minimum(rp[ends], np.minimum(need[ends], max(hi, lo)))
+        if floor is not None:
+            rp = np.maximum(rp, floor)
     problems = []
     tight = np.flatnonzero(need > hi * (1 + 1e-9))
     if tight.size:

@@ -55,6 +55,8 @@ class NetTarget:
         drawn: the target as drawn, before the planner (None: this is it).
         refine_edges: every edge cut into this many rods in line by the planner (``net.refine``
             of explicit nodes and edges).
+        node_of_drawn: (drawn n,) the node each drawn node became where the planner collapsed
+            short edges (:mod:`rodcad.design.net.collapse`), or None.
     """
 
     kind: str
@@ -74,6 +76,7 @@ class NetTarget:
     joints: np.ndarray | None = None
     drawn: Any = None
     refine_edges: int = 1
+    node_of_drawn: np.ndarray | None = None
 
     @property
     def fit_pairs(self) -> tuple[np.ndarray, np.ndarray]:
@@ -110,6 +113,8 @@ class NetTarget:
         """The net's size: the largest extent of its target along x, y or z (mm; as drawn,
         where the planner edited it)."""
         pts = self.positions if self.fit_points is None else self.fit_points
+        if self.drawn is not None:  # (nodes a collapse merged away count as drawn)
+            pts = np.vstack([pts, self.drawn.positions])
         return float(np.max(np.ptp(pts, axis=0)))
 
     @property

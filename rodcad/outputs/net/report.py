@@ -56,6 +56,29 @@ def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
     if pl.get("merged_nodes"):
         out.append(f"- {len(pl['merged_nodes'])} group(s) of drawn nodes too close for any hub were merged into one "
                    f"hub: {pl['merged_nodes'][:6]}; the fit counts each drawn node.")
+    col = pl.get("collapsed_edges") or []
+    if col:
+        drawn = sum(len(c["drawn_nodes"]) for c in col)
+        worst = max(col, key=lambda c: c["moved_mm"])
+        out.append(f"- {drawn} drawn nodes joined by edges shorter than the shortest rod between the smallest hubs "
+                   f"(or whose rods met tighter than the largest hub allows) are {len(col)} hub(s), "
+                   f"{sum(c['into_anchor'] for c in col)} of them an anchor that kept its place: "
+                   + "; ".join(f"nodes {c['drawn_nodes']} -> node {c['node']}" for c in col[:6])
+                   + (f"; ... ({len(col)} in all)" if len(col) > 6 else "")
+                   + f". Each hub is on the drawn surface or edges (at an anchor, the anchor), and the fit measures "
+                   f"it against that point; a drawn node is up to {worst['moved_mm']:.3g} mm from the hub that "
+                   f"replaces it (drawn nodes {worst['drawn_nodes']}). Rods that came to join the same two nodes "
+                   "are one rod.")
+    if pl.get("added_anchors"):
+        add = pl["added_anchors"]
+        out.append(f"- {len(add)} anchor point(s) added, each midway between two drawn anchors (on a generated net's "
+                   "surface): two rods from one hub to two anchors met tighter than the largest hub allows, and are "
+                   "one rod to the point between them: "
+                   + "; ".join(f"node {a['node']} between anchors {a['between_drawn_anchors']}" for a in add[:6])
+                   + ". The frame holds the net there too.")
+    if pl.get("rods_between_anchors_left_out"):
+        out.append(f"- {pl['rods_between_anchors_left_out']} rod(s) that would have joined two anchors are left out "
+                   "(the anchors hold both ends).")
     sizes = pl.get("hub_pivot_radii") or []
     if len(sizes) > 1:
         out.append(f"- Hubs of {len(sizes)} sizes from the catalog's family (pivot radius "

@@ -1,0 +1,116 @@
+"""Short edges collapsed (issue 33): a drawn edge shorter than the shortest rod between the
+smallest hubs is one hub on the drawing (rodcad.design.net.collapse), the default, and the fit
+measures the net against what was drawn.
+
+Truth: the drawn surface's own expression (the hubs on it, the simulated net's distance from
+it), the drawn strip's rungs (their midpoints), and MuJoCo (tests/mujoco_net.py, no rodcad
+code) for the collapsed net's equilibrium.
+"""
+
+from __future__ import annotations
+
+import json
+
+import mujoco_net
+import numpy as np
+import pytest
+
+from optimize import solve_net
+from rodcad.cli import main
+from rodcad.design.loader import load_design
+from rodcad.design.net.choose import design_drawn_net
+
+GRID = """design: 1
+name: fine
+net:
+  surface: {z: "0.004 * ((x - 75)**2 + (y - 60)**2) - 30", x: [0, 150], y: [0, 120], u: 6, v: 5}
+  anchored: boundary
+"""
+
+
+def _z(x, y):
+    return 0.004 * ((x - 75) ** 2 + (y - 60) ** 2) - 30
+
+
+def _strip(width: float, length: float = 300.0, bays: int = 6, sag: float = 60.0) -> str:
+    nodes, edges = [], []
+    for b in range(bays + 1):
+        x = length * b / bays
+        z = -sag * (1 - (2 * x / length - 1) ** 2)
+        nodes += [[x, 0.0, z], [x, width, z]]
+    for b in range(bays + 1):
+        p, q = 2 * b, 2 * b + 1
+        if 0 < b < bays:
+            edges.append([p, q])
+        if b < bays:
+            edges += [[p, p + 2], [q, q + 2], [p, q + 2]]
+    return (f"design: 1\nname: strip\nnet:\n  nodes: {nodes}\n  edges: {edges}\n"
+            f"  anchored: [0, 1, {2 * bays}, {2 * bays + 1}]\n")
+
+
+def test_a_grid_drawn_too_fine_is_collapsed_on_its_surface_and_measured_against_it():
+    d = load_design("fine.yaml", text=GRID)  # 25 x 24 mm cells: no rod between two hubs is that short
+    check = design_drawn_net(d.net, d.catalog, seed=0)
+    plan, t, eq = check.plan, check.plan.target, check.equilibrium
+    assert plan.collapsed and check.ok and check.rel_size <= 0.01
+    assert np.all(plan.lengths >= plan.length_range[0] - 1e-9)  # every rod buildable
+    drawn = d.net
+    # the anchors stay where they were drawn (or midway between two drawn ones, named)
+    added = {k for k, _ in plan.added_anchors}
+    for k in t.anchored:
+        if k in added:
+            pair = dict(plan.added_anchors)[k]
+            mid = drawn.positions[list(pair)].mean(axis=0)
+            assert np.allclose(t.positions[k], [mid[0], mid[1], _z(mid[0], mid[1])])  # (on the frame)
+        else:
+            assert np.min(np.linalg.norm(drawn.positions[drawn.anchored] - t.positions[k], axis=1)) < 1e-9
+    free = [c for c in plan.collapsed if not c.anchored]
+    assert free
+    for c in free:  # each free hub on the drawn surface, under its drawn nodes' centroid
+        x, y, z = c.point
+        assert z == pytest.approx(_z(x, y), abs=1e-9)
+        assert np.allclose([x, y], drawn.positions[list(c.drawn), :2].mean(axis=0))
+    # the fit is against the drawing: no simulated node is further from the surface than it says
+    # (measured independently: the vertical distance bounds the distance to the surface)
+    off = np.abs(eq.positions[:, 2] - _z(eq.positions[:, 0], eq.positions[:, 1]))
+    assert off.max() <= check.error_mm + 1e-9
+    for c in free:
+        assert check.node_error[c.node] == pytest.approx(np.linalg.norm(eq.positions[c.node] - c.point), abs=1e-12)
+    assert check.rel_size == pytest.approx(check.error_mm / drawn.size)  # (the size as drawn)
+
+
+def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(tmp_path):
+    text = _strip(28.0)  # rungs of 28 mm: no rod between two hubs
+    d = load_design("strip.yaml", text=text)
+    check = design_drawn_net(d.net, d.catalog, seed=0)
+    plan, t, eq = check.plan, check.plan.target, check.equilibrium
+    assert check.ok
+    x = d.net.positions
+    for b, c in enumerate(sorted(plan.collapsed, key=lambda c: c.drawn), start=1):
+        assert c.drawn == (2 * b, 2 * b + 1) and not c.anchored  # each rung's two nodes one hub ...
+        assert np.allclose(c.point, 0.5 * (x[2 * b] + x[2 * b + 1]))  # ... at its midpoint
+    assert len(plan.collapsed) == 5 and np.allclose(t.positions[t.anchored[:4]], x[[0, 1, 12, 13]])
+    # the V from the first and last hub to the two end anchors (12.5 deg, tighter than the largest hub
+    # allows) is one rod to a point midway between them
+    assert sorted(pair for _, pair in plan.added_anchors) == [(0, 1), (12, 13)]
+    for k, (a, b) in plan.added_anchors:
+        assert np.allclose(t.positions[k], 0.5 * (x[a] + x[b])) and t.anchored_mask[k]
+    # MuJoCo (no rodcad code) released from another shape of the same rods rests where rodcad's
+    # equilibrium is
+    kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots)
+    rng = np.random.default_rng(3)
+    start = solve_net(eq.positions, t.edges, plan.lengths, check.masses * rng.uniform(0.7, 1.3, t.m), t.anchored,
+                      node_rotations0=eq.rotations, **kw)
+    sim = mujoco_net.settle_net(start.positions, t.edges, plan.lengths, check.masses, t.anchored,
+                                rotations0=start.rotations, rod_y=rng.normal(size=(t.m, 3)), **kw)
+    assert sim["converged"] and sim["closure_error"] < 1e-6 * t.size
+    assert np.max(np.linalg.norm(sim["positions"] - eq.positions, axis=1)) < 1e-5 * t.size
+    # the report and design.json say which nodes were merged and why
+    (tmp_path / "strip.yaml").write_text(text)
+    assert main(["build", str(tmp_path / "strip.yaml"), "-o", str(tmp_path / "out"), "--no-cad"]) == 0
+    data = json.loads((tmp_path / "out" / "design.json").read_text())
+    col = data["planner"]["collapsed_edges"]
+    assert [c["drawn_nodes"] for c in col] == [[2 * b, 2 * b + 1] for b in range(1, 6)]
+    assert all(c["moved_mm"] == pytest.approx(14.0) for c in col)
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "shorter than the shortest rod between the smallest hubs" in report and "nodes [2, 3] -> node" in report

@@ -9,6 +9,8 @@ hub can be from both nodes it replaces, refinement against the surface's own exp
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 import sys
 from pathlib import Path
@@ -148,6 +150,22 @@ def test_a_slack_diagonal_whose_joint_cannot_hang_is_one_rod_between_larger_hubs
         rp = plan.node_pivot[[i, j]]
         assert np.all(rp >= (drawn - hi) / 2 - 1e-9) and np.all(rp <= d.catalog.node.pivot_limits[1] + 1e-9)
     assert any("one rod each, between hubs of the family made larger" in n for n in check.notes)
+
+
+def test_a_rod_the_turned_sockets_lengthen_past_the_catalog_is_not_a_design():
+    """The sockets turned at the equilibrium change each rod's pivot-to-pivot length: a design
+    whose rod leaves the lengths the catalog prints is not ok, and says which rod and what would."""
+    d = load_design("s.yaml", text="design: 1\nname: t\nnet:\n  nodes: [[0, 0, 0], [50, 0, 0], [25, 0, -30]]\n"
+                    "  edges: [[0, 2], [1, 2]]\n  anchored: [0, 1]\n")
+    check = design_drawn_net(d.net, d.catalog, seed=0)
+    assert check.ok and check.out_of_window.size == 0
+    lo, hi = check.plan.length_range
+    for wrong in (hi + 0.6, lo - 0.6):
+        lengths = check.plan.lengths.copy()
+        lengths[1] = wrong
+        bad = dataclasses.replace(check, plan=dataclasses.replace(check.plan, lengths=lengths))
+        assert not bad.ok and bad.out_of_window.tolist() == [1]
+        assert f"leave the {lo:g}-{hi:g} mm the catalog prints (rod 1: {wrong:.4g} mm)" in bad.limit()
 
 
 def test_the_default_catalog_has_a_hub_family_and_bad_ranges_are_refused_at_their_key():

@@ -32,6 +32,10 @@ __all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_p
 #: only where the first turning brought the statics this close (over the force scale).
 ORIENT_USEFUL = 1e-4
 
+#: A rod's pivot-to-pivot length may leave the catalog's window by this much (mm): round-off
+#: of the sockets' turning, far below a print's resolution.
+LENGTH_TOL = 1e-6
+
 #: The statics' masses are refined through the solver only where they hang further off
 #: their target than this share of its size.
 REFINE_ABOVE = 1e-6
@@ -131,9 +135,19 @@ class NetCheck:
         return bool(self.equilibrium.success and self.equilibrium.stable and self.rel_size <= self.tolerance)
 
     @property
+    def out_of_window(self) -> np.ndarray:
+        """Rods whose pivot-to-pivot length, with the hubs' sockets turned, left the lengths
+        the catalog prints (indices)."""
+        lo, hi = self.plan.length_range
+        L = np.asarray(self.plan.lengths, float)
+        return np.flatnonzero((L < lo - LENGTH_TOL) | (L > hi + LENGTH_TOL))
+
+    @property
     def ok(self) -> bool:
-        """Hangs within the tolerance, stable, in tension (unless allowed), rods within their swing."""
-        return self.meets_tolerance and self.in_tension and bool(np.all(self.swing_deg <= self.plan.swing_limits[:, None]))
+        """Hangs within the tolerance, stable, in tension (unless allowed), rods within their
+        swing and within the lengths the catalog prints."""
+        return (self.meets_tolerance and self.in_tension and self.out_of_window.size == 0
+                and bool(np.all(self.swing_deg <= self.plan.swing_limits[:, None])))
 
     def limit(self) -> str:
         """One line: what keeps the net off its target and what would reach it."""
@@ -155,6 +169,12 @@ class NetCheck:
             c = self.compressed
             return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
                    "or anchor more nodes"
+        if self.out_of_window.size:
+            k = int(self.out_of_window[0])
+            lo, hi = self.plan.length_range
+            return (f"{pct}, but with the hubs' sockets turned {self.out_of_window.size} rod(s) leave the "
+                    f"{lo:g}-{hi:g} mm the catalog prints (rod {k}: {self.plan.lengths[k]:.4g} mm); a catalog "
+                    "with that length, or the net drawn with shorter edges there, would build it")
         over = np.argwhere(self.swing_deg > self.plan.swing_limits[:, None])
         return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
                f"than the {self.plan.swing_limits[over[0][0]]:.3g} deg the hub allows"

@@ -79,7 +79,7 @@ def test_a_grid_drawn_too_fine_is_collapsed_on_its_surface_and_measured_against_
     assert check.rel_size == pytest.approx(check.error_mm / drawn.size)  # (the size as drawn)
 
 
-def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(tmp_path):
+def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(tmp_path, capsys):
     text = _strip(28.0)  # rungs of 28 mm: no rod between two hubs
     d = load_design("strip.yaml", text=text)
     check = design_drawn_net(d.net, d.catalog, seed=0)
@@ -114,3 +114,8 @@ def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(t
     assert all(c["moved_mm"] == pytest.approx(14.0) for c in col)
     report = (tmp_path / "out" / "report.md").read_text()
     assert "shorter than the shortest rod between the smallest hubs" in report and "nodes [2, 3] -> node" in report
+    # and so does the terminal, where a user sees first how far the drawing moved
+    line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("planner:")]
+    assert line == [f"planner: drawn {len(x)} nodes, {d.net.m} edges; built {t.n} nodes, {t.m} rods: 10 drawn nodes "
+                    f"collapsed into 5 hub(s), a drawn node moved up to 14 mm ({100 * 14.0 / t.size:.3g} % of its "
+                    "size); 2 anchor point(s) added (report.md)"], line

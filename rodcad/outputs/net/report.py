@@ -10,7 +10,7 @@ import numpy as np
 
 from rodcad.outputs.view import view_line
 
-__all__ = ["assembly_layers", "net_report", "net_summary"]
+__all__ = ["assembly_layers", "net_report", "net_summary", "planner_summary"]
 
 
 def assembly_layers(edges: np.ndarray, anchored: np.ndarray, n: int) -> list[tuple[list[int], list[int]]]:
@@ -265,5 +265,31 @@ def net_summary(check, outdir: Path) -> str:
     return (f"{t.n} nodes, {t.m} rods: hangs {check.error_mm:.3g} mm ({100 * check.rel_size:.3g} % of its size) "
             f"from its target, {'stable' if eq.stable else 'not stable'}, KKT residual {eq.kkt_residual:.2g}, "
             f"{len(eq.alternatives)} other stable shape(s) in {eq.n_starts} starts; {masses}\n"
-            f"wrote {outdir}/design.json, report.md, preview.png, view.html, assembly.glb"
+            + planner_summary(check.plan)
+            + f"wrote {outdir}/design.json, report.md, preview.png, view.html, assembly.glb"
             + (", rods/, hubs/, assembly.step, print.3mf" if (outdir / "assembly.step").exists() else ""))
+
+
+def planner_summary(plan) -> str:
+    """One line (with its newline) when the planner changed the drawn net's nodes or edges:
+    drawn and built counts, and how far a collapse moved a drawn node; else empty."""
+    t = plan.target
+    drawn = t.drawn if t.drawn is not None else t
+    collapsed, added = list(plan.collapsed), list(plan.added_anchors)
+    split = len(t.joints) if t.joints is not None else 0
+    if not (collapsed or added or split or plan.merged or plan.between_anchors):
+        return ""
+    what = []
+    if collapsed:
+        worst = max(c.moved_mm for c in collapsed)
+        what.append(f"{sum(len(c.drawn) for c in collapsed)} drawn nodes collapsed into {len(collapsed)} hub(s), a "
+                    f"drawn node moved up to {worst:.3g} mm ({100 * worst / t.size:.3g} % of its size)")
+    if plan.merged:
+        what.append(f"{len(plan.merged)} group(s) of nearly coincident nodes merged")
+    if split:
+        what.append(f"{split} two-rod joint(s) on long edges")
+    if added:
+        what.append(f"{len(added)} anchor point(s) added")
+    if plan.between_anchors:
+        what.append(f"{plan.between_anchors} rod(s) between anchors left out")
+    return f"planner: drawn {drawn.n} nodes, {drawn.m} edges; built {t.n} nodes, {t.m} rods: {'; '.join(what)} (report.md)\n"

@@ -172,7 +172,6 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
         design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
     result = hung_result(design, cd, method=method, seed=seed, intervals=ivfn, progress=progress)
     p = result.plan
-    rods = result.rods
     if cad:
         (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
                                       progress=progress,

@@ -87,9 +87,9 @@ def collapse_short(t: NetTarget, short_edges) -> tuple[NetTarget, int]:
     """One round: the short edges ``short_edges`` (indices of ``t``'s edges) collapsed as a
     matching, shortest first (module docstring). Returns (the target, the number of rods
     between two anchors left out this round). ``t`` is the net before any two-rod joint."""
-    pos, edges = t.positions, t.edges
+    edges = t.edges
     anchored = t.anchored_mask
-    d = np.linalg.norm(pos[edges[:, 1]] - pos[edges[:, 0]], axis=1)
+    d = t.edge_lengths
     short = np.asarray(short_edges, int)
     short = short[np.argsort(d[short], kind="stable")]
     label = np.arange(t.n)

@@ -152,7 +152,7 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     from optimize import design_net_masses
     from optimize.net.sockets import balance_sockets
 
-    t, hw = plan.target, plan.hardware
+    t = plan.target
 
     def statics(p):
         return design_net_masses(t.positions, t.edges, p.lengths, p.bounds, t.anchored, node_masses=p.node_masses,

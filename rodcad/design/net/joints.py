@@ -78,7 +78,7 @@ def merge_close(t: NetTarget, shortest: float, tolerance: float) -> tuple[NetTar
     :data:`MERGE_SHARE` x ``tolerance`` x size. Returns (the target, the merged groups of
     drawn nodes); the target itself when nothing merges."""
     pos, edges = t.positions, t.edges
-    d = np.linalg.norm(pos[edges[:, 1]] - pos[edges[:, 0]], axis=1)
+    d = t.edge_lengths
     limit = MERGE_SHARE * tolerance * t.size
     parent = np.arange(t.n)
 

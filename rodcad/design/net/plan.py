@@ -256,11 +256,10 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
     from rodcad.design.net.sizing import size_hubs
 
     between = 0
+    least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
     for _ in range(MAX_ROUNDS):
         rp, _ = size_hubs(t, hw, shortest, longest)
-        d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
-        short = np.flatnonzero(d - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
-        least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0
+        short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
         if hw.is_hub:  # (a thin triangle whose rods meet tighter than the largest hub allows)
             short = np.union1d(short, tight_triangles(t, least))
         if not short.size:
@@ -289,7 +288,7 @@ def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: froze
     if not whole or not hw.is_hub:
         return one, floor
     src = base.source if base.source is not None else np.arange(base.m)
-    d = np.linalg.norm(base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]], axis=1)
+    d = base.edge_lengths
     half = (d - 0.97 * longest) / 2  # (the margin _first_count keeps: the sockets turned lengthen rods)
     one = np.isin(src, sorted(whole)) & (half <= hw.pivot_limits[1])
     for e in np.flatnonzero(one):
@@ -302,7 +301,7 @@ def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:
     """For a generated net drawn too fine: the cells whose edges the catalog can make ('' else)."""
     if t.kind not in ("surface", "radial") or not t.shape:
         return ""
-    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    d = t.edge_lengths
     need = shortest + 2 * (hw.pivot_limits[0] if hw.is_hub else 0.0)
     if d.min() >= need:
         return ""
@@ -323,20 +322,23 @@ def _first_count(base: NetTarget, e: int, node_pivot: np.ndarray, rp_min: float,
 
 
 def _lengths(t: NetTarget, node_pivot: np.ndarray) -> np.ndarray:
-    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    d = t.edge_lengths
     return d - node_pivot[t.edges[:, 0]] - node_pivot[t.edges[:, 1]]
+
+
+def _rod_axes(t: NetTarget, node_pivot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each rod's unit direction node to node (m, 3), its pivots from its two nodes (m, 2, 3)
+    with the nodes' pivot radii ``node_pivot`` (mm) and its pivot-to-pivot length (m,)."""
+    d = t.edge_lengths
+    u = (t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]]) / d[:, None]
+    r = node_pivot[t.edges]
+    return u, np.stack([r[:, :1] * u, -r[:, 1:] * u], axis=1), d - r.sum(axis=1)
 
 
 def _plan(t: NetTarget, hw: NodeHardware, node_pivot: np.ndarray, window: tuple[float, float]) -> NetPlan:
     """The plan on a buildable target with each node's pivot radius."""
-    pos, edges = t.positions, t.edges
-    n = t.n
-    d = pos[edges[:, 1]] - pos[edges[:, 0]]
-    dist = np.linalg.norm(d, axis=1)
-    u = d / dist[:, None]
-    r = node_pivot[edges]
-    pivots = np.stack([r[:, :1] * u, -r[:, 1:] * u], axis=1)
-    lengths = dist - r.sum(axis=1)
+    edges, n = t.edges, t.n
+    u, pivots, lengths = _rod_axes(t, node_pivot)
     degree = np.bincount(edges.ravel(), minlength=n)
     rods = [hw.rod_numbers(float(L)) for L in fill_lengths(hw, lengths, t.bends)]
     bounds = np.array([rn.mass_range for rn in rods], float)
@@ -369,21 +371,18 @@ def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw
     from optimize import design_net_masses
 
     rp = node_pivot[: base.n]
-    d = np.linalg.norm(base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]], axis=1)
-    u = (base.positions[base.edges[:, 1]] - base.positions[base.edges[:, 0]]) / d[:, None]
-    r = rp[base.edges]
-    pivots = np.stack([r[:, :1] * u, -r[:, 1:] * u], axis=1)
-    lengths = d - r.sum(axis=1)
+    _, pivots, lengths = _rod_axes(base, rp)
     full = _lengths(t, node_pivot)
     jm = t.joint_mask
     joint_mass = np.array([hw.sized(node_pivot[k]).hub_mass(np.array([[1.0, 0, 0], [-1.0, 0, 0]]))[0]
                            if jm[k] else 0.0 for k in range(t.n)])
+    per_joint = float(joint_mass[jm].mean() if jm.any() else 0.0)
     bounds = np.zeros((base.m, 2))
     for e in range(base.m):
         rods = np.flatnonzero(src == e)
         for q in rods:
             bounds[e] += hw.rod_numbers(float(full[q])).mass_range
-        bounds[e] += (len(rods) - 1) * float(joint_mass[jm].mean() if jm.any() else 0.0)
+        bounds[e] += (len(rods) - 1) * per_joint
     node_masses = np.zeros(base.n)
     dirs = _directions(base, pivots)
     for k in range(base.n):
@@ -391,7 +390,7 @@ def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw
     st = design_net_masses(base.positions, base.edges, lengths, bounds, base.anchored, node_masses=node_masses,
                            pivots=pivots, allow_compression=base.compression, g=g, forces_only=True)
     T = st.tensions[src]
-    per_piece = np.array([(st.masses[src[q]] - (counts[src[q]] - 1) * joint_mass[jm].mean()) / counts[src[q]]
+    per_piece = np.array([(st.masses[src[q]] - (counts[src[q]] - 1) * per_joint) / counts[src[q]]
                           for q in range(t.m)])
     return hang_joints(t, T, per_piece, joint_mass, g)
 
@@ -424,12 +423,8 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     rods = [hw.rod_numbers(float(L)) for L in flen]
     node_com = np.zeros((t.n, 3))
     node_masses = plan.node_masses.copy()
-    dirs: list[list[np.ndarray]] = [[] for _ in range(t.n)]
-    for e, (i, j) in enumerate(t.edges):
-        dirs[i].append(pivots[e, 0] / np.linalg.norm(pivots[e, 0]))
-        dirs[j].append(pivots[e, 1] / np.linalg.norm(pivots[e, 1]))
-    for k in range(t.n):
-        node_masses[k], node_com[k] = plan.hub(k).hub_mass(np.asarray(dirs[k]).reshape(-1, 3))
+    for k, dk in enumerate(_directions(t, pivots)):
+        node_masses[k], node_com[k] = plan.hub(k).hub_mass(dk)
     bounds = rod_bounds(plan, lengths, rods)
     return dataclasses.replace(plan, pivots=pivots, lengths=lengths, rods=rods, bounds=bounds,
                                node_masses=node_masses, node_com=node_com, com=None)

@@ -67,7 +67,7 @@ def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float,
     rp = np.minimum(rp, max(hi, lo))
     if floor is not None:
         rp = np.maximum(rp, floor)
-    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    d = t.edge_lengths
     for _ in range(3):  # a short rod's nodes get the least hubs their angles allow
         short = d - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9)
         if not short.any():
@@ -92,7 +92,7 @@ def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float,
 
 
 def _short_rods(t: NetTarget, rp: np.ndarray, shortest: float, hw: NodeHardware) -> list[str]:
-    d = np.linalg.norm(t.positions[t.edges[:, 1]] - t.positions[t.edges[:, 0]], axis=1)
+    d = t.edge_lengths
     L = d - rp[t.edges].sum(axis=1)
     short = np.flatnonzero(L < shortest * (1 - 1e-9))
     if not short.size:

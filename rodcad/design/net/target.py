@@ -101,6 +101,11 @@ class NetTarget:
         return np.zeros(self.m) if self.rod_bends is None else self.rod_bends
 
     @property
+    def edge_lengths(self) -> np.ndarray:
+        """(m,) each edge's length node to node (mm)."""
+        return np.linalg.norm(self.positions[self.edges[:, 1]] - self.positions[self.edges[:, 0]], axis=1)
+
+    @property
     def n(self) -> int:
         return int(self.positions.shape[0])
 

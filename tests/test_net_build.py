@@ -244,12 +244,12 @@ def test_exit_codes_of_net_builds(tmp_path, capsys):
     far.write_text("design: 1\nname: far\nnet:\n  surface: {z: '0.001 * (x - 150)**2', x: [0, 300], y: [0, 200], "
                    "u: 2, v: 2}\n  anchored: boundary\n")
     code, out = _build(tmp_path, far, "far")
-    assert code == 1 and not out.exists()
-    # its long edges are cut into rods in line (no longer refused for the rod window), but the
-    # joints on the trough's flat edges have too little pull to hang near them: said, with the
-    # hardware that would
-    err = capsys.readouterr().err
-    assert "longer than the 60 mm" not in err and "cannot hang on the target" in err and "A rod of" in err
+    # its long edges are cut into rods in line (no longer refused for the rod window); the joints on
+    # the trough's flat edges have too little pull to hang near them, and those edges are spliced rods
+    assert code == 0 and out.exists()
+    data = json.loads((out / "design.json").read_text())
+    assert data["planner"]["spliced_rods"] and data["net"]["meets_tolerance"]
+    assert "longer than the 60 mm" not in capsys.readouterr().err
 
 
 #: A small hub net (3 hubs, 2 rods holding steel balls).
@@ -328,11 +328,14 @@ def test_a_hung_hub_grid_is_designed_exactly(nx, ny):
     to it to the exact equilibrium's round-off (1e-6 of the size), with exact statics and masses
     in the bounds it designed them in, and the solver, started from the target with the
     designed sockets, hubs and masses, must stay there. (The sockets turned hub by hub by the
-    least turn once needed masses the rods cannot be built at: 2e-3 to 5e-3 of the size off.)"""
+    least turn once needed masses the rods cannot be built at: 2e-3 to 5e-3 of the size off.)
+    The sockets' turns are found in rounds whose path round-off can change (inputs equal to
+    1e-15 turned them 7.26 or 7.29 deg, statics residual 0 or 2e-7 of the force scale): the
+    statics must balance to a millionth of the force scale, the fit to a millionth of the size."""
     cat, flat, plan, hung = _hung_hub_grid(nx, ny)
     target = NetTarget("nodes", hung.positions, flat.edges, flat.anchored)
     check = design_net_plan(plan_net(target, cat), seed=0)
-    assert check.design.statics.exact
+    assert check.design.statics.exact or check.design.statics.residual <= 1e-6
     assert check.equilibrium.stable and check.rel_size <= 1e-6
     p = check.plan
     lo, hi = p.bounds[:, 0], p.bounds[:, 1]

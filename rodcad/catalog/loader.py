@@ -24,6 +24,7 @@ from rodcad.yamlspec import Checked, check_document
 
 if TYPE_CHECKING:  # pragma: no cover
     pass
+from rodcad.catalog.stock import DEFAULT_MODULUS
 from rodcad.catalog.model import (
     CATALOG_FORMAT,
     Balls,
@@ -295,7 +296,7 @@ def _expand(f: dict[str, Any], ctx: _FamilyContext, printer: Printer | None
     """The rod types of one complete family, after cross-field checks (for a family
     printed to order: its reference types, ranges and template)."""
     sec, jt, ends, mat = f["section"], f["joint"], f["ends"], f["material"]
-    material = Material(mat.get("name", ""), mat["density"], mat["min_wall"])
+    material = Material(mat.get("name", ""), mat["density"], mat["min_wall"], mat.get("modulus", DEFAULT_MODULUS))
     friction = friction_range(jt["friction"], ctx.report, "joint.friction")[1]
     raw = f.get("balls")
     listed = isinstance(raw, list)

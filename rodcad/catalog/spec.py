@@ -227,6 +227,10 @@ def family_spec() -> Obj:
                         "min_wall": Field(Num(maximum=50, **mm_pos), required=True,
                                           description="Minimum wall (mm): thinnest printed wall, also kept "
                                           "around cavities, ball sockets and pin holes."),
+                        "modulus": Field(Num(exclusive_minimum=0, maximum=500, unit="GPa"),
+                                         description="Young's modulus of a printed rod along its axis (GPa; default "
+                                         "1.5, the low end of printed PLA, PETG and ABS): a net rod that pushes "
+                                         "must stay under a fifth of its buckling load."),
                     },
                     description="Printing material.",
                 ),
@@ -356,9 +360,31 @@ def node_spec() -> Obj:
                          f"rod body's end face (default {d['gap']:g} mm)."),
             "mass": Field(Num(minimum=0, maximum=1000, unit="g"), description="point: the part's mass "
                           f"(default {d['mass']:g} g)."),
+            "splice": Field(_splice_spec(), description="hub: the steel dowel pins a rod longer than the catalog "
+                            "prints is spliced on, where two-rod joints cannot hang (rodcad.catalog.net.splice)."),
         },
         description="The hardware at a net's nodes (every rod turns freely in every direction); printed in the "
         "families' material, rods weighed down with their steel balls.",
+    )
+
+
+def _splice_spec() -> Obj:
+    """Spec of ``node.splice``: a rigid in-line splice's dowel pin (:mod:`rodcad.catalog.net.splice`)."""
+    from rodcad.catalog.net.splice import DEFAULT_SPLICE as d
+
+    return Obj(
+        {
+            "pin_diameter": Field(Num(exclusive_minimum=0, maximum=20, unit="mm"),
+                                  description=f"The steel dowel pin's diameter (default {d['pin_diameter']:g} mm)."),
+            "pin_length": Field(Num(exclusive_minimum=0, maximum=100, unit="mm"),
+                                description=f"Its length, half in each piece (default {d['pin_length']:g} mm)."),
+            "pin_density": Field(Num(exclusive_minimum=0, maximum=25, unit="g/cm^3"),
+                                 description=f"Its material (default {d['pin_density']:g} g/cm^3, steel)."),
+            "clearance": Field(Num(minimum=0, maximum=2, unit="mm"), description="Hole diameter minus pin "
+                               f"diameter (default {d['clearance']:g} mm); the pin is glued in."),
+        },
+        description="Rigid in-line splice: a rod cut square into equal pieces, each cut's faces bored for a "
+        "dowel pin glued into both.",
     )
 
 

@@ -9,7 +9,11 @@ from dataclasses import dataclass
 
 from rodcad.errors import Problem
 
-__all__ = ["Balls", "Fill", "Material", "Origin", "Printer"]
+__all__ = ["DEFAULT_MODULUS", "Balls", "Fill", "Material", "Origin", "Printer"]
+
+#: A printed rod's Young's modulus when its catalog gives none (GPa): the low end of PLA, PETG and
+#: ABS printed along their rods (about 1.5-3.5 GPa).
+DEFAULT_MODULUS = 1.5
 
 
 @dataclass(frozen=True)
@@ -21,11 +25,14 @@ class Material:
         density: g/cm^3 (PLA about 1.24).
         min_wall: thinnest wall printed reliably, also the least plastic kept
             around cavities and ball sockets (mm).
+        modulus: Young's modulus of the printed part along its rods (GPa): what a pushing net
+            rod's buckling load follows (:meth:`rodcad.catalog.net.node.NodeHardware.buckling_load`).
     """
 
     name: str
     density: float
     min_wall: float
+    modulus: float = DEFAULT_MODULUS
 
 
 @dataclass(frozen=True)

@@ -130,9 +130,9 @@ def _parts_json(s) -> list[dict[str, Any]]:
     once, with how many to print, for which rods or nodes, its solid's and its mesh's volume."""
     out = []
     for part in s.parts:
-        for solid, mesh_volume in zip(part.solids, part.mesh_volumes):
+        for i, (solid, mesh_volume) in enumerate(zip(part.solids, part.mesh_volumes)):
             vol = float(solid.volume)
-            out.append({"name": solid.label, "kind": part.kind, "count": part.count,
+            out.append({"name": solid.label, "kind": part.kind, "count": part.prints(i),
                         "members": [int(m) for m in part.members], "volume_mm3": round(vol, 4),
                         "mesh_volume_mm3": round(float(mesh_volume), 4),
                         "mesh_volume_rel": round(float(mesh_volume) / vol - 1, 6)})

@@ -30,7 +30,9 @@ from rodcad.cad.net.hub import HubSplit, split_hub, split_plane, splittable_sock
 from rodcad.cad.net.parts import (REL_TOL, HubSpec, PartResult, PartTask, RodSpec, brep_bytes, from_brep,
                                   group_parts, signature)
 from rodcad.cad.net.solids import AS_BUILT_KKT, NetPart, NetSolids, hub_solid, net_rod_solid, place, rod_matrix, whole_hub
+from rodcad.cad.net.splice import spliced_rod_solids
 from rodcad.cad.solids import GeometryError
+from rodcad.catalog.net.splice import splice_fill
 
 __all__ = ["build_group", "build_net_solids", "distinct_count", "part_specs", "write_net_files"]
 
@@ -43,9 +45,16 @@ def part_specs(check) -> tuple[list, list]:
     plan = check.plan
     t, hw = plan.target, plan.hardware
     rods = []
-    for e in range(t.m):
-        k, cavity, _ = hw.rod_fill(float(plan.fill_lengths[e]), float(check.masses[e]))
-        rods.append(RodSpec(hw, float(plan.lengths[e]), int(k), float(cavity), plan.arcs[e]))
+    fill, arcs = plan.fill_lengths, plan.arcs
+    for e, k in enumerate(plan.rod_pieces):
+        L, mass = float(plan.lengths[e]), float(check.masses[e])
+        if k > 1:  # spliced: each piece's own balls and cavity
+            fills, _ = splice_fill(hw, L, mass, int(k))
+            rods.append(RodSpec(hw, L, sum(b for b, _ in fills), sum(c for _, c in fills), None,
+                                tuple((int(b), float(c)) for b, c in fills)))
+            continue
+        balls, cavity, _ = hw.rod_fill(float(fill[e]), mass)
+        rods.append(RodSpec(hw, L, int(balls), float(cavity), arcs[e]))
     hubs = []
     for k in range(t.n if hw.is_hub else 0):
         at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
@@ -104,20 +113,22 @@ def build_net_solids(check, *, printer=None, layer_height: float = 0.2, runner=N
     hubs: list = [None] * t.n if hw.is_hub else []
     splits = [HubSplit([], [], np.array([0.0, 0.0, 1.0]), 0.0, 0.0) for _ in range(len(hubs))]
     rod_masses, rod_balls = np.zeros(t.m), [int(sp.balls) for sp in rod_specs]
+    pin_mass = hw.splice.pin_mass
     rod_com = np.column_stack([plan.lengths / 2, np.zeros((t.m, 2))])
     node_masses, node_com = plan.node_masses.copy(), plan.node_com.copy()
     parts = []
     for (kind, members, rotations), res in zip(owners, results):
         shared = [from_brep(data, label) for label, data in res.solids]
         part = NetPart(kind, f"{kind}-{members[0]:03d}", members, rotations, shared, res.print_matrices, res.files,
-                       res.mesh_volumes, res.split_reason)
+                       res.mesh_volumes, res.split_reason, list(res.copies))
         parts.append(part)
         whole_hub_solid = from_brep(res.whole) if res.whole else None
         for i, (who, R) in enumerate(zip(members, rotations)):
             if kind == "rod":
                 sp = rod_specs[who]
-                rods[who] = _instance(shared[0], np.eye(3), f"rod-{who:03d}")
-                rod_masses[who] = rho * res.volumes[i] + sp.balls * ball_mass
+                whole = from_brep(res.whole) if res.whole else shared[0]  # (a spliced rod: its pieces joined)
+                rods[who] = _instance(whole, np.eye(3), f"rod-{who:03d}")
+                rod_masses[who] = rho * res.volumes[i] + sp.balls * ball_mass + (sp.pieces - 1) * pin_mass
                 if sp.arc is not None:  # measured on the solid: its plastic's centre of mass and its steel balls
                     moment = rho * res.volumes[i] * res.com[i] + ball_mass * bent_socket_centres(hw, sp.arc, sp.balls).sum(axis=0)
                     rod_com[who] = moment / rod_masses[who]
@@ -185,6 +196,8 @@ def _bare(kind: str, spec, label: str):
     """A member's solid as built from its spec (a hub whole, its sphere's pole on its cut
     plane's normal, as :func:`build_net_solids` cuts it)."""
     if kind == "rod":
+        if spec.fills:
+            return spliced_rod_solids(spec.hardware, spec.length, spec.fills, name=label)[0]
         if spec.arc is None:
             return net_rod_solid(spec.hardware, spec.length, spec.balls, spec.cavity, name=label)
         return bent_rod_solid(spec.hardware, spec.arc, spec.balls, spec.cavity, name=label)
@@ -209,7 +222,12 @@ def _files(solid, label: str, deflection: tuple[float, float]) -> tuple[dict[str
 def build_group(task: PartTask) -> PartResult:
     """Build one group's part (and its halves, a hub), write and check its files, and confirm
     every other member on its own bare B-rep (module docstring)."""
-    first = _bare(task.kind, task.specs[0], task.label)
+    spliced = task.kind == "rod" and bool(task.specs[0].fills)
+    if spliced:  # the whole rod (its members' signature) and the pieces printed
+        spec = task.specs[0]
+        first, pieces = spliced_rod_solids(spec.hardware, spec.length, spec.fills, name=task.label)
+    else:
+        first = _bare(task.kind, task.specs[0], task.label)
     sig0 = signature(first)
     volumes, com, confirmed = [], [], []
     for i, spec in enumerate(task.specs):
@@ -220,6 +238,11 @@ def build_group(task: PartTask) -> PartResult:
         com.append(tuple(s.center(CenterOf.MASS)))
     out = PartResult([], [], [], volumes, np.array(com, float), confirmed)
     printed, mats = [first], [np.eye(4)]
+    if spliced:  # the two end pieces are one solid turned end for end, the middle ones another
+        printed = pieces[:2] if len(pieces) > 2 else pieces[:1]
+        out.copies = [2, len(pieces) - 2][: len(printed)]
+        mats = [np.eye(4)] * len(printed)
+        out.whole = brep_bytes(first)
     if task.kind == "hub":
         spec = task.specs[0]
         socks = np.asarray(spec.sockets, float).reshape(-1, 3)

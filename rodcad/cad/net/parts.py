@@ -56,6 +56,11 @@ class RodSpec:
     balls: int
     cavity: float
     arc: object = None
+    fills: tuple = ()  # a spliced rod's, per piece (balls, cavity mm^3) (:mod:`rodcad.cad.net.splice`)
+
+    @property
+    def pieces(self) -> int:
+        return max(len(self.fills), 1)
 
 
 @dataclass(frozen=True)
@@ -96,8 +101,8 @@ def _key(spec) -> tuple[tuple, np.ndarray]:
     if isinstance(spec, RodSpec):
         hw = spec.hardware
         bore = math.pi * max(hw.rod_diameter / 2 - hw.min_wall, 1e-9) ** 2
-        d += [int(spec.balls), spec.arc is None]
-        n += [float(spec.length), float(spec.cavity) / bore]
+        d += [int(spec.balls), spec.arc is None, spec.pieces] + [int(b) for b, _ in spec.fills]
+        n += [float(spec.length), float(spec.cavity) / bore] + [float(c) / bore for _, c in spec.fills]
         if spec.arc is not None:
             _flat(spec.arc, d, n)
     else:
@@ -274,7 +279,9 @@ class PartResult:
             in its own frame (mm).
         confirmed: per member, its B-rep's signature matched the first member's.
         mesh_volumes: per printed solid, its STL's volume (mm^3).
-        whole: a hub cut in halves, the whole hub's BREP (b'' else).
+        whole: a hub cut in halves or a spliced rod, the whole part's BREP (b'' else).
+        copies: per printed solid, how many each member needs (empty: one each; a spliced rod's
+            end piece two, the same solid turned end for end).
     """
 
     solids: list[tuple[str, bytes]]
@@ -289,3 +296,4 @@ class PartResult:
     normal: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     offset: float = 0.0
     whole: bytes = b""
+    copies: list[int] = field(default_factory=list)

@@ -27,8 +27,8 @@ from rodcad.cad.export import export_step, import_step
 from rodcad.cad.net.hub import split_plane
 from rodcad.cad.solids import GeometryError, one_solid
 
-__all__ = ["AS_BUILT_KKT", "NetPart", "NetSolids", "ball_positions", "hub_solid", "net_rod_solid", "place",
-           "rod_matrix", "whole_hub"]
+__all__ = ["AS_BUILT_KKT", "NetPart", "NetSolids", "ball_positions", "fill_voids", "hub_solid", "net_rod_solid",
+           "place", "rod_body", "rod_matrix", "whole_hub"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -98,12 +98,49 @@ def whole_hub(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
     raise GeometryError(f"{name}: no parametrisation of its sphere writes to STEP as built")
 
 
-def ball_positions(hw, length: float, balls: int) -> np.ndarray:
+def ball_positions(hw, length: float, balls: int, centre: float | None = None) -> np.ndarray:
     """(balls,) the steel balls' centres along a net rod (mm from its first pivot, on its
-    axis): a row at mid-length, ``min_wall`` apart."""
+    axis): a row at mid-length (or at ``centre``), ``min_wall`` apart."""
     ds = hw.insert_diameter + hw.insert_clearance
     row = balls * ds + max(balls - 1, 0) * hw.min_wall
-    return np.array([length / 2 - row / 2 + ds / 2 + k * (ds + hw.min_wall) for k in range(balls)], float)
+    c = length / 2 if centre is None else float(centre)
+    return np.array([c - row / 2 + ds / 2 + k * (ds + hw.min_wall) for k in range(balls)], float)
+
+
+def rod_body(hw, length: float) -> Solid:
+    """A net rod's plastic before its voids, along +x, its pivots at x = 0 and ``length``: the
+    round body, and for a hub's rod a ball and a neck at each end."""
+    r, e = hw.rod_diameter / 2, hw.end_offset
+    parts = [Solid.make_cylinder(r, length - 2 * e, Plane((e, 0, 0), z_dir=(1, 0, 0)))]
+    if hw.is_hub:
+        for x0, d in ((0.0, 1.0), (length, -1.0)):
+            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0))))
+            parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
+    return parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
+
+
+def fill_voids(hw, z0: float, z1: float, balls: int, cavity: float) -> list[Solid]:
+    """The voids that fill a rod's body between ``z0`` and ``z1`` along x (mm) to its mass: the
+    steel balls' closed sockets in a row at the middle and the cavity (volume mm^3), two equal
+    coaxial cylinders beside the row, or one at the middle
+    (:meth:`rodcad.catalog.net.node.NodeHardware.zone_intervals`)."""
+    r, w = hw.rod_diameter / 2, hw.min_wall
+    c = (z0 + z1) / 2
+    ds = hw.insert_diameter + hw.insert_clearance
+    row = balls * ds + max(balls - 1, 0) * w
+    voids = [Solid.make_sphere(ds / 2, Plane((float(cx), 0, 0))) for cx in ball_positions(hw, 0.0, balls, c)]
+    area = math.pi * (r - w) ** 2
+    if cavity > 1e-3 * area:  # (a cavity shorter than a thousandth of a mm is none)
+        if balls:
+            each = cavity / 2 / area
+            for sgn in (-1.0, 1.0):
+                start = c + sgn * (row / 2 + w)
+                voids.append(Solid.make_cylinder(r - w, each, Plane((start if sgn > 0 else start - each, 0, 0),
+                                                                    z_dir=(1, 0, 0))))
+        else:
+            lc = cavity / area
+            voids.append(Solid.make_cylinder(r - w, lc, Plane((c - lc / 2, 0, 0), z_dir=(1, 0, 0))))
+    return voids
 
 
 def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod") -> Solid:
@@ -116,29 +153,8 @@ def net_rod_solid(hw, length: float, balls: int, cavity: float, name: str = "rod
         cavity: the cavity's volume (mm^3): two equal coaxial cylinders beside the balls,
             or one at mid-length (:meth:`rodcad.catalog.net.node.NodeHardware.rod_fill`).
     """
-    r, w = hw.rod_diameter / 2, hw.min_wall
-    e = hw.end_offset
-    body = length - 2 * e
-    parts = [Solid.make_cylinder(r, body, Plane((e, 0, 0), z_dir=(1, 0, 0)))]
-    if hw.is_hub:
-        for x0, d in ((0.0, 1.0), (length, -1.0)):
-            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0))))
-            parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
-    solid = parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
-    ds = hw.insert_diameter + hw.insert_clearance
-    row = balls * ds + max(balls - 1, 0) * w
-    voids = [Solid.make_sphere(ds / 2, Plane((float(cx), 0, 0))) for cx in ball_positions(hw, length, balls)]
-    area = math.pi * (r - w) ** 2
-    if cavity > 1e-3 * area:  # (a cavity shorter than a thousandth of a mm is none)
-        if balls:
-            each = cavity / 2 / area
-            for sgn in (-1.0, 1.0):
-                start = length / 2 + sgn * (row / 2 + w)
-                voids.append(Solid.make_cylinder(r - w, each, Plane((start if sgn > 0 else start - each, 0, 0),
-                                                                    z_dir=(1, 0, 0))))
-        else:
-            lc = cavity / area
-            voids.append(Solid.make_cylinder(r - w, lc, Plane((length / 2 - lc / 2, 0, 0), z_dir=(1, 0, 0))))
+    solid = rod_body(hw, length)
+    voids = fill_voids(hw, hw.end_offset, length - hw.end_offset, balls, cavity)
     if voids:
         solid = one_solid(solid.cut(*voids), "cutting a rod's cavity and ball sockets")
     solid.label = name
@@ -167,6 +183,8 @@ class NetPart:
         files: per solid, {'.step': bytes, '.stl': bytes}, checked.
         mesh_volumes: per solid, its STL's volume (mm^3).
         split_reason: a hub printed whole: why ('' else).
+        copies: per solid, how many each member needs (empty: one each; :class:`rodcad.cad.net.parts.
+            PartResult`).
     """
 
     kind: str
@@ -178,10 +196,15 @@ class NetPart:
     files: list
     mesh_volumes: list
     split_reason: str = ""
+    copies: list = field(default_factory=list)
 
     @property
     def count(self) -> int:
         return len(self.members)
+
+    def prints(self, i: int) -> int:
+        """How many of solid ``i`` to print: its copies for every member."""
+        return self.count * (int(self.copies[i]) if self.copies else 1)
 
 
 @dataclass

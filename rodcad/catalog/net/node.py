@@ -34,9 +34,11 @@ the hub sphere (apex off the hub's centre) by a 1D integral over the cone's pola
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from rodcad.catalog.net.splice import Splice, splice_fill, splice_intervals, splice_numbers
 
 __all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "largest_clear_turn", "node_hardware",
            "socket_centres"]
@@ -106,6 +108,10 @@ class NodeHardware:
         min_wall: the thinnest wall printed (mm).
         insert_diameter, insert_density, insert_clearance: the steel balls that weigh rods
             down (mm, g/cm^3, mm); diameter 0 for none.
+        pivot_range: the hub family's (smallest, largest) pivot radius (mm), or None.
+        splice: the dowel pins a rod longer than the catalog prints is spliced on
+            (:mod:`rodcad.catalog.net.splice`).
+        modulus: the rods' Young's modulus (GPa; the material's): :meth:`buckling_load`.
     """
 
     kind: str
@@ -125,6 +131,8 @@ class NodeHardware:
     insert_density: float = 0.0
     insert_clearance: float = 0.0
     pivot_range: tuple[float, float] | None = None
+    splice: Splice = field(default_factory=Splice)
+    modulus: float = 1.5
 
     # ------------------------------------------------------------------ the hub family
     @property
@@ -255,62 +263,78 @@ class NodeHardware:
         moment = -(v_sock * self.pivot_radius + v_cone * c_cone) * d.sum(axis=0)
         return self.density * v / 1000.0, moment / v
 
-    def rod_numbers(self, length: float) -> NetRodNumbers:
-        """A net rod's masses for a pivot-to-pivot ``length`` (mm); see the module."""
-        rho = self.density / 1000.0
-        r = self.rod_diameter / 2
-        if self.is_hub:
-            rb, s = self.ball / 2, self.neck / 2
-            e = self.end_offset
-            t0 = math.sqrt(max(rb**2 - s**2, 0.0))
-            h = rb - t0
-            cap = math.pi * h**2 * (3 * rb - h) / 3
-            v_end = 4 / 3 * math.pi * rb**3 + math.pi * s**2 * (e - t0) - cap
-            body = length - 2 * e
-        else:
-            v_end, body = 0.0, length
-        v = 2 * v_end + math.pi * r**2 * max(body, 0.0)
-        w = self.min_wall
-        cav_r, cav_l = r - w, body - 2 * w
-        cavity = math.pi * cav_r**2 * cav_l if cav_r > 0 and cav_l > 0 else 0.0
-        n = 0
-        add = 0.0
-        ds = self.insert_diameter + self.insert_clearance
-        if self.insert_diameter > 0 and 2 * r >= ds + 2 * w and body > ds + 2 * w:
-            n = int((body - w) // (ds + w))
-            add = n * (self.insert_density * math.pi / 6 * self.insert_diameter**3 - self.density * math.pi / 6 * ds**3)
-            add /= 1000.0
-        solid = rho * v
-        return NetRodNumbers(float(length), float(body), solid, (solid - rho * cavity, solid + max(add, 0.0)), n)
+    @property
+    def end_volume(self) -> float:
+        """One rod end's plastic outside its body: the ball and the neck to the body's face
+        (mm^3; 0 for a point node's plain rod)."""
+        if not self.is_hub:
+            return 0.0
+        rb, s = self.ball / 2, self.neck / 2
+        t0 = math.sqrt(max(rb**2 - s**2, 0.0))
+        h = rb - t0
+        cap = math.pi * h**2 * (3 * rb - h) / 3
+        return 4 / 3 * math.pi * rb**3 + math.pi * s**2 * (self.end_offset - t0) - cap
 
-    def rod_intervals(self, length: float) -> list[tuple[int, float, float]]:
+    def zone_balls(self, zone: float) -> int:
+        """The steel balls a row of closed sockets takes in a body ``zone`` mm long."""
+        r, w = self.rod_diameter / 2, self.min_wall
+        ds = self.insert_diameter + self.insert_clearance
+        if self.insert_diameter > 0 and 2 * r >= ds + 2 * w and zone > ds + 2 * w:
+            return int((zone - w) // (ds + w))
+        return 0
+
+    def zone_intervals(self, volume: float, zone: float) -> list[tuple[int, float, float]]:
+        """The masses a body of plastic ``volume`` (mm^3) can be built at with its balls and
+        cavity in a ``zone`` mm long: per steel-ball count ``k``, (k, lightest g, heaviest g)
+        (:meth:`rod_intervals`)."""
+        rho = self.density / 1000.0
+        ds = self.insert_diameter + self.insert_clearance
+        vs = math.pi / 6 * ds ** 3
+        mb = self.insert_density * math.pi / 6 * self.insert_diameter ** 3 / 1000.0
+        rc, w = self.rod_diameter / 2 - self.min_wall, self.min_wall
+        out = []
+        for k in range(self.zone_balls(zone) + 1):
+            row = k * ds + max(k - 1, 0) * w
+            room = 2 * max((zone - row) / 2 - 2 * w, 0.0) if k else max(zone - 2 * w, 0.0)
+            hi = rho * (volume - k * vs) + k * mb
+            out.append((k, hi - rho * math.pi * max(rc, 0.0) ** 2 * room, hi))
+        return out
+
+    def rod_numbers(self, length: float, pieces: int = 1) -> NetRodNumbers:
+        """A net rod's masses for a pivot-to-pivot ``length`` (mm); see the module. A rod of
+        ``pieces`` > 1 is spliced (:func:`rodcad.catalog.net.splice.splice_numbers`)."""
+        if pieces > 1:
+            return NetRodNumbers(*splice_numbers(self, length, pieces))
+        rho = self.density / 1000.0
+        body = length - 2 * self.end_offset if self.is_hub else length
+        v = 2 * self.end_volume + math.pi * (self.rod_diameter / 2) ** 2 * max(body, 0.0)
+        iv = self.zone_intervals(v, body)
+        solid = rho * v
+        return NetRodNumbers(float(length), float(body), solid, (iv[0][1], max(solid, iv[-1][2])), iv[-1][0])
+
+    def rod_intervals(self, length: float, pieces: int = 1) -> list[tuple[int, float, float]]:
         """The masses a rod of ``length`` can be built at: per steel-ball count ``k`` (0 up to
         what fits), (k, lightest g, heaviest g). The balls sit in a row at mid-length, the cavity
         (two equal coaxial cylinders beside the row, or one at mid-length without balls,
         ``min_wall`` from everything) takes the plastic off, as :mod:`rodcad.cad.net.solids` builds
-        it. A short rod has little room beside its balls: its intervals leave gaps."""
+        it. A short rod has little room beside its balls: its intervals leave gaps. A spliced
+        rod (``pieces`` > 1): :func:`rodcad.catalog.net.splice.splice_intervals`."""
+        if pieces > 1:
+            return splice_intervals(self, length, pieces)
         rn = self.rod_numbers(length)
-        rho = self.density / 1000.0
-        v = rn.solid_mass / rho
-        ds = self.insert_diameter + self.insert_clearance
-        vs = math.pi / 6 * ds ** 3
-        mb = self.insert_density * math.pi / 6 * self.insert_diameter ** 3 / 1000.0
-        rc, w, body = self.rod_diameter / 2 - self.min_wall, self.min_wall, rn.body_length
-        out = []
-        for k in range(rn.balls + 1):
-            row = k * ds + max(k - 1, 0) * w
-            room = 2 * max((body - row) / 2 - 2 * w, 0.0) if k else max(body - 2 * w, 0.0)
-            hi = rho * (v - k * vs) + k * mb
-            out.append((k, hi - rho * math.pi * max(rc, 0.0) ** 2 * room, hi))
-        return out
+        return self.zone_intervals(rn.solid_mass / (self.density / 1000.0), rn.body_length)
 
-    def rod_fill(self, length: float, mass: float) -> tuple[int, float, float]:
+    def rod_fill(self, length: float, mass: float, pieces: int = 1) -> tuple[int, float, float]:
         """How a rod of ``length`` is made to weigh ``mass`` (:meth:`rod_intervals`).
 
         Returns:
             (balls, cavity volume mm^3, the mass it comes to g): the fewest balls whose
-            interval holds ``mass``, else the interval that comes nearest.
+            interval holds ``mass``, else the interval that comes nearest; a spliced rod's
+            summed over its pieces (:func:`rodcad.catalog.net.splice.splice_fill` for each's).
         """
+        if pieces > 1:
+            fills, got = splice_fill(self, length, mass, pieces)
+            return sum(b for b, _ in fills), sum(c for _, c in fills), got
         rho = self.density / 1000.0
         best = None
         for k, lo, hi in self.rod_intervals(length):
@@ -319,6 +343,16 @@ class NodeHardware:
                 best = (abs(got - mass), k, (hi - got) / rho, got)
         assert best is not None
         return best[1], best[2], best[3]
+
+    def buckling_load(self, length: float) -> float:
+        """The force (mN, as the solver's tensions: g x m/s^2) at which a rod of pivot-to-pivot
+        ``length`` (mm) pushed along its axis buckles: Euler's pinned-pinned load ``pi^2 E I / L^2``
+        of its body's section with the largest cavity it can hold (a tube ``min_wall`` thick, the
+        weakest it is printed; a spliced rod's steel pin is stiffer than the plastic round it)."""
+        r = self.rod_diameter / 2
+        rc = max(r - self.min_wall, 0.0)
+        inertia = math.pi / 4 * (r ** 4 - rc ** 4)  # mm^4
+        return math.pi ** 2 * self.modulus * 1e3 * inertia / max(float(length), 1e-9) ** 2 * 1e3
 
     def shortest_rod(self) -> float:
         """The shortest rod the hardware makes (mm): both ends and a body of two walls."""
@@ -351,7 +385,7 @@ class NodeHardware:
             out.append(("neck", f"the neck ({self.neck:g} mm) is thinner than two walls ({2 * w:g} mm)"))
         if self.rod_diameter < self.neck:
             out.append(("rod_diameter", f"the rod ({self.rod_diameter:g} mm) is thinner than its neck"))
-        return out
+        return out + self.splice.problems(self.rod_diameter, w)
 
 
 def socket_centres(pivots: np.ndarray, forces: np.ndarray, clearance: float) -> np.ndarray:
@@ -390,6 +424,7 @@ def node_hardware(block: dict, rod, v) -> NodeHardware | None:
     of hubs that keep the nominal hub's wall outside their pivots (:attr:`NodeHardware.shell`),
     between the two ranges."""
     d = {**DEFAULT_NODE, **block}
+    splice = Splice(**{k: float(x) for k, x in (block.get("splice") or {}).items()})
     balls = rod.balls
     dia, dlo, dhi = _size(d["diameter"])
     rp, plo, phi = _size(d["pivot_radius"])
@@ -416,13 +451,14 @@ def node_hardware(block: dict, rod, v) -> NodeHardware | None:
                       gap=float(d["gap"]), mass=float(d["mass"]), density=rod.material.density,
                       min_wall=rod.material.min_wall, insert_diameter=balls.diameter if balls else 0.0,
                       insert_density=balls.density if balls else 0.0,
-                      insert_clearance=balls.clearance if balls else 0.0, pivot_range=pivot_range)
+                      insert_clearance=balls.clearance if balls else 0.0, pivot_range=pivot_range, splice=splice,
+                      modulus=float(rod.material.modulus))
     bad = hw.problems()
     if hw.family and not bad:  # every size of the family must hold its balls too
         for end in hw.pivot_range:
             for key, message in hw.sized(end).problems():
                 bad.append((key, f"the family's hub of pivot radius {end:g} mm: {message}"))
     for key, message in bad:
-        v.report_at(f"node.{key}" if key in block else "node", message if key in block else
-                    f"{key}: {message}", fallback="node")
+        given = key.split(".")[-1] in (block.get("splice") or {}) if key.startswith("splice.") else key in block
+        v.report_at(f"node.{key}" if given else "node", message if given else f"{key}: {message}", fallback="node")
     return None if bad else hw

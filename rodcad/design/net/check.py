@@ -25,7 +25,8 @@ from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.net.hubs import buildable_bounds, orient_sockets
 from rodcad.design.net.plan import NetPlan, replan
 
-__all__ = ["FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts", "settle_com"]
+__all__ = ["BUCKLING_SAFETY", "FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts",
+           "settle_com"]
 
 
 #: After the rods' bounds are narrowed to buildable masses, the sockets are turned again
@@ -47,6 +48,10 @@ FULL_REFINE_NODES = 100
 #: A rod whose force is within this share of the net's largest tension hangs slack: neither
 #: pulling nor pushing to speak of (a rigid rod takes it either way).
 SLACK = 1e-3
+
+#: A rod that pushes keeps under its buckling load divided by this (a printed part's modulus
+#: and straightness vary; Euler's load is an upper bound for a rod that is not quite straight).
+BUCKLING_SAFETY = 5.0
 
 #: A bent net's masses and centres of mass are consistent when the centres of mass move less
 #: than this share of the net's size in a round (:func:`settle_com`); at most COM_ROUNDS rounds.
@@ -127,8 +132,28 @@ class NetCheck:
         return np.flatnonzero(np.abs(T) <= SLACK * float(np.max(np.abs(T), initial=0.0)))
 
     @property
+    def unheld(self) -> np.ndarray:
+        """Rods that push where the hardware does not hold them (indices): with ``net.compression``
+        unset, a rod may push if it is one rigid rod between two hubs (their ball sockets hold its
+        balls either way; a ball joint between two pushing rods folds) and pushes less than
+        1 / :data:`BUCKLING_SAFETY` of its buckling load
+        (:meth:`rodcad.catalog.net.node.NodeHardware.buckling_load`); true: every rod may push;
+        false, or point nodes: none may."""
+        c = self.compressed
+        t, hw = self.plan.target, self.plan.hardware
+        if t.compression or not c.size:
+            return np.zeros(0, int)
+        if t.compression is False or not hw.is_hub:
+            return c
+        T = self.equilibrium.tensions
+        at_joint = t.joint_mask[t.edges[c]].any(axis=1)
+        load = np.array([hw.buckling_load(float(L)) for L in self.plan.lengths[c]])
+        return c[at_joint | (-T[c] * BUCKLING_SAFETY > load)]
+
+    @property
     def in_tension(self) -> bool:
-        return self.plan.target.compression or self.compressed.size == 0
+        """No rod pushes where the hardware does not hold it (:attr:`unheld`)."""
+        return self.unheld.size == 0
 
     @property
     def meets_tolerance(self) -> bool:
@@ -136,10 +161,10 @@ class NetCheck:
 
     @property
     def out_of_window(self) -> np.ndarray:
-        """Rods whose pivot-to-pivot length, with the hubs' sockets turned, left the lengths
-        the catalog prints (indices)."""
+        """Rods whose pivot-to-pivot length (a spliced rod's per piece), with the hubs' sockets
+        turned, left the lengths the catalog prints (indices)."""
         lo, hi = self.plan.length_range
-        L = np.asarray(self.plan.lengths, float)
+        L = self.plan.piece_lengths
         return np.flatnonzero((L < lo - LENGTH_TOL) | (L > hi + LENGTH_TOL))
 
     @property
@@ -166,14 +191,17 @@ class NetCheck:
             return f"{pct}: {st.message} The best fit within the rods' mass ranges{how} is the closest; a catalog " \
                    "with a wider mass range, more anchored nodes or a target closer to a hanging shape would reach it"
         if not self.in_tension:
-            c = self.compressed
-            return f"{pct}, but rods {c[:8].tolist()} push (compression): allow it with net.compression: true " \
-                   "or anchor more nodes"
+            c = self.unheld
+            why = ("" if self.plan.target.compression is False else
+                   ": point nodes hold no push" if not self.plan.hardware.is_hub else
+                   ": at two-rod joints, which fold, or beyond a fifth of their buckling load")
+            return f"{pct}, but rods {c[:8].tolist()} push (compression){why}; allow it with net.compression: " \
+                   "true, or anchor more nodes"
         if self.out_of_window.size:
             k = int(self.out_of_window[0])
             lo, hi = self.plan.length_range
             return (f"{pct}, but with the hubs' sockets turned {self.out_of_window.size} rod(s) leave the "
-                    f"{lo:g}-{hi:g} mm the catalog prints (rod {k}: {self.plan.lengths[k]:.4g} mm); a catalog "
+                    f"{lo:g}-{hi:g} mm the catalog prints (rod {k}: {self.plan.piece_lengths[k]:.4g} mm{' a piece' if self.plan.rod_pieces[k] > 1 else ''}); a catalog "
                     "with that length, or the net drawn with shorter edges there, would build it")
         over = np.argwhere(self.swing_deg > self.plan.swing_limits[:, None])
         return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
@@ -228,7 +256,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     if plan.bent:
         plan, com_rounds = settle_com(plan, g=g)
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-              allow_compression=t.compression, g=g, com=plan.statics_com)
+              allow_compression=bool(t.compression), g=g, com=plan.statics_com)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
     # a step (a dense bounded least squares on hundreds of masses), so the statics' best fit
     # stays; otherwise the statics' masses, solved once from the target, are refined through
@@ -340,7 +368,7 @@ def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> t
     for used in range(1, rounds + 1):
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
-                               allow_compression=t.compression, g=g, explain=False)
+                               allow_compression=bool(t.compression), g=g, explain=False)
         new = plan.rod_com(st.masses)
         change = float(np.max(np.abs(new - com)))
         com = new
@@ -395,5 +423,5 @@ def _forces_balance(plan: NetPlan, g: float) -> bool:
     t = plan.target
     fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
                            node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
-                           allow_compression=t.compression, g=g, forces_only=True)
+                           allow_compression=bool(t.compression), g=g, forces_only=True)
     return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

@@ -22,7 +22,12 @@ from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["design_drawn_net", "slack_joints", "weak_edges"]
+__all__ = ["RETRIES", "design_drawn_net", "slack_joints", "weak_edges"]
+
+#: Rounds of drawn edges made one rod where their joints cannot hang: each round adds the edges
+#: whose joints the last round's design could not hang either (bounded: each round designs the
+#: net again).
+RETRIES = 3
 
 
 def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int = 0,
@@ -49,8 +54,10 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
             check = other
     tried: frozenset[int] = frozenset()
-    for _ in range(2):  # joints that cannot hang: their edges one rod between larger hubs, where the family's do
-        weak = frozenset(weak_edges(check)) | tried
+    last = check
+    for _ in range(RETRIES):  # joints that cannot hang: their edges one rod (between larger hubs, or spliced)
+        # (the joints left where the last try's could not hang either: in line with their rods, say)
+        weak = frozenset(weak_edges(check)) | frozenset(weak_edges(last)) | tried
         if check.ok or weak == tried:
             break
         tried = weak
@@ -58,15 +65,19 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
             plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak)
         except DesignLimit:
             break
-        other = design_net_plan(plan, **kw)
+        other = last = design_net_plan(plan, **kw)
         if _rank(other) > _rank(check):
+            k = plan.rod_pieces
+            spliced = (f" ({int(np.count_nonzero(k > 1))} of them, longer than one rod between the family's largest "
+                       f"hubs, spliced rigidly from {int(k.max())} printed pieces on steel dowel pins)"
+                       if np.any(k > 1) else "")
             other.notes.append(f"The two-rod joints on drawn edge(s) {sorted(weak)[:8]} could not hang on the target "
                                f"within the tolerance (the net hung {100 * check.rel_size:.3g} % of its size off it): "
-                               "those edges are one rod each, between hubs of the family made larger to take what "
-                               "the rod cannot.")
+                               f"those edges are one rod each{spliced}, between hubs of the family made larger to take "
+                               "what the rod cannot.")
             check = other
     if not check.ok:
-        why = slack_joints(check)
+        why = slack_joints(check, None if last is check else last)
         if why:
             check.why = why + (" " + check.why if check.why else "")
             check.notes.append(why)
@@ -102,8 +113,10 @@ def _weak(check: NetCheck) -> np.ndarray:
         return np.zeros(t.m, dtype=bool)
     jm = t.joint_mask
     far = jm & (check.node_error > check.tolerance * t.size)  # joints that hang off the tolerance
-    if not check.equilibrium.stable:  # joints in line with their rods balance only inverted
-        far |= _in_line(t)
+    if not check.equilibrium.stable:  # joints in line with their rods balance only inverted; where none
+        # is, the unstable mode is one of the joints' all the same (a ball between two rods is the net's hinge)
+        line = _in_line(t)
+        far |= line if line[jm].any() else jm
     return far[t.edges].any(axis=1) | (jm[t.edges].any(axis=1) & (T <= SLACK * float(np.max(np.abs(T), initial=0.0))))
 
 
@@ -114,9 +127,10 @@ def weak_edges(check: NetCheck) -> list[int]:
     return sorted({int(x) for x in src[_weak(check)]})
 
 
-def slack_joints(check: NetCheck) -> str:
+def slack_joints(check: NetCheck, tried: NetCheck | None = None) -> str:
     """Where two-rod joints cannot hang (their rods slack or pushing at the design), in words with
-    the hardware that would hold them: a rod as long as the edge, or a rigid in-line splice."""
+    the hardware that would hold them: a rod as long as the edge, or a rigid in-line splice, and
+    how the net hung when the planner ``tried`` them so (the last such design, None: not tried)."""
     plan = check.plan
     t = plan.target
     T = check.equilibrium.tensions
@@ -141,5 +155,11 @@ def slack_joints(check: NetCheck) -> str:
     return (f"The two-rod joints on {len(edges)} drawn edge(s) ({edges[:8]}) cannot hang on the target within the "
             f"tolerance ({check.tolerance * t.size:.3g} mm): {why}; a ball joint between two rods carries its weight "
             f"only by a kink below its chord. A rod of {need:.4g} mm between the family's largest hubs (pivot radius "
-            f"{big:g} mm; the rod family's length.max) or a rigid in-line splice of the rods (not in this catalog) "
-            "would hold them.")
+            f"{big:g} mm; the rod family's length.max) or a rigid in-line splice (node.splice) would hold them"
+            + (f"; planned so (one rod each, spliced where longer), the net {_verdict(tried)}" if tried is not None
+               else "") + ".")
+
+
+def _verdict(check: NetCheck) -> str:
+    """How a tried design fell short, in its own words (:meth:`NetCheck.limit`)."""
+    return check.limit() if not check.ok else "met the tolerance"

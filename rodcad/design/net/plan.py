@@ -27,7 +27,12 @@ from rodcad.design.net.joints import hang_joints, merge_close, pieces, split_lon
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["NetPlan", "POINT_WIDTH", "fill_lengths", "length_range", "mass_segments", "plan_net", "replan", "rod_bounds"]
+__all__ = ["NetPlan", "POINT_WIDTH", "SPLICE_MARGIN", "fill_lengths", "length_range", "mass_segments", "plan_net",
+           "replan", "rod_bounds", "rod_numbers"]
+
+#: A spliced rod's pieces are each at most this share of the longest rod the catalog prints:
+#: the margin :func:`_first_count` keeps for rods in line (the sockets turned lengthen rods).
+SPLICE_MARGIN = 0.97
 
 
 @dataclass
@@ -59,6 +64,8 @@ class NetPlan:
         added_anchors: anchor points added midway between two drawn anchors, (node, (a, b)),
             where two rods to them met tighter than the largest hub allows
             (:func:`rodcad.design.net.collapse.join_anchor_pairs`).
+        pieces: (m,) the printed pieces each rod is spliced from (:mod:`rodcad.catalog.net.splice`;
+            1: one piece), or None: every rod one piece.
     """
 
     target: NetTarget
@@ -78,6 +85,7 @@ class NetPlan:
     collapsed: list = field(default_factory=list)
     between_anchors: int = 0
     added_anchors: list = field(default_factory=list)
+    pieces: np.ndarray | None = None
 
     def hub(self, k: int) -> NodeHardware:
         """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`)."""
@@ -105,6 +113,23 @@ class NetPlan:
     @property
     def bent(self) -> bool:
         return bool(np.any(self.target.bends > 0))
+
+    @property
+    def rod_pieces(self) -> np.ndarray:
+        """(m,) the pieces each rod is printed in (1 where it is not spliced)."""
+        return np.ones(self.target.m, int) if self.pieces is None else np.asarray(self.pieces, int)
+
+    @property
+    def piece_lengths(self) -> np.ndarray:
+        """(m,) each rod's share of pivot-to-pivot length per printed piece (mm): what the
+        catalog's length window bounds."""
+        return np.asarray(self.lengths, float) / self.rod_pieces
+
+    def numbers(self, lengths=None) -> list[NetRodNumbers]:
+        """Each rod's numbers at ``lengths`` (mm; default its own): a bent rod's at its fill
+        length, a spliced rod's over its pieces."""
+        lengths = self.lengths if lengths is None else lengths
+        return rod_numbers(self.hardware, lengths, self.target.bends, self.pieces)
 
     @property
     def fill_lengths(self) -> np.ndarray:
@@ -147,6 +172,14 @@ class NetPlan:
         if not self.bent:
             return None
         return self.com if self.com is not None else self.rod_com(self.bounds.mean(axis=1))
+
+
+def rod_numbers(hw, lengths, bends, pieces=None) -> list[NetRodNumbers]:
+    """Per rod, its numbers (:meth:`rodcad.catalog.net.node.NodeHardware.rod_numbers`) at its fill
+    length, over its ``pieces`` (None: one each)."""
+    flen = fill_lengths(hw, lengths, bends)
+    ks = np.ones(len(flen), int) if pieces is None else np.asarray(pieces, int)
+    return [hw.rod_numbers(float(L), int(k)) for L, k in zip(flen, ks)]
 
 
 def fill_lengths(hw, lengths, bends) -> np.ndarray:
@@ -210,8 +243,8 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     t, between = _collapsed(t, hw, lo_hw, hi)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
-    one, floor = _whole_floor(base, hw, hi, whole)
-    counts[one] = 1
+    one, floor, spliced = _whole_floor(base, hw, hi, whole)
+    counts[one | spliced] = 1
     rp_base = size_hubs(base, hw, lo_hw, hi, floor)[0]
     for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
         # (the first and last joints set in by how much larger their end hubs are than a joint's)
@@ -219,7 +252,8 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         node_pivot, problems = size_hubs(t, hw, lo_hw, hi, np.concatenate([floor, np.zeros(t.n - base.n)]))
         rp_base = node_pivot[: base.n]
         lengths = _lengths(t, node_pivot)
-        long = np.flatnonzero(lengths > hi * (1 + 1e-9))
+        pieces = np.where(spliced[parent], np.ceil(lengths / (SPLICE_MARGIN * hi) - 1e-12), 1).astype(int)
+        long = np.flatnonzero(lengths / np.maximum(pieces, 1) > hi * (1 + 1e-9))
         if not long.size:
             break
         grow = np.unique(parent[long])
@@ -239,8 +273,8 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     if problems:
         raise DesignLimit("; ".join(problems) + _coarser(target, hw, lo_hw))
     if hang and t.joints is not None and len(t.joints):
-        t = _hung(t, base, parent, counts, hw, node_pivot, g)
-    plan = _plan(t, hw, node_pivot, (lo_hw, hi))
+        t = _hung(t, base, parent, counts, hw, node_pivot, g, pieces)
+    plan = _plan(t, hw, node_pivot, (lo_hw, hi), pieces if np.any(pieces > 1) else None)
     plan.merged = merged
     plan.collapsed = collapses(base, merged)
     plan.between_anchors = between
@@ -278,23 +312,25 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
 
 
 def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int]
-                 ) -> tuple[np.ndarray, np.ndarray]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The edges of ``base`` on the drawn edges ``whole`` that one rod between larger hubs of
     the family spans (node to node at most the longest rod plus two of the largest pivot
-    radii), and (n,) the least pivot radius each node then needs: half of what the edge is
-    longer than the longest rod, at each end (mm)."""
+    radii), (n,) the least pivot radius each node then needs: half of what the edge is
+    longer than the longest rod, at each end (mm), and the straight edges of ``whole`` beyond
+    that reach: one rigid rod each, spliced from pieces (:mod:`rodcad.catalog.net.splice`)."""
     one = np.zeros(base.m, dtype=bool)
     floor = np.zeros(base.n)
     if not whole or not hw.is_hub:
-        return one, floor
+        return one, floor, one.copy()
     src = base.source if base.source is not None else np.arange(base.m)
     d = base.edge_lengths
-    half = (d - 0.97 * longest) / 2  # (the margin _first_count keeps: the sockets turned lengthen rods)
-    one = np.isin(src, sorted(whole)) & (half <= hw.pivot_limits[1])
+    half = (d - SPLICE_MARGIN * longest) / 2
+    chosen = np.isin(src, sorted(whole))
+    one = chosen & (half <= hw.pivot_limits[1])
     for e in np.flatnonzero(one):
         for k in base.edges[e]:
             floor[k] = max(floor[k], half[e])
-    return one, floor
+    return one, floor, chosen & ~one & (base.bends <= 0)
 
 
 def _coarser(t: NetTarget, hw: NodeHardware, shortest: float) -> str:
@@ -318,7 +354,7 @@ def _first_count(base: NetTarget, e: int, node_pivot: np.ndarray, rp_min: float,
     i, j = (int(x) for x in base.edges[e])
     d = float(np.linalg.norm(base.positions[j] - base.positions[i]))
     free = d - node_pivot[i] - node_pivot[j] + 2 * rp_min
-    return pieces(free, 0.97 * hi + 2 * rp_min)
+    return pieces(free, SPLICE_MARGIN * hi + 2 * rp_min)
 
 
 def _lengths(t: NetTarget, node_pivot: np.ndarray) -> np.ndarray:
@@ -335,15 +371,16 @@ def _rod_axes(t: NetTarget, node_pivot: np.ndarray) -> tuple[np.ndarray, np.ndar
     return u, np.stack([r[:, :1] * u, -r[:, 1:] * u], axis=1), d - r.sum(axis=1)
 
 
-def _plan(t: NetTarget, hw: NodeHardware, node_pivot: np.ndarray, window: tuple[float, float]) -> NetPlan:
-    """The plan on a buildable target with each node's pivot radius."""
+def _plan(t: NetTarget, hw: NodeHardware, node_pivot: np.ndarray, window: tuple[float, float],
+          pieces: np.ndarray | None = None) -> NetPlan:
+    """The plan on a buildable target with each node's pivot radius (and its rods' pieces)."""
     edges, n = t.edges, t.n
     u, pivots, lengths = _rod_axes(t, node_pivot)
     degree = np.bincount(edges.ravel(), minlength=n)
-    rods = [hw.rod_numbers(float(L)) for L in fill_lengths(hw, lengths, t.bends)]
+    rods = rod_numbers(hw, lengths, t.bends, pieces)
     bounds = np.array([rn.mass_range for rn in rods], float)
     plan = NetPlan(t, hw, pivots, lengths, rods, bounds, np.zeros(n), np.zeros((n, 3)), window, degree,
-                   node_pivot=np.asarray(node_pivot, float))
+                   node_pivot=np.asarray(node_pivot, float), pieces=pieces)
     dirs: list[list[np.ndarray]] = [[] for _ in range(n)]
     for e, (i, j) in enumerate(edges):
         dirs[i].append(u[e])
@@ -365,7 +402,7 @@ def _directions(t: NetTarget, pivots: np.ndarray) -> list[np.ndarray]:
 
 
 def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw: NodeHardware,
-          node_pivot: np.ndarray, g: float) -> NetTarget:
+          node_pivot: np.ndarray, g: float, pieces: np.ndarray) -> NetTarget:
     """The joints moved to their funicular sag, from the statics of ``base`` with each split
     edge one rod of its pieces' mass ranges and joints (:func:`rodcad.design.net.joints.hang_joints`)."""
     from optimize import design_net_masses
@@ -381,14 +418,14 @@ def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw
     for e in range(base.m):
         rods = np.flatnonzero(src == e)
         for q in rods:
-            bounds[e] += hw.rod_numbers(float(full[q])).mass_range
+            bounds[e] += hw.rod_numbers(float(full[q]), int(pieces[q])).mass_range
         bounds[e] += (len(rods) - 1) * per_joint
     node_masses = np.zeros(base.n)
     dirs = _directions(base, pivots)
     for k in range(base.n):
         node_masses[k] = hw.sized(rp[k]).hub_mass(dirs[k])[0]
     st = design_net_masses(base.positions, base.edges, lengths, bounds, base.anchored, node_masses=node_masses,
-                           pivots=pivots, allow_compression=base.compression, g=g, forces_only=True)
+                           pivots=pivots, allow_compression=bool(base.compression), g=g, forces_only=True)
     T = st.tensions[src]
     per_piece = np.array([(st.masses[src[q]] - (counts[src[q]] - 1) * per_joint) / counts[src[q]]
                           for q in range(t.m)])
@@ -400,11 +437,12 @@ def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw
 POINT_WIDTH = 1e-6
 
 
-def mass_segments(hw, length: float) -> list[tuple[float, float]]:
-    """The masses a rod can be built at (:meth:`rodcad.catalog.net.node.NodeHardware.rod_intervals`)
-    as disjoint segments, ascending; a single mass given :data:`POINT_WIDTH` below it."""
+def mass_segments(hw, length: float, pieces: int = 1) -> list[tuple[float, float]]:
+    """The masses a rod (of ``pieces``) can be built at (:meth:`rodcad.catalog.net.node.
+    NodeHardware.rod_intervals`) as disjoint segments, ascending; a single mass given
+    :data:`POINT_WIDTH` below it."""
     segs: list[list[float]] = []
-    for _, lo, hi in sorted(hw.rod_intervals(length), key=lambda x: x[1]):
+    for _, lo, hi in sorted(hw.rod_intervals(length, int(pieces)), key=lambda x: x[1]):
         if hi - lo < POINT_WIDTH * hi:
             lo = hi * (1 - POINT_WIDTH)
         if segs and lo <= segs[-1][1]:
@@ -416,11 +454,10 @@ def mass_segments(hw, length: float) -> list[tuple[float, float]]:
 
 def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     """The plan with new pivots: lengths, mass bounds and hub centres of mass follow."""
-    t, hw = plan.target, plan.hardware
+    t = plan.target
     ends = t.positions[t.edges] + pivots
     lengths = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
-    flen = fill_lengths(hw, lengths, t.bends)
-    rods = [hw.rod_numbers(float(L)) for L in flen]
+    rods = plan.numbers(lengths)
     node_com = np.zeros((t.n, 3))
     node_masses = plan.node_masses.copy()
     for k, dk in enumerate(_directions(t, pivots)):
@@ -436,10 +473,10 @@ def rod_bounds(plan: NetPlan, lengths: np.ndarray, rods: list[NetRodNumbers] | N
     hw = plan.hardware
     flen = fill_lengths(hw, lengths, plan.target.bends)
     if rods is None:
-        rods = [hw.rod_numbers(float(L)) for L in flen]
+        rods = plan.numbers(lengths)
     bounds = np.array([r.mass_range for r in rods], float)
     if plan.segment is not None:
-        for e, L in enumerate(flen):
-            segs = mass_segments(hw, float(L))
+        for e, (L, k) in enumerate(zip(flen, plan.rod_pieces)):
+            segs = mass_segments(hw, float(L), int(k))
             bounds[e] = segs[min(int(plan.segment[e]), len(segs) - 1)]
     return bounds

@@ -131,9 +131,12 @@ def net_spec() -> Obj:
             "edge_length": Field(Num(exclusive_minimum=0, maximum=10000, unit="mm"),
                                  description="Refine to the finer net whose mean edge is nearest this length (mm): "
                                  "refine N = the mean edge over it, rounded (at least 1); with 'refine', the larger."),
-            "compression": Field(Bool(), default=False,
-                                 description="Let rods push (by default every rod of a hanging net stays in "
-                                 "tension)."),
+            "compression": Field(Bool(),
+                                 description="true: any rod may push; false: every rod stays in tension. Unset "
+                                 "(the default): a rod may push where the hardware holds it: one rigid rod "
+                                 "between two hubs (their ball sockets hold it either way), not at a two-rod "
+                                 "joint, pushing less than a fifth of its buckling load (material.modulus); "
+                                 "point nodes keep every rod in tension."),
         },
         description="A net of rods (three or more at a joint, 3D, z up) to hang in a target shape: nodes "
         "and edges, or generated from a surface, a mesh or rings and spokes.",

@@ -42,7 +42,8 @@ class NetTarget:
         anchored: (k,) anchored node indices, ascending.
         anchored_as: the keyword that chose them, or '' for a list.
         dropped: rods left out because both their nodes are anchored (a generated set).
-        compression: rods may push.
+        compression: rods may push (True), every rod in tension (False), or rods push where the
+            hardware holds them (None, the default: :attr:`rodcad.design.net.check.NetCheck.unheld`).
         shape: (u, v) cells, (rings, spokes), or ().
         written: the block as written (for design.json and the report).
         rod_bends: (m,) each rod's bend (sagitta over chord of its body's arc, 0 straight;
@@ -65,7 +66,7 @@ class NetTarget:
     anchored: np.ndarray
     anchored_as: str = ""
     dropped: int = 0
-    compression: bool = False
+    compression: bool | None = None
     shape: tuple[int, ...] = ()
     written: dict[str, Any] = field(default_factory=dict)
     rod_bends: np.ndarray | None = None
@@ -352,7 +353,7 @@ def net_target(net: dict[str, Any], v: Any, base: Path) -> NetTarget | None:
     if not v.ok("net"):
         return None
     return NetTarget(kind=kind, positions=pos, edges=edges, anchored=anchored, anchored_as=anchored_as,
-                     dropped=dropped, compression=bool(net.get("compression", False)), shape=layout.shape,
+                     dropped=dropped, compression=net.get("compression"), shape=layout.shape,
                      written=dict(net), rod_bends=bends, surface=layout.surface, refine_edges=split_edges)
 
 

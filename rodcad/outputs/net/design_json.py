@@ -47,6 +47,8 @@ def planner_json(plan) -> dict[str, Any]:
                              "moved_mm": c.moved_mm, "into_anchor": c.anchored} for c in plan.collapsed],
         "rods_between_anchors_left_out": int(plan.between_anchors),
         "added_anchors": [{"node": k, "between_drawn_anchors": list(pair)} for k, pair in plan.added_anchors],
+        "spliced_rods": [{"rod": int(e), "edge": int(src[e]), "pieces": int(plan.rod_pieces[e])}
+                         for e in np.flatnonzero(plan.rod_pieces > 1)],
         "rod_edge": [int(x) for x in src],
         "hub_pivot_radii": sizes,
     }
@@ -56,19 +58,45 @@ def rod_balls(check) -> np.ndarray:
     """(m,) the steel balls each rod holds at its designed mass (the fewest whose range holds
     it: :meth:`rodcad.catalog.net.node.NodeHardware.rod_fill`)."""
     hw = check.plan.hardware
-    return np.array([hw.rod_fill(float(L), float(m))[0] for L, m in zip(check.plan.fill_lengths, check.masses)], int)
+    plan = check.plan
+    return np.array([hw.rod_fill(float(L), float(m), int(k))[0]
+                     for L, m, k in zip(plan.fill_lengths, check.masses, plan.rod_pieces)], int)
+
+
+def _splice(hw, length: float, mass: float, pieces: int) -> dict[str, Any] | None:
+    """A spliced rod's pieces (:mod:`rodcad.catalog.net.splice`): where each is cut, its balls and
+    cavity, and the dowel pins; None for a rod of one piece."""
+    if pieces <= 1:
+        return None
+    from rodcad.catalog.net.splice import piece_extents, splice_fill
+
+    fills, _ = splice_fill(hw, length, mass, pieces)
+    sp = hw.splice
+    return {"pieces": [{"from": x0, "to": x1, "steel_balls": int(b), "cavity_mm3": c}
+                       for (x0, x1, _, _), (b, c) in zip(piece_extents(hw, length, pieces), fills)],
+            "dowel_pins": pieces - 1, "pin": {"diameter": sp.pin_diameter, "length": sp.pin_length,
+                                              "hole_diameter": 2 * sp.hole_radius, "hole_depth": sp.depth}}
 
 
 def net_bill(check, catalog) -> dict[str, Any]:
-    """What to print and buy: hubs (or point parts), rods, steel balls, filament (g)."""
+    """What to print and buy: hubs (or point parts), rods (a spliced rod's pieces and dowel pins),
+    steel balls, filament (g)."""
     plan, hw = check.plan, check.plan.hardware
     balls = rod_balls(check)
     ball_mass = hw.insert_density * math.pi / 6 * hw.insert_diameter ** 3 / 1000.0
-    rod_plastic = float(np.sum(check.masses - balls * ball_mass))
+    pins = int(np.sum(plan.rod_pieces - 1))
+    rod_plastic = float(np.sum(check.masses - balls * ball_mass) - pins * hw.splice.pin_mass)
     out: dict[str, Any] = {"rods": plan.target.m, "rod_plastic_g": rod_plastic,
                            "steel_balls": int(balls.sum())}
     if balls.sum():
         out["steel_ball"] = {"diameter": hw.insert_diameter, "density": hw.insert_density}
+    if pins:
+        sp = hw.splice
+        out["spliced_rods"] = int(np.count_nonzero(plan.rod_pieces > 1))
+        out["rod_pieces"] = int(plan.rod_pieces.sum())
+        out["dowel_pins"] = pins
+        out["dowel_pin"] = {"diameter": sp.pin_diameter, "length": sp.pin_length, "density": sp.pin_density,
+                            "note": "glued into both pieces' holes"}
     if hw.is_hub:
         held = plan.degree > 0  # a node no rod reaches (an anchor between anchors) needs no hub
         out["hubs"] = int(np.count_nonzero(held))
@@ -121,6 +149,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
     # the plan's per-rod arrays are properties computed over every rod: read each once
     arcs = plan.arcs
     fill = plan.fill_lengths
+    pieces = plan.rod_pieces
     target_ends = plan.target_ends
     swing_limits = plan.swing_limits if hw.is_hub else None
     com = plan.com if plan.com is not None else plan.rod_com(check.masses)
@@ -129,7 +158,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
         L = float(plan.lengths[e])
         Lf = float(fill[e])
         arc = arcs[e]
-        fill_e = hw.rod_fill(Lf, float(check.masses[e]))
+        fill_e = hw.rod_fill(Lf, float(check.masses[e]), int(pieces[e]))
         rods.append({
             "index": e,
             "nodes": [int(x) for x in t.edges[e]],
@@ -147,6 +176,8 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "body_length": rn.body_length,
             "diameter": hw.rod_diameter,
             "shape": "straight" if arc is None else "bent",
+            "pieces": int(pieces[e]),
+            "splice": _splice(hw, L, float(check.masses[e]), int(pieces[e])),
             "bend": None if arc is None else {"bend": arc.bend, "sagitta": arc.sagitta, "radius": arc.radius,
                                               "half_angle_deg": float(np.degrees(arc.half_angle)),
                                               "plane": "vertical through the chord, bowing down"},
@@ -179,6 +210,9 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "anchored": [int(x) for x in t.anchored],
             "anchored_as": t.anchored_as or None,
             "compression_allowed": bool(t.compression),
+            "compression": ("allowed" if t.compression else "not allowed" if t.compression is False or not hw.is_hub
+                            else "where the hardware holds it"),
+            "pushing_unheld": [int(x) for x in check.unheld],
             "rods_left_out": int(t.dropped),
             "statics": {"exact": bool(st.exact), "residual": _f(st.residual), "margin": _f(st.margin),
                         "message": st.message, "refined": bool(check.design.refined)},

@@ -76,6 +76,12 @@ def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
                    "one rod to the point between them: "
                    + "; ".join(f"node {a['node']} between anchors {a['between_drawn_anchors']}" for a in add[:6])
                    + ". The frame holds the net there too.")
+    if pl.get("spliced_rods"):
+        sp = pl["spliced_rods"]
+        out.append(f"- {len(sp)} drawn edge(s) whose two-rod joints could not hang within the tolerance, and longer "
+                   "than one rod between the family's largest hubs, are each one rigid rod spliced from printed pieces "
+                   "on steel dowel pins (rods " + ", ".join(f"{s['rod']} in {s['pieces']}" for s in sp[:8])
+                   + (", ..." if len(sp) > 8 else "") + " pieces).")
     if pl.get("rods_between_anchors_left_out"):
         out.append(f"- {pl['rods_between_anchors_left_out']} rod(s) that would have joined two anchors are left out "
                    "(the anchors hold both ends).")
@@ -111,7 +117,8 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
               f"{_list([int(x) for x in check.slack]) if check.slack.size else 'none'}.",
               f"- Rods in compression: {check.compressed.size}"
               + ("" if not check.compressed.size else f" ({_list([int(x) for x in check.compressed])})"
-                 + (" (allowed)" if t.compression else " (not allowed)")) + ".",
+                 + (" (allowed)" if t.compression else " (not allowed)" if t.compression is False or check.unheld.size
+                    else " (held: rigid rods between hubs, under a fifth of their buckling load)")) + ".",
               f"- Design time {check.time_s:.2f} s."]
     for note in check.notes[1:]:
         lines.append(f"- {note}")
@@ -138,16 +145,26 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     what = ("Round rods printed to order, bent where 'bow' is not 0 (bow: the sagitta over the chord of the body's arc; each "
             "hangs below its chord in the vertical plane through it, its centre of mass 'below' mm off the chord)"
             if bent else "Straight round rods printed to order")
+    spliced = [r for r in net["rods"] if r.get("splice")]
     lines += ["## Rods", "",
-              f"{what} ({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls).", "",
-              "| rod | nodes | length (mm) | mass (g) | range (g) | steel balls | tension (mN) |"
-              + (" bow | below (mm) |" if bent else ""),
-              "|---:|---|---:|---:|---|---:|---:|" + ("---:|---:|" if bent else "")]
+              f"{what} ({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls).", ""]
+    if spliced:
+        pin = spliced[0]["splice"]["pin"]
+        lines += [f"{len(spliced)} rod(s) longer than the catalog prints are spliced: each is printed in the 'pieces' "
+                  "shown, cut square to its axis at equal shares of its length, and is one rigid rod once a steel "
+                  f"dowel pin ({pin['diameter']:g} x {pin['length']:g} mm) is glued into the "
+                  f"{pin['hole_diameter']:g} mm bores ({pin['hole_depth']:g} mm deep) of each cut's two faces; its "
+                  "mass counts its pins, its pieces are filled alike so its centre of mass stays at mid-length.", ""]
+    lines += ["| rod | nodes | length (mm) | mass (g) | range (g) | steel balls | tension (mN) |"
+              + (" bow | below (mm) |" if bent else "") + (" pieces |" if spliced else ""),
+              "|---:|---|---:|---:|---|---:|---:|" + ("---:|---:|" if bent else "") + ("---:|" if spliced else "")]
     for r in net["rods"]:
         extra = ""
         if bent:
             b = r.get("bend")
             extra = f" {b['bend']:.3g} | {r['com'][1]:.3f} |" if b else " 0 | 0 |"
+        if spliced:
+            extra += f" {r.get('pieces', 1)} |"
         lines.append(f"| {r['index']} | {r['nodes'][0]}-{r['nodes'][1]} | {r['length']:.2f} | {r['mass']:.3f} | "
                      f"{r['mass_range'][0]:.2f}-{r['mass_range'][1]:.2f} | {r['steel_balls']} | "
                      f"{r['tension']:.3g} |{extra}")
@@ -166,6 +183,11 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                      + ", ".join(f"{c} x {k}" for k, c in bom.get("hub_sizes", {}).items()))
     else:
         lines.append(f"- {bom['point_parts']} x {bom['point_part']}")
+    if bom.get("dowel_pins"):
+        pin = bom["dowel_pin"]
+        lines.append(f"- {bom['dowel_pins']} steel dowel pins, {pin['diameter']:g} x {pin['length']:g} mm (e.g. ISO "
+                     f"8734), glued into the bores of the {bom['spliced_rods']} spliced rods' pieces "
+                     f"({bom['rod_pieces']} printed rod pieces in all)")
     if bom["steel_balls"]:
         lines.append(f"- {bom['steel_balls']} steel balls, {bom['steel_ball']['diameter']:g} mm (inserted at a "
                      "print pause)")
@@ -277,7 +299,8 @@ def planner_summary(plan) -> str:
     drawn = t.drawn if t.drawn is not None else t
     collapsed, added = list(plan.collapsed), list(plan.added_anchors)
     split = len(t.joints) if t.joints is not None else 0
-    if not (collapsed or added or split or plan.merged or plan.between_anchors):
+    spliced = int(np.count_nonzero(plan.rod_pieces > 1))
+    if not (collapsed or added or split or plan.merged or plan.between_anchors or spliced):
         return ""
     what = []
     if collapsed:
@@ -288,6 +311,8 @@ def planner_summary(plan) -> str:
         what.append(f"{len(plan.merged)} group(s) of nearly coincident nodes merged")
     if split:
         what.append(f"{split} two-rod joint(s) on long edges")
+    if spliced:
+        what.append(f"{spliced} long rod(s) spliced from {int(plan.rod_pieces.sum()) - t.m + spliced} printed pieces")
     if added:
         what.append(f"{len(added)} anchor point(s) added")
     if plan.between_anchors:

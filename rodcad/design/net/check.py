@@ -13,6 +13,7 @@ ends).
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -204,8 +205,26 @@ class NetCheck:
                     f"{lo:g}-{hi:g} mm the catalog prints (rod {k}: {self.plan.piece_lengths[k]:.4g} mm{' a piece' if self.plan.rod_pieces[k] > 1 else ''}); a catalog "
                     "with that length, or the net drawn with shorter edges there, would build it")
         over = np.argwhere(self.swing_deg > self.plan.swing_limits[:, None])
+        worst = float(np.max(self.swing_deg[over[:, 0], over[:, 1]]))
         return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
-               f"than the {self.plan.swing_limits[over[0][0]]:.3g} deg the hub allows"
+               f"than the {self.plan.swing_limits[over[0][0]]:.3g} deg the hub allows ({len(over)} rod end(s), " \
+               f"up to {worst:.3g} deg); {_wider_cone(self.plan.hardware, worst)}"
+
+
+def _wider_cone(hw, turn: float) -> str:
+    """The socket hardware that lets a rod turn ``turn`` deg, in words: the cone it needs (the
+    neck's clearance added), if one still holds the ball (its opening 0.2 mm narrower than the
+    ball, :meth:`rodcad.catalog.net.node.NodeHardware.problems`), else a thinner neck."""
+    rs = hw.socket_radius
+    neck = math.degrees(math.asin(min(1.0, (hw.neck / 2) / rs)))
+    need = turn + neck
+    hold = math.degrees(math.asin(min(1.0, (hw.ball / 2 - 0.1) / rs)))
+    if need <= hold:
+        return (f"a node.cone_deg of {math.ceil(need * 10) / 10:g} (the catalog's {hw.cone_deg:g}; at most {hold:.3g} "
+                f"still holds the {hw.ball:g} mm ball) would let this design's rods turn so far (a wider cone lightens the hubs, "
+                "and the design changes with it)")
+    return (f"no cone that still holds the {hw.ball:g} mm ball lets it (at most {hold:.3g} deg): a thinner node.neck "
+            f"than {hw.neck:g} mm, or the net drawn with its rods meeting nearer their hubs' lines, would")
 
 
 def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,

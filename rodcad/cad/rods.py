@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Collection, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -256,7 +256,7 @@ def _key(rod: RodType, target: float, seed: int, roof: RoofPlan | None = None) -
 
     raised = () if roof is None else roof.key()
     return make_key("fab", FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION, POOL_SIZE, RADIUS_FACTOR,
-                    rod.geometry.key_data(), asdict(rod.material),
+                    rod.geometry.key_data(), rod.material.key_data(),
                     rod.balls_json(), round(float(target), 9), int(seed), *raised)
 
 

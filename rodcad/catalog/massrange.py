@@ -118,7 +118,7 @@ def _key(rod: RodType) -> str:
     from rodcad.catalog.model import GEOMETRY_VERSION
 
     return make_key("mass", MASSRANGE_VERSION, GEOMETRY_VERSION, MIN_CAVITY_RADIUS, RADIUS_STEP,
-                    rod.geometry.key_data(), asdict(rod.material),
+                    rod.geometry.key_data(), rod.material.key_data(),
                     rod.balls_json(),
                     *(() if rod.fill is None else ("fill", CHAMBER_VERSION, asdict(rod.fill))))
 

@@ -34,6 +34,11 @@ class Material:
     min_wall: float
     modulus: float = DEFAULT_MODULUS
 
+    def key_data(self) -> dict:
+        """What a rod's solids and masses depend on (cache keys): not the modulus, which only
+        bounds how hard a net rod may push."""
+        return {"name": self.name, "density": self.density, "min_wall": self.min_wall}
+
 
 @dataclass(frozen=True)
 class Balls:

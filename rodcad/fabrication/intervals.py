@@ -6,7 +6,6 @@ a ``fill`` reaches its whole range continuously (:mod:`rodcad.catalog.chamber`):
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -171,7 +170,7 @@ def intervals_key(rod: RodType, seed: int) -> str:
 
     return make_key("fabint", INTERVALS_VERSION, FABRICATE_VERSION, MASSRANGE_VERSION, GEOMETRY_VERSION,
                     POOL_SIZE, RADIUS_FACTOR, MIN_CAVITY_RADIUS, SOLID_TOL, GAP_MERGE,
-                    rod.geometry.key_data(), asdict(rod.material),
+                    rod.geometry.key_data(), rod.material.key_data(),
                     rod.balls_json(), int(seed))
 
 

@@ -23,6 +23,7 @@ from rodcad.cad.net.parts import PartTask, RodSpec
 from rodcad.cad.net.splice import spliced_rod_solids
 from rodcad.catalog.loader import catalog_from_text, load_catalog
 from rodcad.catalog.net.splice import piece_extents, splice_fill
+from rodcad.cli import main
 from rodcad.design.loader import load_design
 from rodcad.pipeline.net import build_net, write_net_outputs
 from rodcad.errors import InputError
@@ -165,3 +166,37 @@ def test_a_catalogs_splice_is_read_and_a_pin_too_thick_is_refused_at_its_key():
     line = next(i for i, s in enumerate(bad.splitlines(), 1) if s == "  splice:") + 1
     got = [str(p) for p in err.value.problems]
     assert any(g.startswith(f"c.yaml:{line}:") and "node.splice.pin_diameter" in g and "wall" in g for g in got), got
+
+
+#: A hub hung from three anchors by straight edges of 108-110 mm (tests/test_net_planner.py's
+#: TRIPOD): its joints cannot hang, each edge is a rod spliced from two pieces.
+TRIPOD = ("design: 1\nname: tripod\nnet:\n  nodes: [[0, 0, 0], [160, 0, 0], [80, 140, 0], [80, 46, -60]]\n"
+          "  edges: [[0, 3], [1, 3], [2, 3]]\n  anchored: [0, 1, 2]\n")
+
+
+def test_a_spliced_nets_files_print_each_piece_and_assemble_each_rod_whole(tmp_path):
+    from build123d import import_step
+
+    (tmp_path / "tripod.yaml").write_text(TRIPOD)
+    out = tmp_path / "out"
+    assert main(["build", str(tmp_path / "tripod.yaml"), "-o", str(out), "--quiet"]) == 0
+    data = json.loads((out / "design.json").read_text())
+    rods = data["net"]["rods"]
+    assert [r["pieces"] for r in rods] == [2, 2, 2]
+    parts = {p["name"]: p for p in data["cad"]["parts"] if p["kind"] == "rod"}
+    # one end piece per distinct rod, printed twice a rod: rods 0 and 1 mirror each other (x = 80)
+    assert sorted(parts) == ["rod-000-a", "rod-002-a"]
+    assert parts["rod-000-a"]["members"] == [0, 1] and parts["rod-000-a"]["count"] == 4
+    assert parts["rod-002-a"]["count"] == 2
+    assert sorted(f.name for f in (out / "rods").glob("*.step")) == ["rod-000-a.step", "rod-002-a.step"]
+    vol = {0: parts["rod-000-a"]["volume_mm3"], 1: parts["rod-000-a"]["volume_mm3"], 2: parts["rod-002-a"]["volume_mm3"]}
+    # assembly.step: each rod whole where it hangs (its two pieces' plastic), rods first in order
+    # (build123d names an instance after its shared shape: rod 1 reads as rod-000)
+    asm = list(import_step(out / "assembly.step").children)
+    for e in range(3):
+        assert asm[e].label.startswith("rod-")
+        whole = asm[e].solids()
+        assert len(whole) == 1 and whole[0].is_valid
+        assert whole[0].volume == pytest.approx(2 * vol[e], rel=VOLUME_REL)
+    # the as-built net (every solid's own volume, the pins' steel) hangs where it was designed
+    assert data["as_built"]["error"]["max_rel_size"] < 1e-3

@@ -119,24 +119,23 @@ def build_net_solids(check, *, printer=None, layer_height: float = 0.2, runner=N
     parts = []
     for (kind, members, rotations), res in zip(owners, results):
         shared = [from_brep(data, label) for label, data in res.solids]
+        whole = from_brep(res.whole, f"{kind}-{members[0]:03d}") if res.whole else None  # (a split hub, a spliced rod)
         part = NetPart(kind, f"{kind}-{members[0]:03d}", members, rotations, shared, res.print_matrices, res.files,
-                       res.mesh_volumes, res.split_reason, list(res.copies))
+                       res.mesh_volumes, res.split_reason, list(res.copies), whole if kind == "rod" else None)
         parts.append(part)
-        whole_hub_solid = from_brep(res.whole) if res.whole else None
         for i, (who, R) in enumerate(zip(members, rotations)):
             if kind == "rod":
                 sp = rod_specs[who]
-                whole = from_brep(res.whole) if res.whole else shared[0]  # (a spliced rod: its pieces joined)
-                rods[who] = _instance(whole, np.eye(3), f"rod-{who:03d}")
+                rods[who] = _instance(part.hanging, np.eye(3), f"rod-{who:03d}")
                 rod_masses[who] = rho * res.volumes[i] + sp.balls * ball_mass + (sp.pieces - 1) * pin_mass
                 if sp.arc is not None:  # measured on the solid: its plastic's centre of mass and its steel balls
                     moment = rho * res.volumes[i] * res.com[i] + ball_mass * bent_socket_centres(hw, sp.arc, sp.balls).sum(axis=0)
                     rod_com[who] = moment / rod_masses[who]
                 continue
             name = f"hub-{who:03d}"
-            whole = len(shared) == 1
-            inst = [_instance(p, R, name if whole else f"{name}-{p.label[-1]}") for p in shared]
-            hubs[who] = inst[0] if whole else _instance(whole_hub_solid, R, name)
+            one = len(shared) == 1
+            inst = [_instance(p, R, name if one else f"{name}-{p.label[-1]}") for p in shared]
+            hubs[who] = inst[0] if one else _instance(whole, R, name)
             mats = [np.asarray(m, float) @ place(R.T, np.zeros(3)) for m in res.print_matrices]
             spec = hub_specs[who]
             splits[who] = HubSplit(inst, mats, R @ res.normal, res.offset, res.off_plane, res.split_reason,
@@ -292,7 +291,7 @@ def write_net_files(check, solids: NetSolids, folder: Path, *, name: str, progre
             if part.kind == "rod":
                 p0, p1 = eq.ends[who]
                 color = tuple(float(c) for c in cmap(norm(m[part.members[0]]))[:3])
-                rods.append((who, AssemblyPart(f"rod-{who:03d}", part.solids[0], rod_matrix(p0, p1), color)))
+                rods.append((who, AssemblyPart(f"rod-{who:03d}", part.hanging, rod_matrix(p0, p1), color)))
                 continue
             at = place(eq.rotations[who], eq.positions[who]) @ place(R, np.zeros(3))
             for i, s in enumerate(part.solids):

@@ -185,6 +185,7 @@ class NetPart:
         split_reason: a hub printed whole: why ('' else).
         copies: per solid, how many each member needs (empty: one each; :class:`rodcad.cad.net.parts.
             PartResult`).
+        whole: what hangs where it is not ``solids[0]``: a spliced rod's pieces joined (None else).
     """
 
     kind: str
@@ -197,6 +198,13 @@ class NetPart:
     mesh_volumes: list
     split_reason: str = ""
     copies: list = field(default_factory=list)
+    whole: object = None
+
+    @property
+    def hanging(self):
+        """The solid assembly.step places for each member: a rod whole (spliced: its pieces
+        joined), else the first printed solid."""
+        return self.whole if self.whole is not None else self.solids[0]
 
     @property
     def count(self) -> int:

@@ -22,7 +22,7 @@ from rodcad.cad.net.build import build_group
 from rodcad.cad.net.parts import PartTask, RodSpec
 from rodcad.cad.net.splice import spliced_rod_solids
 from rodcad.catalog.loader import catalog_from_text, load_catalog
-from rodcad.catalog.net.splice import piece_extents, splice_fill
+from rodcad.catalog.net.splice import Splice, piece_extents, splice_fill
 from rodcad.cli import main
 from rodcad.design.loader import load_design
 from rodcad.pipeline.net import build_net, write_net_outputs
@@ -156,11 +156,12 @@ def test_slack_rungs_are_spliced_rods_and_the_ladder_hangs_where_drawn_as_mujoco
 
 def test_a_catalogs_splice_is_read_and_a_pin_too_thick_is_refused_at_its_key():
     text = (default_catalog_dir() / "pla-parametric.yaml").read_text()
-    assert "\n  gap: 3\n" in text
-    ok = catalog_from_text(text.replace("\n  gap: 3\n", "\n  gap: 3\n  splice: {pin_diameter: 4, pin_length: 20}\n"),
-                           "c.yaml").node
+    shipped = "  splice: {pin_diameter: 3, pin_length: 16, pin_density: 7.85, clearance: 0.1}\n"
+    assert shipped in text and catalog_from_text(text, "c.yaml").node.splice == Splice()  # (the defaults)
+    ok = catalog_from_text(text.replace(shipped, "  splice: {pin_diameter: 4, pin_length: 20}\n"), "c.yaml").node
     assert ok.splice.pin_diameter == 4 and ok.splice.pin_length == 20 and ok.splice.depth == 10.5
-    bad = text.replace("\n  gap: 3\n", "\n  gap: 3\n  splice:\n    pin_diameter: 8\n")
+    assert ok.splice.pin_density == Splice().pin_density  # (unset keys: the defaults)
+    bad = text.replace(shipped, "  splice:\n    pin_diameter: 8\n")
     with pytest.raises(InputError) as err:
         catalog_from_text(bad, "c.yaml")
     line = next(i for i, s in enumerate(bad.splitlines(), 1) if s == "  splice:") + 1

@@ -63,8 +63,12 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
         tried = weak
         try:
             plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak)
-        except DesignLimit:
-            break
+        except DesignLimit:  # (larger hubs at their ends leave another rod too short: spliced between theirs)
+            try:
+                plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak,
+                                splice_whole=True)
+            except DesignLimit:
+                break
         other = last = design_net_plan(plan, **kw)
         if _rank(other) > _rank(check):
             k = plan.rod_pieces

@@ -203,7 +203,7 @@ def length_range(catalog) -> tuple[float, float]:
 
 
 def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang: bool = False,
-             g: float = 9.81, whole: frozenset[int] = frozenset()) -> NetPlan:
+             g: float = 9.81, whole: frozenset[int] = frozenset(), splice_whole: bool = False) -> NetPlan:
     """Hardware, lengths, mass bounds and hub masses for a net's target, the drawn net made
     buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.collapse`,
     :mod:`rodcad.design.net.sizing`): nodes nearly on top of each other merged into one hub,
@@ -223,6 +223,9 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         whole: drawn edges to be one rod each, not rods in line, their end hubs made larger
             (within the family) to take what the rod cannot (:func:`_whole_floor`); where the
             family's largest hubs do not, they are cut into rods in line as the others.
+        splice_whole: every straight edge of ``whole`` spliced (:mod:`rodcad.catalog.net.splice`)
+            between the hubs its nodes get anyway, none between larger hubs (where larger hubs
+            would leave another of their rods too short).
 
     Raises:
         DesignLimit: what no hardware in the catalog can do (every such rod and node named,
@@ -243,7 +246,7 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     t, between = _collapsed(t, hw, lo_hw, hi)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
-    one, floor, spliced = _whole_floor(base, hw, hi, whole)
+    one, floor, spliced = _whole_floor(base, hw, hi, whole, splice_whole)
     counts[one | spliced] = 1
     rp_base = size_hubs(base, hw, lo_hw, hi, floor)[0]
     for _ in range(4):  # the pieces on a surface are not all alike: split further where one is still long
@@ -311,13 +314,14 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
     return t, between
 
 
-def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int]
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int],
+                 splice_all: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The edges of ``base`` on the drawn edges ``whole`` that one rod between larger hubs of
     the family spans (node to node at most the longest rod plus two of the largest pivot
     radii), (n,) the least pivot radius each node then needs: half of what the edge is
     longer than the longest rod, at each end (mm), and the straight edges of ``whole`` beyond
-    that reach: one rigid rod each, spliced from pieces (:mod:`rodcad.catalog.net.splice`)."""
+    that reach: one rigid rod each, spliced from pieces (:mod:`rodcad.catalog.net.splice`);
+    ``splice_all``: every straight edge of ``whole`` spliced, no hub made larger."""
     one = np.zeros(base.m, dtype=bool)
     floor = np.zeros(base.n)
     if not whole or not hw.is_hub:
@@ -326,7 +330,7 @@ def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: froze
     d = base.edge_lengths
     half = (d - SPLICE_MARGIN * longest) / 2
     chosen = np.isin(src, sorted(whole))
-    one = chosen & (half <= hw.pivot_limits[1])
+    one = chosen & (half <= hw.pivot_limits[1]) & (not splice_all)
     for e in np.flatnonzero(one):
         for k in base.edges[e]:
             floor[k] = max(floor[k], half[e])

@@ -9,8 +9,10 @@ designed too and the better fit kept. Where two-rod joints still cannot hang wit
 tolerance (their edge barely pulls, or the net is too light to kink it), their drawn edges are
 planned again as one rod each between hubs of the family made larger, each taking half of what
 the edge is longer than the longest rod (:func:`rodcad.design.net.plan.plan_net`'s ``whole``),
-where the family's largest hubs reach, and the better design kept; beyond that reach only a
-rigid in-line splice would hold them (not in the catalog), and the refusal says so.
+where the family's largest hubs reach, and beyond that reach one rigid rod spliced from printed
+pieces on dowel pins (:mod:`rodcad.catalog.net.splice`; also where larger hubs would leave
+another of their rods too short), round after round (:data:`RETRIES`), the better design kept;
+what still cannot hang is refused with the hardware that would hold it.
 """
 
 from __future__ import annotations

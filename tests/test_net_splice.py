@@ -193,3 +193,4 @@ def test_a_spliced_nets_files_print_each_piece_and_assemble_each_rod_whole(tmp_p
         assert whole[0].volume == pytest.approx(2 * vol[e], rel=VOLUME_REL)
     # the as-built net (every solid's own volume, the pins' steel) hangs where it was designed
     assert data["as_built"]["error"]["max_rel_size"] < 1e-3
+    assert "straight, 2 pieces" in (out / "view.html").read_text()  # (the 3D view's rod table says so)

@@ -98,6 +98,13 @@ def whole_hub(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
     raise GeometryError(f"{name}: no parametrisation of its sphere writes to STEP as built")
 
 
+#: A rod's end ball is a sphere whose pole lies on its neck's axis, so the neck's hole takes the
+#: pole away: with the pole across the neck (build123d's default z), FreeCAD 0.20 read every rod's
+#: STEP one ball's volume short (113.1 mm^3 for the 6 mm ball: the trimmed sphere face integrated
+#: as a hole), though OCC's own re-import agreed; with the pole on the neck both read it whole.
+BALL_POLE = "along the neck"
+
+
 def ball_positions(hw, length: float, balls: int, centre: float | None = None) -> np.ndarray:
     """(balls,) the steel balls' centres along a net rod (mm from its first pivot, on its
     axis): a row at mid-length (or at ``centre``), ``min_wall`` apart."""
@@ -109,12 +116,12 @@ def ball_positions(hw, length: float, balls: int, centre: float | None = None) -
 
 def rod_body(hw, length: float) -> Solid:
     """A net rod's plastic before its voids, along +x, its pivots at x = 0 and ``length``: the
-    round body, and for a hub's rod a ball and a neck at each end."""
+    round body, and for a hub's rod a ball and a neck at each end (:data:`BALL_POLE`)."""
     r, e = hw.rod_diameter / 2, hw.end_offset
     parts = [Solid.make_cylinder(r, length - 2 * e, Plane((e, 0, 0), z_dir=(1, 0, 0)))]
     if hw.is_hub:
-        for x0, d in ((0.0, 1.0), (length, -1.0)):
-            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0))))
+        for x0, d in ((0.0, 1.0), (length, -1.0)):  # (each ball's pole on its neck: BALL_POLE)
+            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
             parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
     return parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
 

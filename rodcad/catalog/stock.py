@@ -5,7 +5,7 @@ printer, and where a value was written (numbers only; re-exported by
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 from rodcad.errors import Problem
 
@@ -35,9 +35,9 @@ class Material:
     modulus: float = DEFAULT_MODULUS
 
     def key_data(self) -> dict:
-        """What a rod's solids and masses depend on (cache keys): not the modulus, which only
-        bounds how hard a net rod may push."""
-        return {"name": self.name, "density": self.density, "min_wall": self.min_wall}
+        """What a rod's solids and masses depend on (cache keys): every field but the modulus,
+        which only bounds how hard a net rod may push."""
+        return {k: v for k, v in asdict(self).items() if k != "modulus"}
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ import math
 import numpy as np
 from build123d import Axis, Face, Plane, Solid, Wire
 
+from rodcad.cad.net.solids import end_ball
 from rodcad.cad.solids import one_solid
 from rodcad.catalog.net.bend import NetRodArc, ball_row
 
@@ -56,8 +57,8 @@ def bent_rod_solid(hw, arc: NetRodArc, balls: int, cavity: float, name: str = "r
     if hw.is_hub:
         e = hw.end_offset
         reach = e + (hw.neck / 2) * math.tan(psi) + 0.5  # past the tilted face everywhere
-        for x0, d in ((0.0, 1.0), (L, -1.0)):  # (each ball's pole on its neck: rodcad.cad.net.solids.BALL_POLE)
-            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
+        for x0, d in ((0.0, 1.0), (L, -1.0)):
+            parts.append(end_ball(hw, x0, d))
             parts.append(Solid.make_cylinder(hw.neck / 2, reach, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
     solid = parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a bent rod's ends")
     ds = hw.insert_diameter + hw.insert_clearance

@@ -30,7 +30,7 @@ from rodcad.cad.net.hub import HubSplit, split_hub, split_plane, splittable_sock
 from rodcad.cad.net.parts import (REL_TOL, HubSpec, PartResult, PartTask, RodSpec, brep_bytes, from_brep,
                                   group_parts, signature)
 from rodcad.cad.net.solids import AS_BUILT_KKT, NetPart, NetSolids, hub_solid, net_rod_solid, place, rod_matrix, whole_hub
-from rodcad.cad.net.splice import spliced_rod_solids
+from rodcad.cad.net.splice import spliced_rod, spliced_rod_solids
 from rodcad.cad.solids import GeometryError
 from rodcad.catalog.net.splice import splice_fill
 
@@ -147,7 +147,8 @@ def build_net_solids(check, *, printer=None, layer_height: float = 0.2, runner=N
                     node_com=node_com, pivots=plan.pivots, node_rotations0=eq.rotations,
                     com=rod_com if plan.bent else None)
     out = NetSolids(hubs, rods, rod_masses, node_masses, node_com, res, rod_balls=rod_balls,
-                    hub_splits=splits if hw.is_hub else [], rod_com=rod_com, parts=parts, deflection=defl)
+                    hub_splits=splits if hw.is_hub else [], rod_com=rod_com, parts=parts, deflection=defl,
+                    rod_fills=[sp.fills for sp in rod_specs])
     if res.success or (np.isfinite(res.kkt_residual) and res.kkt_residual <= AS_BUILT_KKT
                        and np.all(np.isfinite(res.positions))):
         err = max(float(np.max(np.linalg.norm(res.positions - eq.positions, axis=1))),
@@ -196,7 +197,7 @@ def _bare(kind: str, spec, label: str):
     plane's normal, as :func:`build_net_solids` cuts it)."""
     if kind == "rod":
         if spec.fills:
-            return spliced_rod_solids(spec.hardware, spec.length, spec.fills, name=label)[0]
+            return spliced_rod(spec.hardware, spec.length, spec.fills, name=label)
         if spec.arc is None:
             return net_rod_solid(spec.hardware, spec.length, spec.balls, spec.cavity, name=label)
         return bent_rod_solid(spec.hardware, spec.arc, spec.balls, spec.cavity, name=label)

@@ -39,7 +39,7 @@ from rodcad.cad.mesh import TriangleMesh, read_stl
 from rodcad.cad.net.solids import ball_positions
 from rodcad.cad.net.bent import bent_socket_centres
 from rodcad.cad.printfile import write_print_files
-from rodcad.catalog.net.splice import piece_extents, splice_fill
+from rodcad.catalog.net.splice import piece_extents
 
 __all__ = ["NetPrintPart", "net_print_parts", "write_net_print_files"]
 
@@ -116,7 +116,7 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
     for part in (p for p in solids.parts if p.kind == "rod"):
         e = part.members[0]
         for i, (s, mesh) in enumerate(zip(part.solids, _meshes(part, solids.deflection))):
-            parts.append(_rod_part(plan, float(check.masses[e]), solids, part, e, i, s, mesh, ball_name))
+            parts.append(_rod_part(plan, solids, part, e, i, s, mesh, ball_name))
     for part in (p for p in solids.parts if p.kind == "hub"):
         whole = len(part.solids) == 1
         for s, matrix, mesh in zip(part.solids, part.print_matrices, _meshes(part, solids.deflection)):
@@ -129,16 +129,16 @@ def net_print_parts(check, solids, *, ball_name: str = "") -> list[NetPrintPart]
     return parts
 
 
-def _rod_part(plan, mass: float, solids, part, e: int, i: int, s, mesh, ball_name: str) -> NetPrintPart:
+def _rod_part(plan, solids, part, e: int, i: int, s, mesh, ball_name: str) -> NetPrintPart:
     """Rod ``e``'s part (piece ``i`` of a spliced rod, :mod:`rodcad.cad.net.splice`) to print:
     along x on its round body (a bent rod turned so that its arc lies flat on the bed), its steel
     balls' sockets where its solid has them."""
     hw = plan.hardware
     arc = plan.arcs[e]
     L = float(plan.lengths[e])
-    tag, end = f"{e:03d}", "the end balls"
+    piece, end = "", "the end balls"
     if plan.rod_pieces[e] > 1:  # solid 0 its end pieces (two), 1 its middle ones
-        fills, _ = splice_fill(hw, L, mass, int(plan.rod_pieces[e]))  # (as part_specs built it)
+        fills = solids.rod_fills[e]  # (as part_specs built it)
         _, _, z0, z1 = piece_extents(hw, L, len(fills))[i]
         k = int(fills[i][0])
         centres = np.column_stack([ball_positions(hw, L, k, (z0 + z1) / 2), np.zeros((k, 2))])
@@ -146,7 +146,7 @@ def _rod_part(plan, mass: float, solids, part, e: int, i: int, s, mesh, ball_nam
         what = "an end piece" if i == 0 else "a middle piece"
         matrix, note = np.eye(4), (f"{what} of a rod spliced from {len(fills)}: glue a dowel pin into its bore(s) "
                                    "and into the next piece's; it lies on its round body along x")
-        tag = f"{e:03d}{chr(ord('a') + i)}"
+        piece = chr(ord("a") + i)
     elif arc is None:
         k = int(solids.rod_balls[e]) if solids.rod_balls else 0
         centres = np.column_stack([ball_positions(hw, L, k), np.zeros((k, 2))])
@@ -156,14 +156,14 @@ def _rod_part(plan, mass: float, solids, part, e: int, i: int, s, mesh, ball_nam
         centres = bent_socket_centres(hw, arc, k)
         matrix, note = FLAT_ARC.copy(), "lies on its round body, its arc flat on the bed"
     return NetPrintPart(
-            e, s, float(s.volume), matrix, s.label, "rods", tag,
+            e, s, float(s.volume), matrix, s.label, "rods", f"{e:03d}{piece}",
             socket_roofs=tuple(0.0 for _ in range(k)), ball_count=k,
             ball_diameter=float(hw.insert_diameter) if k else None, ball_name=ball_name if k else "",
             print_note=f"{note}: support from the bed under the body and {end}",
             print_settings=dict(ROD_SETTINGS),
             socket_centers=centres if k else np.zeros((0, 3)),
             socket_radius=(hw.insert_diameter + hw.insert_clearance) / 2 if k else 0.0,
-            copies=part.prints(i), copy_tags=tuple(tag.replace(f"{e:03d}", f"{j:03d}") for j in part.members
+            copies=part.prints(i), copy_tags=tuple(f"{j:03d}{piece}" for j in part.members
                                                    for _ in range(part.prints(i) // part.count)),
             mesh_deflection=tuple(solids.deflection), mesh=mesh)
 

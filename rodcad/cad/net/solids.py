@@ -27,8 +27,8 @@ from rodcad.cad.export import export_step, import_step
 from rodcad.cad.net.hub import split_plane
 from rodcad.cad.solids import GeometryError, one_solid
 
-__all__ = ["AS_BUILT_KKT", "NetPart", "NetSolids", "ball_positions", "fill_voids", "hub_solid", "net_rod_solid",
-           "place", "rod_body", "rod_matrix", "whole_hub"]
+__all__ = ["AS_BUILT_KKT", "NetPart", "NetSolids", "ball_positions", "end_ball", "fill_voids", "hub_solid",
+           "net_rod_solid", "place", "rod_body", "rod_matrix", "whole_hub"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -98,11 +98,14 @@ def whole_hub(hw, sockets: np.ndarray, name: str = "hub") -> Solid:
     raise GeometryError(f"{name}: no parametrisation of its sphere writes to STEP as built")
 
 
-#: A rod's end ball is a sphere whose pole lies on its neck's axis, so the neck's hole takes the
-#: pole away: with the pole across the neck (build123d's default z), FreeCAD 0.20 read every rod's
-#: STEP one ball's volume short (113.1 mm^3 for the 6 mm ball: the trimmed sphere face integrated
-#: as a hole), though OCC's own re-import agreed; with the pole on the neck both read it whole.
-BALL_POLE = "along the neck"
+def end_ball(hw, x0: float, d: float) -> Solid:
+    """A rod's end ball at ``x0`` on its axis, its neck leaving along ``d`` (+1 or -1, along x).
+
+    The sphere's pole lies on the neck's axis, so the neck takes the pole away: with the pole
+    across the neck (build123d's default z), FreeCAD 0.20 read every rod's STEP one ball's
+    volume short (113.1 mm^3 for the 6 mm ball: the trimmed sphere face integrated as a hole),
+    though OCC's own re-import agreed; with the pole on the neck both read it whole."""
+    return Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0), z_dir=(d, 0, 0)))
 
 
 def ball_positions(hw, length: float, balls: int, centre: float | None = None) -> np.ndarray:
@@ -116,12 +119,12 @@ def ball_positions(hw, length: float, balls: int, centre: float | None = None) -
 
 def rod_body(hw, length: float) -> Solid:
     """A net rod's plastic before its voids, along +x, its pivots at x = 0 and ``length``: the
-    round body, and for a hub's rod a ball and a neck at each end (:data:`BALL_POLE`)."""
+    round body, and for a hub's rod a ball (:func:`end_ball`) and a neck at each end."""
     r, e = hw.rod_diameter / 2, hw.end_offset
     parts = [Solid.make_cylinder(r, length - 2 * e, Plane((e, 0, 0), z_dir=(1, 0, 0)))]
     if hw.is_hub:
-        for x0, d in ((0.0, 1.0), (length, -1.0)):  # (each ball's pole on its neck: BALL_POLE)
-            parts.append(Solid.make_sphere(hw.ball / 2, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
+        for x0, d in ((0.0, 1.0), (length, -1.0)):
+            parts.append(end_ball(hw, x0, d))
             parts.append(Solid.make_cylinder(hw.neck / 2, e + 0.5, Plane((x0, 0, 0), z_dir=(d, 0, 0))))
     return parts[0] if len(parts) == 1 else one_solid(parts[0].fuse(*parts[1:]).clean(), "joining a rod's ends")
 
@@ -243,6 +246,7 @@ class NetSolids:
         parts: the distinct parts (:class:`NetPart`), each written once; ``rods``, ``hubs`` and
             ``hub_splits`` hold every member's instance of them (shapes shared).
         deflection: (linear mm, angular rad) of the parts' STL and 3MF meshes.
+        rod_fills: per rod, a spliced rod's pieces' (balls, cavity mm^3) as built (() for one piece).
     """
 
     hubs: list
@@ -259,6 +263,7 @@ class NetSolids:
     rod_com: np.ndarray | None = None
     parts: list = field(default_factory=list)
     deflection: tuple = (0.03, 0.2)
+    rod_fills: list = field(default_factory=list)
 
     @property
     def hub_parts(self) -> list:

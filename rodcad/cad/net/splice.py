@@ -15,7 +15,7 @@ from rodcad.cad.net.solids import fill_voids, rod_body
 from rodcad.cad.solids import one_solid
 from rodcad.catalog.net.splice import piece_extents
 
-__all__ = ["piece_label", "spliced_rod_solids"]
+__all__ = ["piece_label", "spliced_rod", "spliced_rod_solids"]
 
 
 def piece_label(name: str, i: int) -> str:
@@ -23,17 +23,14 @@ def piece_label(name: str, i: int) -> str:
     return f"{name}-{chr(ord('a') + i)}"
 
 
-def spliced_rod_solids(hw, length: float, fills, name: str = "rod") -> tuple[Solid, list[Solid]]:
-    """A spliced rod along +x, its pivots at x = 0 and ``length``.
+def spliced_rod(hw, length: float, fills, name: str = "rod") -> Solid:
+    """A spliced rod whole along +x, its pivots at x = 0 and ``length``, labelled ``name``.
 
     Args:
         hw: the node hardware (its ``splice``).
         length: pivot to pivot (mm).
         fills: per piece, (steel balls, cavity volume mm^3)
             (:func:`rodcad.catalog.net.splice.splice_fill`).
-
-    Returns:
-        (the whole rod, labelled ``name``; its pieces, ``name-a``, ``name-b``, ...).
     """
     sp = hw.splice
     ext = piece_extents(hw, length, len(fills))
@@ -44,6 +41,17 @@ def spliced_rod_solids(hw, length: float, fills, name: str = "rod") -> tuple[Sol
         voids.append(Solid.make_cylinder(sp.hole_radius, 2 * sp.depth, Plane((x0 - sp.depth, 0, 0), z_dir=(1, 0, 0))))
     whole = one_solid(rod_body(hw, length).cut(*voids), "cutting a spliced rod's cavities, ball sockets and pin bores")
     whole.label = name
+    return whole
+
+
+def spliced_rod_solids(hw, length: float, fills, name: str = "rod") -> tuple[Solid, list[Solid]]:
+    """A spliced rod (:func:`spliced_rod`) and the pieces it is printed in.
+
+    Returns:
+        (the whole rod, labelled ``name``; its pieces, ``name-a``, ``name-b``, ...).
+    """
+    whole = spliced_rod(hw, length, fills, name)
+    ext = piece_extents(hw, length, len(fills))
     big = hw.ball + hw.rod_diameter  # (beyond the rod's ends and sides)
     pieces = []
     for i, (x0, x1, _, _) in enumerate(ext):

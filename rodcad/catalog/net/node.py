@@ -39,6 +39,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rodcad.catalog.net.splice import Splice, splice_fill, splice_intervals, splice_numbers
+from rodcad.catalog.stock import DEFAULT_MODULUS
 
 __all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "largest_clear_turn", "node_hardware",
            "socket_centres"]
@@ -132,7 +133,7 @@ class NodeHardware:
     insert_clearance: float = 0.0
     pivot_range: tuple[float, float] | None = None
     splice: Splice = field(default_factory=Splice)
-    modulus: float = 1.5
+    modulus: float = DEFAULT_MODULUS
 
     # ------------------------------------------------------------------ the hub family
     @property

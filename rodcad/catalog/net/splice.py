@@ -106,39 +106,33 @@ def _kinds(hw, length: float, pieces: int) -> list[tuple[int, float, float]]:
     return out
 
 
-def _combined(hw, length: float, pieces: int) -> list[tuple[tuple[int, ...], float, float, list]]:
-    """Every choice of steel balls per kind of piece, alike pieces alike: (balls per kind, the
-    rod's lightest and heaviest mass with its pins g, per kind its (balls, lightest, heaviest))."""
-    kinds = _kinds(hw, length, pieces)
+def _combined(hw, kinds: list[tuple[int, float, float]], pieces: int) -> list[tuple[int, float, float, list]]:
+    """Every choice of steel balls per kind of piece (:func:`_kinds`), alike pieces alike, fewest
+    balls first: (the rod's balls in all, its lightest and heaviest mass with its pins g, per kind
+    its (balls, lightest, heaviest))."""
     per = [hw.zone_intervals(v, z) for _, v, z in kinds]
     pins = (pieces - 1) * hw.splice.pin_mass
-    out = []
-    choices = [()]
+    choices: list[tuple] = [()]
     for opts in per:
         choices = [c + (o,) for c in choices for o in opts]
-    for c in choices:
-        lo = pins + sum(n * iv[1] for (n, _, _), iv in zip(kinds, c))
-        hi = pins + sum(n * iv[2] for (n, _, _), iv in zip(kinds, c))
-        out.append((tuple(iv[0] for iv in c), lo, hi, list(c)))
-    return out
+    out = [(sum(n * iv[0] for (n, _, _), iv in zip(kinds, c)),
+            pins + sum(n * iv[1] for (n, _, _), iv in zip(kinds, c)),
+            pins + sum(n * iv[2] for (n, _, _), iv in zip(kinds, c)), list(c)) for c in choices]
+    return sorted(out, key=lambda x: x[0])  # (stable: alike totals keep their order)
 
 
 def splice_intervals(hw, length: float, pieces: int) -> list[tuple[int, float, float]]:
     """The masses a spliced rod can be built at: per choice of balls, (its balls in all,
     lightest g, heaviest g), pins included."""
-    kinds = _kinds(hw, length, pieces)
-    return [(sum(n * b for (n, _, _), b in zip(kinds, balls)), lo, hi)
-            for balls, lo, hi, _ in _combined(hw, length, pieces)]
+    return [(total, lo, hi) for total, lo, hi, _ in _combined(hw, _kinds(hw, length, pieces), pieces)]
 
 
 def splice_numbers(hw, length: float, pieces: int) -> tuple[float, float, float, tuple[float, float], int]:
     """A spliced rod's numbers, its pins' steel in every mass: (length, body length mm, solid
     mass g, mass range g, most steel balls), as :class:`rodcad.catalog.net.node.NetRodNumbers`."""
     kinds = _kinds(hw, length, pieces)
-    rho = hw.density / 1000.0
-    pins = (pieces - 1) * hw.splice.pin_mass
-    solid = pins + rho * sum(n * v for n, v, _ in kinds)
-    iv = splice_intervals(hw, length, pieces)
+    solid = (pieces - 1) * hw.splice.pin_mass + hw.density / 1000.0 * sum(n * v for n, v, _ in kinds)
+    iv = _combined(hw, kinds, pieces)
     top = max(iv, key=lambda x: x[2])
     return (float(length), float(length - 2 * hw.end_offset), solid, (min(x[1] for x in iv), max(x[2] for x in iv)),
             int(top[0]))
@@ -152,14 +146,11 @@ def splice_fill(hw, length: float, mass: float, pieces: int) -> tuple[list[tuple
         (per piece in order, (balls, cavity volume mm^3)), the mass it comes to (g).
     """
     rho = hw.density / 1000.0
-    kinds = _kinds(hw, length, pieces)
     best = None
-    for balls, lo, hi, ivs in _combined(hw, length, pieces):
+    for _, lo, hi, ivs in _combined(hw, _kinds(hw, length, pieces), pieces):  # (fewest balls first: they win ties)
         got = min(max(mass, lo), hi)
-        total = sum(n * b for (n, _, _), b in zip(kinds, balls))
-        key = (abs(got - mass), total)
-        if best is None or key[0] < best[0][0] - 1e-12 or (abs(key[0] - best[0][0]) <= 1e-12 and total < best[0][1]):
-            best = (key, got, lo, hi, ivs)
+        if best is None or abs(got - mass) < best[0] - 1e-12:
+            best = (abs(got - mass), got, lo, hi, ivs)
     assert best is not None
     _, got, lo, hi, ivs = best
     s = (got - lo) / (hi - lo) if hi > lo else 1.0

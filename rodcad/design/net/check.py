@@ -275,7 +275,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     if plan.bent:
         plan, com_rounds = settle_com(plan, g=g)
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-              allow_compression=bool(t.compression), g=g, com=plan.statics_com)
+              allow_compression=t.any_may_push, g=g, com=plan.statics_com)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
     # a step (a dense bounded least squares on hundreds of masses), so the statics' best fit
     # stays; otherwise the statics' masses, solved once from the target, are refined through
@@ -387,7 +387,7 @@ def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> t
     for used in range(1, rounds + 1):
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
-                               allow_compression=bool(t.compression), g=g, explain=False)
+                               allow_compression=t.any_may_push, g=g, explain=False)
         new = plan.rod_com(st.masses)
         change = float(np.max(np.abs(new - com)))
         com = new
@@ -442,5 +442,5 @@ def _forces_balance(plan: NetPlan, g: float) -> bool:
     t = plan.target
     fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
                            node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
-                           allow_compression=bool(t.compression), g=g, forces_only=True)
+                           allow_compression=t.any_may_push, g=g, forces_only=True)
     return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

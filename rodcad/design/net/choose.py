@@ -162,10 +162,5 @@ def slack_joints(check: NetCheck, tried: NetCheck | None = None) -> str:
             f"tolerance ({check.tolerance * t.size:.3g} mm): {why}; a ball joint between two rods carries its weight "
             f"only by a kink below its chord. A rod of {need:.4g} mm between the family's largest hubs (pivot radius "
             f"{big:g} mm; the rod family's length.max) or a rigid in-line splice (node.splice) would hold them"
-            + (f"; planned so (one rod each, spliced where longer), the net {_verdict(tried)}" if tried is not None
+            + (f"; planned so (one rod each, spliced where longer), the net {tried.limit()}" if tried is not None
                else "") + ".")
-
-
-def _verdict(check: NetCheck) -> str:
-    """How a tried design fell short, in its own words (:meth:`NetCheck.limit`)."""
-    return check.limit() if not check.ok else "met the tolerance"

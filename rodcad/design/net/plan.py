@@ -429,7 +429,7 @@ def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw
     for k in range(base.n):
         node_masses[k] = hw.sized(rp[k]).hub_mass(dirs[k])[0]
     st = design_net_masses(base.positions, base.edges, lengths, bounds, base.anchored, node_masses=node_masses,
-                           pivots=pivots, allow_compression=bool(base.compression), g=g, forces_only=True)
+                           pivots=pivots, allow_compression=base.any_may_push, g=g, forces_only=True)
     T = st.tensions[src]
     per_piece = np.array([(st.masses[src[q]] - (counts[src[q]] - 1) * per_joint) / counts[src[q]]
                           for q in range(t.m)])

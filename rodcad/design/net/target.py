@@ -102,6 +102,12 @@ class NetTarget:
         return np.zeros(self.m) if self.rod_bends is None else self.rod_bends
 
     @property
+    def any_may_push(self) -> bool:
+        """Every rod may push (``compression: true``); unset or false, the designs keep them in
+        tension and the check judges what pushes (:attr:`rodcad.design.net.check.NetCheck.unheld`)."""
+        return bool(self.compression)
+
+    @property
     def edge_lengths(self) -> np.ndarray:
         """(m,) each edge's length node to node (mm)."""
         return np.linalg.norm(self.positions[self.edges[:, 1]] - self.positions[self.edges[:, 0]], axis=1)

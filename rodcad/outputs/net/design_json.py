@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from optimize import pivots_by_node
+from rodcad.catalog.net.splice import piece_extents, splice_fill
 
 __all__ = ["net_bill", "net_json", "rod_balls"]
 
@@ -63,19 +64,14 @@ def rod_balls(check) -> np.ndarray:
                      for L, m, k in zip(plan.fill_lengths, check.masses, plan.rod_pieces)], int)
 
 
-def _splice(hw, length: float, mass: float, pieces: int) -> dict[str, Any] | None:
-    """A spliced rod's pieces (:mod:`rodcad.catalog.net.splice`): where each is cut, its balls and
-    cavity, and the dowel pins; None for a rod of one piece."""
-    if pieces <= 1:
-        return None
-    from rodcad.catalog.net.splice import piece_extents, splice_fill
-
-    fills, _ = splice_fill(hw, length, mass, pieces)
+def _splice(hw, length: float, fills: list[tuple[int, float]]) -> dict[str, Any]:
+    """A spliced rod's pieces (:mod:`rodcad.catalog.net.splice`) with their ``fills``: where each
+    is cut, its balls and cavity, and the dowel pins."""
     sp = hw.splice
     return {"pieces": [{"from": x0, "to": x1, "steel_balls": int(b), "cavity_mm3": c}
-                       for (x0, x1, _, _), (b, c) in zip(piece_extents(hw, length, pieces), fills)],
-            "dowel_pins": pieces - 1, "pin": {"diameter": sp.pin_diameter, "length": sp.pin_length,
-                                              "hole_diameter": 2 * sp.hole_radius, "hole_depth": sp.depth}}
+                       for (x0, x1, _, _), (b, c) in zip(piece_extents(hw, length, len(fills)), fills)],
+            "dowel_pins": len(fills) - 1, "pin": {"diameter": sp.pin_diameter, "length": sp.pin_length,
+                                                  "hole_diameter": 2 * sp.hole_radius, "hole_depth": sp.depth}}
 
 
 def net_bill(check, catalog) -> dict[str, Any]:
@@ -144,7 +140,6 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             if hw.is_hub else None,
             "joint": _joint_kind(t, k),
         })
-    balls = rod_balls(check)
     rods = []
     # the plan's per-rod arrays are properties computed over every rod: read each once
     arcs = plan.arcs
@@ -158,7 +153,12 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
         L = float(plan.lengths[e])
         Lf = float(fill[e])
         arc = arcs[e]
-        fill_e = hw.rod_fill(Lf, float(check.masses[e]), int(pieces[e]))
+        mass = float(check.masses[e])
+        if pieces[e] > 1:  # (each piece's fill once: the rod's sums and its pieces come from it)
+            fills, got = splice_fill(hw, L, mass, int(pieces[e]))
+            fill_e = (sum(b for b, _ in fills), sum(c for _, c in fills), got)
+        else:
+            fills, fill_e = None, hw.rod_fill(Lf, mass)
         rods.append({
             "index": e,
             "nodes": [int(x) for x in t.edges[e]],
@@ -170,14 +170,14 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "target_ends": [_v(target_ends[e, 0]), _v(target_ends[e, 1])],
             "mass_range": [rn.mass_range[0], rn.mass_range[1]],
             "solid_mass": rn.solid_mass,
-            "steel_balls": int(balls[e]),
+            "steel_balls": int(fill_e[0]),
             "cavity_mm3": fill_e[1],
             "buildable_mass": fill_e[2],
             "body_length": rn.body_length,
             "diameter": hw.rod_diameter,
             "shape": "straight" if arc is None else "bent",
             "pieces": int(pieces[e]),
-            "splice": _splice(hw, L, float(check.masses[e]), int(pieces[e])),
+            "splice": None if fills is None else _splice(hw, L, fills),
             "bend": None if arc is None else {"bend": arc.bend, "sagitta": arc.sagitta, "radius": arc.radius,
                                               "half_angle_deg": float(np.degrees(arc.half_angle)),
                                               "plane": "vertical through the chord, bowing down"},
@@ -209,7 +209,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "generated": t.kind,
             "anchored": [int(x) for x in t.anchored],
             "anchored_as": t.anchored_as or None,
-            "compression_allowed": bool(t.compression),
+            "compression_allowed": t.any_may_push,
             "compression": ("allowed" if t.compression else "not allowed" if t.compression is False or not hw.is_hub
                             else "where the hardware holds it"),
             "pushing_unheld": [int(x) for x in check.unheld],

@@ -299,7 +299,8 @@ def planner_summary(plan) -> str:
     drawn = t.drawn if t.drawn is not None else t
     collapsed, added = list(plan.collapsed), list(plan.added_anchors)
     split = len(t.joints) if t.joints is not None else 0
-    spliced = int(np.count_nonzero(plan.rod_pieces > 1))
+    k = plan.rod_pieces
+    spliced = int(np.count_nonzero(k > 1))
     if not (collapsed or added or split or plan.merged or plan.between_anchors or spliced):
         return ""
     what = []
@@ -312,7 +313,7 @@ def planner_summary(plan) -> str:
     if split:
         what.append(f"{split} two-rod joint(s) on long edges")
     if spliced:
-        what.append(f"{spliced} long rod(s) spliced from {int(plan.rod_pieces.sum()) - t.m + spliced} printed pieces")
+        what.append(f"{spliced} long rod(s) spliced from {int(k[k > 1].sum())} printed pieces")
     if added:
         what.append(f"{len(added)} anchor point(s) added")
     if plan.between_anchors:

@@ -60,3 +60,24 @@ def test_pushing_is_refused_when_asked_or_beyond_a_fifth_of_the_buckling_load(pu
     weak = dataclasses.replace(check, plan=dataclasses.replace(check.plan, hardware=soft))
     assert not weak.ok and np.array_equal(weak.unheld, check.compressed)
     assert "buckling" in weak.limit()
+
+
+def test_a_catalogs_modulus_is_read_and_a_bad_one_is_refused_at_its_key():
+    from rodcad.catalog.loader import catalog_from_text
+    from rodcad.catalog.paths import default_catalog_dir
+    from rodcad.errors import InputError
+
+    text = (default_catalog_dir() / "pla-parametric.yaml").read_text()
+    shipped = "  material: {name: PLA, density: 1.24, min_wall: 1.2}"
+    assert shipped in text
+    stiff = catalog_from_text(text.replace(shipped, shipped[:-1] + ", modulus: 3.5}"), "c.yaml")
+    assert stiff.node.modulus == 3.5 and next(iter(stiff)).material.modulus == 3.5
+    assert catalog_from_text(text, "c.yaml").node.modulus == 1.5  # (the default)
+    bad = text.replace(shipped, shipped[:-1] + ", modulus: -2}")
+    with pytest.raises(InputError) as err:
+        catalog_from_text(bad, "c.yaml")
+    line = next(i for i, s in enumerate(bad.splitlines(), 1) if "modulus: -2" in s)
+    col = bad.splitlines()[line - 1].index("-2") + 1
+    got = [str(p) for p in err.value.problems]
+    assert got == [f"c.yaml:{line}:{col}: defaults.material.modulus: must be greater than 0 GPa and at most 500 GPa "
+                   "(got -2)"], got

@@ -227,12 +227,13 @@ def test_the_default_catalog_has_hub_hardware_and_bad_hardware_is_refused(tmp_pa
     assert cat.node.kind == "hub" and cat.node.swing_deg > 20 and cat.node.min_angle_deg <= 60 + 1e-9
     assert "  pivot_radius: {min: 4, max: 16, nominal: 7.5}" in text
     bad = text.replace("  pivot_radius: {min: 4, max: 16, nominal: 7.5}", "  pivot_radius: 10").replace(
-        "  cone_deg: 55", "  cone_deg: 80")
+        "  cone_deg: {min: 55, max: 65}", "  cone_deg: 80")
     with pytest.raises(InputError) as err:
         catalog_from_text(bad, "c.yaml")
     got = [str(p) for p in err.value.problems]
     line = next(i for i, s in enumerate(bad.splitlines(), 1) if s.startswith("  pivot_radius"))
     assert got[0].startswith(f"c.yaml:{line}:17: node.pivot_radius: a socket")
-    assert got[1].startswith(f"c.yaml:{line + 3}:13: node.cone_deg: the opening")
+    cone = next(i for i, s in enumerate(bad.splitlines(), 1) if s.startswith("  cone_deg"))
+    assert got[1].startswith(f"c.yaml:{cone}:13: node.cone_deg: the opening")
     point = catalog_from_text(text.replace("  kind: hub", "  kind: point\n  mass: 0.8"), "c.yaml").node
     assert point.pivot == 0.0 and point.hub_mass(np.eye(3))[0] == 0.8 and point.min_angle_deg == 0.0

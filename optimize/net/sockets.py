@@ -32,13 +32,16 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import least_squares
 
-__all__ = ["LSMR_ITER", "LSMR_UNKNOWNS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
+__all__ = ["FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
 
 #: Above LSMR_UNKNOWNS unknowns, each trust-region step's sparse least squares (LSMR) stops
 #: after LSMR_ITER iterations instead of running to its default (one per unknown): a 2,000-rod
 #: hub grid's joint solve spent 50 s in LSMR for the same residual (1.4e-6 of the force scale)
 #: that 200 iterations a step reach in 15 s (inexact steps: the trust region still decides).
 LSMR_UNKNOWNS = 4000
+
+#: A socket whose turn is bounded by this little (deg) stays where it starts (no unknowns).
+FIXED_TURN = 1e-6
 LSMR_ITER = 200
 
 
@@ -108,7 +111,9 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
             there.
         max_turn_deg: each socket turns at most this far from ``pivots`` about each of two
             axes across it (deg; a hub balanced by large turns would put its rods beyond what
-            their sockets let them swing).
+            their sockets let them swing): one number, or (m, 2) per socket (its turn is then
+            at most ``atan(sqrt(2) tan(max_turn_deg))`` from ``pivots``; one bounded by
+            :data:`FIXED_TURN` or less stays at ``start``).
         bound_slopes: (m, 2) d(mass bounds)/d(pivot-to-pivot length) (g/mm): a rod's bounds
             follow its length as its sockets turn (a rod with steel balls may be buildable in a
             range a few micrograms wide), or None: fixed bounds.
@@ -159,7 +164,8 @@ def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, no
     kappa = np.asarray(socket_com, float)
     r = np.linalg.norm(P0, axis=2)
     free = ~anch
-    turn = free[E]                                  # (m, 2) sockets that may turn
+    turns = np.minimum(np.broadcast_to(np.asarray(max_turn_deg, float), (m, 2)), 89.0)
+    turn = free[E] & (turns > FIXED_TURN)           # (m, 2) sockets that may turn
     ns = int(turn.sum())
     # tangent bases at the start
     d0 = P0 / r[..., None]
@@ -314,7 +320,7 @@ def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, no
     inner = 1e-9
     lo = np.concatenate([np.full(2 * ns, -np.inf), np.full(m, -np.inf if allow_compression else 0.0), np.full(m, inner)])
     hi = np.concatenate([np.full(2 * ns, np.inf), np.full(m, np.inf), np.full(m, 1 - inner)])
-    cap = np.tan(np.radians(min(max_turn_deg, 89.0)))
+    cap = np.repeat(np.tan(np.radians(turns))[turn], 2).reshape(ns, 2)
     ang0 = np.zeros((ns, 2))
     if start is not None:
         ds = np.asarray(start, float)[turn]
@@ -322,7 +328,7 @@ def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, no
         along = np.sum(ds * d0[turn], axis=1, keepdims=True)
         ang0 = np.column_stack([np.sum(ds * b1[turn], axis=1), np.sum(ds * b2[turn], axis=1)]) / along
     ang0 = np.clip(ang0, -cap * (1 - 1e-9), cap * (1 - 1e-9))
-    lo[:2 * ns], hi[:2 * ns] = -cap, cap
+    lo[:2 * ns], hi[:2 * ns] = -cap.ravel(), cap.ravel()
     x0 = np.concatenate([ang0.ravel(), T0, np.clip(theta0, 2 * inner, 1 - 2 * inner)])
     return SocketProblem(fun, jac, x0, lo, hi, unpack, hub_com)
 

@@ -350,9 +350,12 @@ def node_spec() -> Obj:
             "clearance": Field(Num(minimum=0, maximum=5, unit="mm"), description="hub: socket diameter minus ball "
                                f"diameter (default {d['clearance']:g} mm); rodcad offsets each socket so the loaded "
                                "ball sits on its pivot."),
-            "cone_deg": Field(Num(exclusive_minimum=0, exclusive_maximum=90, unit="deg"),
+            "cone_deg": Field(_size_spec(Num(exclusive_minimum=0, exclusive_maximum=90, unit="deg"),
+                                         "socket cone (deg)"),
                               description="hub: half-angle of each socket's opening cone, apex at the ball's centre "
-                              f"(default {d['cone_deg']:g} deg)."),
+                              f"(default {d['cone_deg']:g} deg); or a range {{min, max, nominal}}: a hub gets the "
+                              "nominal cone (default min) where its rods' turns fit it, else the narrowest wider one "
+                              "that lets them, within the range and keeping the wall between its sockets."),
             "neck": Field(Num(**mm), description="hub: diameter of a rod's neck between its ball and its body "
                           f"(default {d['neck']:g} mm)."),
             "rod_diameter": Field(Num(**mm), description=f"Net rods' round body (default {d['rod_diameter']:g} mm)."),

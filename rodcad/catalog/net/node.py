@@ -110,6 +110,9 @@ class NodeHardware:
         insert_diameter, insert_density, insert_clearance: the steel balls that weigh rods
             down (mm, g/cm^3, mm); diameter 0 for none.
         pivot_range: the hub family's (smallest, largest) pivot radius (mm), or None.
+        cone_range: the (narrowest, widest) socket cone a hub may be printed with (deg), or
+            None: every hub's cone ``cone_deg``. A hub whose rods turn further than its sockets
+            let them gets a wider cone (:meth:`cone_for_turn`, :meth:`widest_cone`).
         splice: the dowel pins a rod longer than the catalog prints is spliced on
             (:mod:`rodcad.catalog.net.splice`).
         modulus: the rods' Young's modulus (GPa; the material's): :meth:`buckling_load`.
@@ -132,6 +135,7 @@ class NodeHardware:
     insert_density: float = 0.0
     insert_clearance: float = 0.0
     pivot_range: tuple[float, float] | None = None
+    cone_range: tuple[float, float] | None = None
     splice: Splice = field(default_factory=Splice)
     modulus: float = DEFAULT_MODULUS
 
@@ -171,6 +175,66 @@ class NodeHardware:
         bodies = (self.rod_diameter / 2) / math.tan(half) - self.gap - self.shell
         return max(sockets, bodies, self.pivot_limits[0] if self.family else 0.0)
 
+    # ------------------------------------------------------------------ the cone family
+    @property
+    def cone_limits(self) -> tuple[float, float]:
+        """(narrowest, widest) socket cone of the family (deg); ``cone_deg`` twice for one cone."""
+        return self.cone_range if self.is_hub and self.cone_range is not None else (self.cone_deg, self.cone_deg)
+
+    def coned(self, cone_deg: float) -> "NodeHardware":
+        """This hub with its sockets' cones ``cone_deg`` wide (half-angle, deg)."""
+        c = float(cone_deg)
+        return self if c == self.cone_deg else replace(self, cone_deg=c)
+
+    @property
+    def neck_angle_deg(self) -> float:
+        """The neck's half-width seen from the ball's centre at the socket's rim (deg): a rod turns
+        ``cone_deg`` less this before its neck touches the cone."""
+        return math.degrees(math.asin(min(1.0, (self.neck / 2) / self.socket_radius)))
+
+    def cone_for_turn(self, turn_deg: float) -> float:
+        """The narrowest cone of the family that lets a rod turn ``turn_deg`` from its socket's axis
+        (deg; the widest where none does; never narrower than this hub's own)."""
+        lo, hi = self.cone_limits
+        return float(min(max(self.cone_deg, lo, turn_deg + self.neck_angle_deg), hi))
+
+    def cone_lip_deg(self, cone_deg: float | None = None) -> float:
+        """The angle, seen from the hub's centre, between a socket's axis and its lip (where its
+        cone of ``cone_deg``, default this hub's, meets the socket sphere and holds the ball)
+        and a neighbour's cone at the same distance from the centre, plus ``min_wall`` there
+        (deg): two sockets this far apart each keep their lip whole."""
+        a = math.radians(self.cone_deg if cone_deg is None else cone_deg)
+        rp, rs = self.pivot_radius, self.socket_radius
+        lip = math.atan2(rs * math.sin(a), rp + rs * math.cos(a))
+        rho = math.hypot(rp + rs * math.cos(a), rs * math.sin(a))
+        t = -rp * math.cos(a) + math.sqrt(max(rho ** 2 - (rp * math.sin(a)) ** 2, 0.0))
+        reach = math.atan2(t * math.sin(a), rp + t * math.cos(a))
+        return math.degrees(lip + reach + self.min_wall / rho)
+
+    def widest_cone(self, directions: np.ndarray) -> float:
+        """The widest cone of the family (deg) whose openings, for sockets along ``directions``
+        ((k, 3) unit vectors), leave each socket's lip whole (:meth:`cone_lip_deg`); this hub's
+        own where even that one does not (the hub is then as it was planned)."""
+        lo, hi = self.cone_limits
+        own = self.cone_deg
+        if hi <= own:
+            return own
+        d = np.asarray(directions, float).reshape(-1, 3)
+        if d.shape[0] < 2:
+            return hi
+        cos = np.clip(d @ d.T, -1.0, 1.0)
+        np.fill_diagonal(cos, -1.0)
+        room = math.degrees(math.acos(float(cos.max())))
+        if self.cone_lip_deg(hi) <= room:
+            return hi
+        if self.cone_lip_deg(own) > room:
+            return own
+        a, b = own, hi  # the lip's angle grows with the cone: bisect to 0.01 deg
+        while b - a > 0.01:
+            c = 0.5 * (a + b)
+            a, b = (c, b) if self.cone_lip_deg(c) <= room else (a, c)
+        return a
+
     # ------------------------------------------------------------------ geometry
     @property
     def is_hub(self) -> bool:
@@ -196,8 +260,7 @@ class NodeHardware:
         touches the cone (deg); 180 for a point node."""
         if not self.is_hub:
             return 180.0
-        neck = self.cone_deg - math.degrees(math.asin(min(1.0, (self.neck / 2) / self.socket_radius)))
-        return min(neck, self.body_swing_deg)
+        return min(self.cone_deg - self.neck_angle_deg, self.body_swing_deg)
 
     @property
     def body_swing_deg(self) -> float:
@@ -226,10 +289,18 @@ class NodeHardware:
         between them and their bodies do not touch (deg); 0 for a point node."""
         if not self.is_hub:
             return 0.0
-        sockets = 2 * math.asin(min(1.0, (2 * self.socket_radius + self.min_wall) / (2 * self.pivot_radius)))
         d = self.pivot_radius + self.end_offset
         bodies = 2 * math.atan2(self.rod_diameter / 2, d)
-        return math.degrees(max(sockets, bodies))
+        return max(self.socket_angle_deg, math.degrees(bodies))
+
+    @property
+    def socket_angle_deg(self) -> float:
+        """The least angle between two sockets' directions from the hub's centre that keeps
+        ``min_wall`` between them (deg; 0 for a point node). A socket turned to balance its hub
+        (:mod:`rodcad.design.net.spacing`) keeps it too."""
+        if not self.is_hub:
+            return 0.0
+        return math.degrees(2 * math.asin(min(1.0, (2 * self.socket_radius + self.min_wall) / (2 * self.pivot_radius))))
 
     # ------------------------------------------------------------------ volumes
     def _cone(self) -> tuple[float, float]:
@@ -408,7 +479,7 @@ def socket_centres(pivots: np.ndarray, forces: np.ndarray, clearance: float) -> 
 
 
 def _size(value) -> tuple[float, float | None, float | None]:
-    """A ``diameter`` or ``pivot_radius`` as written: (nominal, min, max); a number is one size."""
+    """A ``diameter``, ``pivot_radius`` or ``cone_deg`` as written: (nominal, min, max); a number is one size."""
     if isinstance(value, dict):
         lo, hi = float(value["min"]), float(value["max"])
         return float(value.get("nominal", lo)), lo, hi
@@ -423,14 +494,16 @@ def node_hardware(block: dict, rod, v) -> NodeHardware | None:
     ``diameter`` and ``pivot_radius`` are each a number (one size) or ``{min, max}`` with an
     optional ``nominal`` (the size a node gets where its rods fit it; default min): a family
     of hubs that keep the nominal hub's wall outside their pivots (:attr:`NodeHardware.shell`),
-    between the two ranges."""
+    between the two ranges. ``cone_deg`` likewise: the sockets' cone, the nominal where the rods'
+    turns fit it, wider where they do not (:attr:`NodeHardware.cone_range`)."""
     d = {**DEFAULT_NODE, **block}
     splice = Splice(**{k: float(x) for k, x in (block.get("splice") or {}).items()})
     balls = rod.balls
     dia, dlo, dhi = _size(d["diameter"])
     rp, plo, phi = _size(d["pivot_radius"])
+    cone, clo, chi = _size(d["cone_deg"])
     pivot_range = None
-    for key, nom, lo, hi in (("diameter", dia, dlo, dhi), ("pivot_radius", rp, plo, phi)):
+    for key, nom, lo, hi in (("diameter", dia, dlo, dhi), ("pivot_radius", rp, plo, phi), ("cone_deg", cone, clo, chi)):
         if lo is not None and not lo <= nom <= hi:
             v.report_at(f"node.{key}", f"expected min <= nominal <= max, got {lo:g}, {nom:g}, {hi:g}",
                         fallback="node")
@@ -448,17 +521,22 @@ def node_hardware(block: dict, rod, v) -> NodeHardware | None:
         pivot_range = (float(lo), float(hi))
     hw = NodeHardware(kind=d["kind"], name=d["name"], diameter=dia,
                       pivot_radius=rp, ball=float(d["ball"]), clearance=float(d["clearance"]),
-                      cone_deg=float(d["cone_deg"]), neck=float(d["neck"]), rod_diameter=float(d["rod_diameter"]),
+                      cone_deg=cone, neck=float(d["neck"]), rod_diameter=float(d["rod_diameter"]),
                       gap=float(d["gap"]), mass=float(d["mass"]), density=rod.material.density,
                       min_wall=rod.material.min_wall, insert_diameter=balls.diameter if balls else 0.0,
                       insert_density=balls.density if balls else 0.0,
-                      insert_clearance=balls.clearance if balls else 0.0, pivot_range=pivot_range, splice=splice,
+                      insert_clearance=balls.clearance if balls else 0.0, pivot_range=pivot_range,
+                      cone_range=(clo, chi) if clo is not None else None, splice=splice,
                       modulus=float(rod.material.modulus))
     bad = hw.problems()
-    if hw.family and not bad:  # every size of the family must hold its balls too
-        for end in hw.pivot_range:
-            for key, message in hw.sized(end).problems():
-                bad.append((key, f"the family's hub of pivot radius {end:g} mm: {message}"))
+    if (hw.family or hw.cone_range is not None) and not bad:  # every size and cone must hold its balls too
+        for end in hw.pivot_limits:
+            for c in sorted(set(hw.cone_limits)):
+                for key, message in hw.sized(end).coned(c).problems():
+                    what = " and ".join(([f"pivot radius {end:g} mm"] if hw.family else [])
+                                        + ([f"cone {c:g} deg"] if hw.cone_range is not None else []))
+                    bad.append((key, f"the family's hub of {what}: {message}"))
+        bad = list(dict.fromkeys(bad))
     for key, message in bad:
         given = key.split(".")[-1] in (block.get("splice") or {}) if key.startswith("splice.") else key in block
         v.report_at(f"node.{key}" if given else "node", message if given else f"{key}: {message}", fallback="node")

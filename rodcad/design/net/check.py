@@ -13,6 +13,7 @@ ends).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -93,6 +94,9 @@ class NetCheck:
         time_s: wall time of the design.
         notes: things the user should know.
         why: when no masses at all balance the target, where and why (else '').
+        planned: the plan as it was given to :func:`design_net_plan` (before its sockets were
+            turned and its bounds narrowed), or None.
+        choices: the planner's choices around this design, in words (also in ``notes``).
     """
 
     plan: NetPlan
@@ -107,6 +111,22 @@ class NetCheck:
     time_s: float
     notes: list[str] = field(default_factory=list)
     why: str = ""
+    planned: NetPlan | None = None
+    choices: list[str] = field(default_factory=list)
+
+    def chose(self, text: str) -> None:
+        """A choice the planner made around this design (its joints hung, edges made one rod,
+        hubs larger, cones wider), in words: a note that a design made again from this one's
+        plan keeps (:meth:`carry`)."""
+        self.choices.append(text)
+        self.notes.append(text)
+
+    def carry(self, earlier: "NetCheck") -> "NetCheck":
+        """This check with ``earlier``'s choices (it was designed from ``earlier``'s plan)."""
+        for text in earlier.choices:
+            if text not in self.choices:
+                self.chose(text)
+        return self
 
     @property
     def equilibrium(self):
@@ -173,7 +193,20 @@ class NetCheck:
         """Hangs within the tolerance, stable, in tension (unless allowed), rods within their
         swing and within the lengths the catalog prints."""
         return (self.meets_tolerance and self.in_tension and self.out_of_window.size == 0
-                and bool(np.all(self.swing_deg <= self.plan.swing_limits[:, None])))
+                and not self.over_swing.size and not self.clashes)
+
+    @functools.cached_property
+    def clashes(self) -> list[tuple[int, float, float]]:
+        """Hubs whose sockets, as turned, are closer than their walls need: (node, angle, need)
+        (:func:`rodcad.design.net.spacing.socket_clashes`)."""
+        from rodcad.design.net.spacing import socket_clashes
+
+        return socket_clashes(self.plan)
+
+    @property
+    def over_swing(self) -> np.ndarray:
+        """(k, 2) the rod ends (rod, end) turning further than their socket lets them."""
+        return np.argwhere(self.swing_deg > self.plan.end_swing_limits)
 
     def limit(self) -> str:
         """One line: what keeps the net off its target and what would reach it."""
@@ -204,11 +237,16 @@ class NetCheck:
             return (f"{pct}, but with the hubs' sockets turned {self.out_of_window.size} rod(s) leave the "
                     f"{lo:g}-{hi:g} mm the catalog prints (rod {k}: {self.plan.piece_lengths[k]:.4g} mm{' a piece' if self.plan.rod_pieces[k] > 1 else ''}); a catalog "
                     "with that length, or the net drawn with shorter edges there, would build it")
-        over = np.argwhere(self.swing_deg > self.plan.swing_limits[:, None])
+        if self.clashes:
+            k, ang, need = self.clashes[0]
+            return (f"{pct}, but {len(self.clashes)} hub(s)' sockets, turned to balance them, come closer than their "
+                    f"walls allow (node {k}: {ang:.3g} deg apart, its {self.plan.hub(k).min_wall:g} mm wall needs "
+                    f"{need:.3g}); larger hubs (node.pivot_radius) would hold them")
+        over = self.over_swing
         worst = float(np.max(self.swing_deg[over[:, 0], over[:, 1]]))
         return f"{pct}, but rod {over[0][0]} turns {self.swing_deg[tuple(over[0])]:.3g} deg in its socket, more " \
-               f"than the {self.plan.swing_limits[over[0][0]]:.3g} deg the hub allows ({len(over)} rod end(s), " \
-               f"up to {worst:.3g} deg); {_wider_cone(self.plan.hardware, worst)}"
+               f"than the {self.plan.end_swing_limits[tuple(over[0])]:.3g} deg the hub allows ({len(over)} rod " \
+               f"end(s), up to {worst:.3g} deg); {_wider_cone(self.plan.hardware, worst)}"
 
 
 def _wider_cone(hw, turn: float) -> str:
@@ -219,10 +257,17 @@ def _wider_cone(hw, turn: float) -> str:
     neck = math.degrees(math.asin(min(1.0, (hw.neck / 2) / rs)))
     need = turn + neck
     hold = math.degrees(math.asin(min(1.0, (hw.ball / 2 - 0.1) / rs)))
+    lo, hi = hw.cone_limits
+    if need <= hi:  # (the catalog's range reaches it: the hubs' sockets left no room for it)
+        return (f"a cone of {math.ceil(need * 10) / 10:g} deg would let this design's rods turn so far, but the hubs "
+                f"where they turn so far keep less than node.min_wall between their sockets' openings with it "
+                f"(the catalog's cones {lo:g}-{hi:g} deg): larger hubs (node.pivot_radius) or the net drawn with its "
+                "rods meeting nearer their hubs' lines would")
     if need <= hold:
-        return (f"a node.cone_deg of {math.ceil(need * 10) / 10:g} (the catalog's {hw.cone_deg:g}; at most {hold:.3g} "
-                f"still holds the {hw.ball:g} mm ball) would let this design's rods turn so far (a wider cone lightens the hubs, "
-                "and the design changes with it)")
+        return (f"a node.cone_deg of {math.ceil(need * 10) / 10:g} (the catalog's "
+                f"{hw.cone_deg:g}" + (f"-{hi:g}" if hi > lo else "") + f"; at most {hold:.3g} "
+                f"still holds the {hw.ball:g} mm ball) would let this design's rods turn so far (a wider cone lightens "
+                "the hubs, and the design changes with it)")
     return (f"no cone that still holds the {hw.ball:g} mm ball lets it (at most {hold:.3g} deg): a thinner node.neck "
             f"than {hw.neck:g} mm, or the net drawn with its rods meeting nearer their hubs' lines, would")
 
@@ -255,6 +300,7 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
 def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None, n_starts: int | None,
                  note) -> NetCheck:
     t0 = time.perf_counter()
+    planned = plan
     n_starts = net_starts(plan.target.n) if n_starts is None else int(n_starts)
     lines = plan.pivots.copy()
     hub = plan.hardware.is_hub
@@ -370,7 +416,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
         notes.append(f"{t.dropped} rod(s) between two anchored nodes were left out (the anchors hold both ends).")
     masses = np.asarray(design.masses, float)
     return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
-                    swing, time.perf_counter() - t0, notes, why)
+                    swing, time.perf_counter() - t0, notes, why, planned)
 
 
 def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> tuple[NetPlan, int]:

@@ -12,7 +12,10 @@ the edge is longer than the longest rod (:func:`rodcad.design.net.plan.plan_net`
 where the family's largest hubs reach, and beyond that reach one rigid rod spliced from printed
 pieces on dowel pins (:mod:`rodcad.catalog.net.splice`; also where larger hubs would leave
 another of their rods too short), round after round (:data:`RETRIES`), the better design kept;
-what still cannot hang is refused with the hardware that would hold it.
+what still cannot hang is refused with the hardware that would hold it. Last, hubs whose rods
+turn further than their sockets let them get wider cones (:mod:`rodcad.design.net.cones`), after
+the hubs whose sockets' spacing keeps the net from balancing are made larger
+(:func:`rodcad.design.net.spacing.grow_tight_hubs`).
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from rodcad.design.net.check import NetCheck, design_net_plan
+from rodcad.design.net.cones import widen_cones
+from rodcad.design.net.spacing import grow_tight_hubs
 from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
@@ -48,11 +53,12 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     check = design_net_plan(plan, **kw)
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
-        return check
+        check = grow_tight_hubs(check, lambda p: design_net_plan(p, **kw), _rank)
+        return widen_cones(check, lambda p: design_net_plan(p, **kw))
     if on_surface:
         other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
         if _rank(other) > _rank(check):
-            other.notes.append("The two-rod joints hang at the funicular sag below their chords: on the target "
+            other.chose("The two-rod joints hang at the funicular sag below their chords: on the target "
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
             check = other
     tried: frozenset[int] = frozenset()
@@ -77,11 +83,13 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
             spliced = (f" ({int(np.count_nonzero(k > 1))} of them, longer than one rod between the family's largest "
                        f"hubs, spliced rigidly from {int(k.max())} printed pieces on steel dowel pins)"
                        if np.any(k > 1) else "")
-            other.notes.append(f"The two-rod joints on drawn edge(s) {sorted(weak)[:8]} could not hang on the target "
+            other.chose(f"The two-rod joints on drawn edge(s) {sorted(weak)[:8]} could not hang on the target "
                                f"within the tolerance (the net hung {100 * check.rel_size:.3g} % of its size off it): "
                                f"those edges are one rod each{spliced}, between hubs of the family made larger to take "
                                "what the rod cannot.")
             check = other
+    check = grow_tight_hubs(check, lambda p: design_net_plan(p, **kw), _rank)
+    check = widen_cones(check, lambda p: design_net_plan(p, **kw))
     if not check.ok:
         why = slack_joints(check, None if last is check else last)
         if why:

@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 
 from rodcad.design.net.plan import NetPlan, mass_segments, replan, rod_bounds
+from rodcad.design.net.spacing import socket_clashes, spaced_turn, too_close
 
 __all__ = ["ANDERSON", "ORIENT_FINE", "ORIENT_ROUNDS", "JOINT_NFEV", "JOINT_PROGRESS", "JOINT_ROUNDS", "ORIENT_TOL", "balance_jointly", "buildable_bounds", "orient_sockets"]
 
@@ -114,6 +115,9 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
                     break
                 a = a + (A.T @ np.linalg.lstsq(AAt, -M, rcond=None)[0]).reshape(-1, 3)
                 a *= rad / np.linalg.norm(a, axis=1, keepdims=True)
+            need = plan.hub(int(k)).socket_angle_deg
+            if too_close(a, need):  # (the least turn runs two sockets into each other's wall)
+                a = spaced_turn(np.array([axis[e, c] for e, c in at]), f, cw, rad, need)
             for q, (e, c) in enumerate(at):
                 new[e, c] = a[q]
         change = float(np.max(np.abs(new - plan.pivots))) / r
@@ -134,6 +138,8 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             on = free[t.edges]
             nxt[on] *= rk[on][:, None] / np.linalg.norm(nxt[on], axis=1, keepdims=True)
             nxt[~on] = new[~on]
+            if socket_clashes(dataclasses.replace(plan, pivots=nxt)):  # (the extrapolation ran two sockets together)
+                nxt = new
         plan = replan(plan, nxt)
     if t.n > JOINT_NODES and best_res > JOINT_FAR:
         return best, rounds, best_res  # (a big net this far from balancing: seconds for nothing)
@@ -150,7 +156,7 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     other turns may balance within them. Returns (the plan, the statics' residual there over
     the force scale); the plan as it was when the joint solve does not improve it."""
     from optimize import design_net_masses
-    from optimize.net.sockets import balance_sockets
+    from optimize.net.sockets import FIXED_TURN, balance_sockets
 
     t = plan.target
 
@@ -179,9 +185,18 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     for _ in range(JOINT_ROUNDS):  # the rods' lengths, and with them their mass bounds, follow the sockets
         h = 1e-4 * float(cur.lengths.mean())
         slopes = (rod_bounds(cur, cur.lengths + h) - rod_bounds(cur, cur.lengths - h)) / (2 * h)
-        sb = balance_sockets(t.positions, t.edges, lines, cur.bounds, t.anchored, node_masses=cur.node_masses,
-                             start=cur.pivots, max_turn_deg=cap, bound_slopes=slopes, socket_com=socket_com, masses0=st.masses, tensions0=st.tensions, com=cur.statics_com,
-                             allow_compression=t.any_may_push, g=g, max_nfev=int(np.clip(JOINT_NFEV / t.m, 20, 200)))
+        for turns in (cap, np.minimum(cap, _room(plan, lines))):  # (the second keeps every two sockets apart)
+            # (a socket with no room stays on its line; the others start within their box)
+            start = np.where((np.asarray(turns) <= FIXED_TURN)[..., None], lines, cur.pivots)
+            sb = balance_sockets(t.positions, t.edges, lines, cur.bounds, t.anchored, node_masses=cur.node_masses,
+                                 start=start, max_turn_deg=turns, bound_slopes=slopes,
+                                 socket_com=socket_com, masses0=st.masses, tensions0=st.tensions, com=cur.statics_com,
+                                 allow_compression=t.any_may_push, g=g,
+                                 max_nfev=int(np.clip(JOINT_NFEV / t.m, 20, 200)))
+            if not socket_clashes(dataclasses.replace(cur, pivots=sb.pivots)):
+                break
+        else:
+            break
         cur = replan(cur, sb.pivots)
         st = statics(cur)
         before = best_res
@@ -190,6 +205,28 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
         if st.exact or best_res * JOINT_PROGRESS > before:
             break
     return best, best_res
+
+
+def _room(plan: NetPlan, lines: np.ndarray) -> np.ndarray:
+    """(m, 2) how far each socket may turn from its line, about each of two axes across it (deg),
+    for every two sockets of a hub to stay :attr:`~rodcad.catalog.net.node.NodeHardware.
+    socket_angle_deg` apart whichever way they turn: half its least slack to a neighbour, the
+    box's corner (``sqrt(2)`` times its side) within it."""
+    t = plan.target
+    out = np.full((t.m, 2), 90.0)
+    for k in range(t.n):
+        at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+        if len(at) < 2:
+            continue
+        d = np.array([lines[e, c] for e, c in at], float)
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        ang = np.degrees(np.arccos(np.clip(d @ d.T, -1.0, 1.0)))
+        np.fill_diagonal(ang, 360.0)
+        slack = np.maximum(ang.min(axis=1) - plan.hub(k).socket_angle_deg, 0.0) / 2
+        side = np.degrees(np.arctan(np.tan(np.radians(np.minimum(slack, 89.0))) / np.sqrt(2)))
+        for q, (e, c) in enumerate(at):
+            out[e, c] = side[q]
+    return out
 
 
 def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:

@@ -28,7 +28,7 @@ from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
 __all__ = ["NetPlan", "POINT_WIDTH", "SPLICE_MARGIN", "fill_lengths", "length_range", "mass_segments", "plan_net",
-           "replan", "rod_bounds", "rod_numbers"]
+           "replan", "resized", "rod_bounds", "rod_numbers"]
 
 #: A spliced rod's pieces are each at most this share of the longest rod the catalog prints:
 #: the margin :func:`_first_count` keeps for rods in line (the sockets turned lengthen rods).
@@ -66,6 +66,8 @@ class NetPlan:
             (:func:`rodcad.design.net.collapse.join_anchor_pairs`).
         pieces: (m,) the printed pieces each rod is spliced from (:mod:`rodcad.catalog.net.splice`;
             1: one piece), or None: every rod one piece.
+        node_cone: (n,) each hub's socket cone (deg) within the catalog's ``cone_range``
+            (:mod:`rodcad.design.net.cones`), or None: the catalog's ``cone_deg`` at every hub.
     """
 
     target: NetTarget
@@ -86,12 +88,22 @@ class NetPlan:
     between_anchors: int = 0
     added_anchors: list = field(default_factory=list)
     pieces: np.ndarray | None = None
+    node_cone: np.ndarray | None = None
 
     def hub(self, k: int) -> NodeHardware:
-        """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`)."""
-        if self.node_pivot is None or not self.hardware.is_hub:
-            return self.hardware
-        return self.hardware.sized(float(self.node_pivot[k]))
+        """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`) and
+        its sockets' cone (:attr:`node_cone`)."""
+        hw = self.hardware
+        if not hw.is_hub:
+            return hw
+        if self.node_pivot is not None:
+            hw = hw.sized(float(self.node_pivot[k]))
+        return hw if self.node_cone is None else hw.coned(float(self.node_cone[k]))
+
+    def hub_key(self, k: int) -> tuple:
+        """What node ``k``'s hub (:meth:`hub`) depends on."""
+        return (None if self.node_pivot is None else float(self.node_pivot[k]),
+                None if self.node_cone is None else float(self.node_cone[k]))
 
     @property
     def end_pivot(self) -> np.ndarray:
@@ -137,23 +149,28 @@ class NetPlan:
         return fill_lengths(self.hardware, self.lengths, self.target.bends)
 
     @property
-    def swing_limits(self) -> np.ndarray:
-        """(m,) how far each rod may turn in its sockets (deg): a bent rod's tilted end face
-        comes nearer the hub (:func:`rodcad.catalog.net.bend.bent_swing_deg`). Each hub size's
-        own swing (a bisection) is found once, not once per rod end."""
-        sizes: dict[float | None, tuple[NodeHardware, float]] = {}
-        out = []
+    def end_swing_limits(self) -> np.ndarray:
+        """(m, 2) how far each rod may turn in the socket at each of its ends (deg): its hub's
+        swing, less where a bent rod's tilted end face comes nearer the hub
+        (:func:`rodcad.catalog.net.bend.bent_swing_deg`). Each hub's own swing (a bisection) is
+        found once per size and cone, not once per rod end."""
+        sizes: dict[tuple, tuple[NodeHardware, float]] = {}
+        out = np.full((self.target.m, 2), np.inf)
         for e, a in enumerate(self.arcs):
-            lim = np.inf
-            for k in self.target.edges[e]:
-                size = None if self.node_pivot is None else float(self.node_pivot[k])  # what hub(k) depends on
-                if size not in sizes:
+            for c, k in enumerate(self.target.edges[e]):
+                key = self.hub_key(int(k))
+                if key not in sizes:
                     hw = self.hub(int(k))
-                    sizes[size] = (hw, hw.swing_deg)
-                hw, swing = sizes[size]
-                lim = min(lim, swing if a is None else min(swing, bent_swing_deg(hw, a)))
-            out.append(lim)
-        return np.array(out, float)
+                    sizes[key] = (hw, hw.swing_deg)
+                hw, swing = sizes[key]
+                out[e, c] = swing if a is None else min(swing, bent_swing_deg(hw, a))
+        return out
+
+    @property
+    def swing_limits(self) -> np.ndarray:
+        """(m,) how far each rod may turn in its sockets (deg): the lesser of its two ends'
+        (:attr:`end_swing_limits`)."""
+        return self.end_swing_limits.min(axis=1)
 
     def rod_com(self, masses) -> np.ndarray:
         """(m, 3) each rod's centre of mass at ``masses`` (g): (along, below the chord, 0) mm,
@@ -277,12 +294,27 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         raise DesignLimit("; ".join(problems) + _coarser(target, hw, lo_hw))
     if hang and t.joints is not None and len(t.joints):
         t = _hung(t, base, parent, counts, hw, node_pivot, g, pieces)
+        # the joints moved, and with them the angles their rods meet the hubs at: the hubs sized again
+        # (never smaller), so that every two sockets keep their wall
+        node_pivot, problems = size_hubs(t, hw, lo_hw, hi, node_pivot)
+        if problems:
+            raise DesignLimit("with the two-rod joints at their funicular sag, " + "; ".join(problems))
     plan = _plan(t, hw, node_pivot, (lo_hw, hi), pieces if np.any(pieces > 1) else None)
     plan.merged = merged
     plan.collapsed = collapses(base, merged)
     plan.between_anchors = between
     plan.added_anchors = added_anchors(base)
     return plan
+
+
+def resized(plan: NetPlan, node_pivot: np.ndarray) -> NetPlan:
+    """The plan with hubs of pivot radii ``node_pivot`` (mm; each node's cone kept): its
+    sockets back on the lines between the node points, its rods' lengths, bounds and hubs'
+    masses following."""
+    new = _plan(plan.target, plan.hardware, np.asarray(node_pivot, float), plan.length_range, plan.pieces)
+    new = dataclasses.replace(new, merged=plan.merged, collapsed=plan.collapsed, between_anchors=plan.between_anchors,
+                              added_anchors=plan.added_anchors, node_cone=plan.node_cone)
+    return replan(new, new.pivots) if plan.node_cone is not None else new
 
 
 def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -> tuple[NetTarget, int]:

@@ -102,7 +102,8 @@ def net_bill(check, catalog) -> dict[str, Any]:
         sizes: dict[str, int] = {}
         for k in np.flatnonzero(held):
             h = plan.hub(int(k))
-            key = f"{h.diameter:.4g} mm (pivot radius {h.pivot_radius:.4g} mm)"
+            key = f"{h.diameter:.4g} mm (pivot radius {h.pivot_radius:.4g} mm" + (
+                f", cones {h.cone_deg:.3g} deg)" if h.cone_deg != hw.cone_deg else ")")
             sizes[key] = sizes.get(key, 0) + 1
         out["hub_sizes"] = sizes
         out["filament_g"] = rod_plastic + float(plan.node_masses.sum())
@@ -136,8 +137,8 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "com": _v(plan.node_com[k]),
             "rods": int(plan.degree[k]),
             "error_mm": _f(check.node_error[k]),
-            "hub": {"diameter": plan.hub(k).diameter, "pivot_radius": plan.hub(k).pivot_radius}
-            if hw.is_hub else None,
+            "hub": {"diameter": plan.hub(k).diameter, "pivot_radius": plan.hub(k).pivot_radius,
+                    "cone_deg": plan.hub(k).cone_deg} if hw.is_hub else None,
             "joint": _joint_kind(t, k),
         })
     rods = []

@@ -129,11 +129,15 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                   f"its pivot {hw.pivot_radius:g} mm from the hub's centre along the rod's target direction. Each rod "
                   f"ends in a {hw.ball:g} mm ball on a {hw.neck:g} mm neck; the sockets are {hw.clearance:g} mm wider "
                   f"and open in a {hw.cone_deg:g} deg cone, so a rod turns {hw.swing_deg:.3g} deg from its socket's "
-                  f"axis in every direction (the designed net uses at most {float(np.max(check.swing_deg)):.3g} deg"
+                  f"axis in every direction"
+                  + (f" ({_wide(plan)} hub(s) open wider, up to {float(plan.node_cone.max()):.3g} deg, where their rods "
+                     "turn further)" if _wide(plan) else "")
+                  + f" (the designed net uses at most {float(np.max(check.swing_deg)):.3g} deg"
                   + (f"; a bent rod's tilted end face lets it turn {float(plan.swing_limits.min()):.3g} deg at least"
                      if plan.bent else "") + "). "
                   "Rods at a node must meet at "
-                  f"{hw.min_angle_deg:.3g} deg or more. The hubs are rigid bodies whose pose the solver found; their "
+                  f"{hw.min_angle_deg:.3g} deg or more (at the nominal hub), and a hub's sockets, turned to balance it, "
+                  f"keep {hw.min_wall:g} mm of wall between every two of them. The hubs are rigid bodies whose pose the solver found; their "
                   f"masses ({float(plan.node_masses.min()):.3g}-{float(plan.node_masses.max()):.3g} g) and centres of "
                   "mass count.", "",
                   f"Free play: each socket is printed {hw.clearance / 2:g} mm back from its pivot against the "
@@ -319,3 +323,10 @@ def planner_summary(plan) -> str:
     if plan.between_anchors:
         what.append(f"{plan.between_anchors} rod(s) between anchors left out")
     return f"planner: drawn {drawn.n} nodes, {drawn.m} edges; built {t.n} nodes, {t.m} rods: {'; '.join(what)} (report.md)\n"
+
+
+def _wide(plan) -> int:
+    """How many hubs have sockets' cones wider than the catalog's nominal."""
+    if plan.node_cone is None:
+        return 0
+    return int(np.count_nonzero(plan.node_cone > plan.hardware.cone_deg + 1e-9))

@@ -1,0 +1,111 @@
+"""Socket cones chosen per hub: a hub whose rods turn further than its sockets let them gets
+wider cones, within the catalog's ``node.cone_deg`` range.
+
+A hub's sockets open outward in a cone (:mod:`rodcad.catalog.net.node`); a rod turns in its
+socket until its neck touches the cone. The hubs' sockets are turned so that every hub balances
+at the target (:mod:`rodcad.design.net.hubs`), so the rods meet them a little off their axes,
+and where the net's rods meet a hub at awkward angles, by more than the nominal cone lets them.
+Such a hub is printed with wider cones: the narrowest of the catalog's range that lets its rods
+turn as far (plus :data:`CONE_MARGIN`), as wide as the range and the wall between its sockets'
+openings on the hub's surface allow (:meth:`rodcad.catalog.net.node.NodeHardware.widest_cone`).
+A wider cone takes plastic out of the hub, so the hub is lighter and its centre of mass moves:
+the net is designed again with the new hubs, round after round (:data:`CONE_ROUNDS`) while
+some rod still turns too far, each round widening from the last.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+
+from rodcad.design.net.plan import NetPlan, replan
+
+__all__ = ["CONE_MARGIN", "CONE_ROUNDS", "widen_cones"]
+
+#: A hub's cone is widened this much beyond what its rods' turns need (deg): the design made
+#: again with the lighter hub turns them a little differently.
+CONE_MARGIN = 1.0
+
+#: Rounds of cones widened and the net designed again (each round designs the net once).
+CONE_ROUNDS = 3
+
+
+def _swing_only(check) -> bool:
+    """The design fails on nothing but rods turning too far in their sockets."""
+    return (check.meets_tolerance and check.in_tension and not check.out_of_window.size
+            and bool(check.over_swing.size))
+
+
+def _excess(check) -> float:
+    """How much further than its socket lets it the worst rod end turns (deg; 0 if none)."""
+    over = check.over_swing
+    if not over.size:
+        return 0.0
+    e, c = over[:, 0], over[:, 1]
+    return float(np.max(check.swing_deg[e, c] - check.plan.end_swing_limits[e, c]))
+
+
+def _needed_cones(check, planned: NetPlan) -> np.ndarray | None:
+    """(n,) each hub's cone for the next round (deg), None where no hub's changes."""
+    plan = check.plan
+    t = plan.target
+    cones = (planned.node_cone.copy() if planned.node_cone is not None
+             else np.full(t.n, planned.hardware.cone_deg, float))
+    need = np.zeros(t.n)
+    limits = plan.end_swing_limits
+    for e, c in check.over_swing:
+        k = int(t.edges[e, c])
+        if limits[e, c] < plan.hub(k).swing_deg - 1e-9:  # (a bent rod's end face limits it, not the cone)
+            continue
+        need[k] = max(need[k], float(check.swing_deg[e, c]) + CONE_MARGIN)
+    new = cones.copy()
+    for k in np.flatnonzero(need > 0):
+        hub = planned.hub(int(k))
+        at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+        dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
+        dirs /= np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
+        new[k] = max(cones[k], min(hub.cone_for_turn(need[k]), hub.widest_cone(dirs)))
+    return new if np.any(new > cones + 1e-9) else None
+
+
+def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_ROUNDS):
+    """The design with wider socket cones at the hubs whose rods turn too far (module
+    docstring), or ``check`` itself where the catalog has one cone, where the design fails on
+    anything else, or where no wider cone lets the rods turn (the try that came closest is kept).
+
+    Args:
+        check: a :class:`rodcad.design.net.check.NetCheck` with its ``planned`` plan.
+        design: designs a plan (:func:`rodcad.design.net.check.design_net_plan` with the
+            design's settings).
+        rounds: rounds at most.
+    """
+    planned = check.planned
+    if planned is None or not planned.hardware.is_hub or planned.hardware.cone_limits[1] <= planned.hardware.cone_deg:
+        return check
+    best, cur = check, check
+    for _ in range(rounds):
+        if not _swing_only(cur):
+            break
+        cones = _needed_cones(cur, planned)
+        if cones is None:
+            break
+        planned = replan(dataclasses.replace(planned, node_cone=cones), planned.pivots)
+        cur = design(planned)
+        if cur.ok:
+            best = cur
+            break
+        if _swing_only(cur) and _excess(cur) < _excess(best):
+            best = cur
+    if best is not check:
+        best.carry(check)
+    if best is not check and best.ok:
+        cones = best.plan.node_cone
+        nominal = best.plan.hardware.cone_deg
+        wide = int(np.count_nonzero(cones > nominal + 1e-9))
+        best.chose(f"{wide} hub(s) have their sockets' cones opened wider than the catalog's nominal "
+                          f"{nominal:g} deg (up to {float(cones.max()):.3g} deg, within its node.cone_deg range), so "
+                          f"that their rods turn as the design hangs them (at most {float(best.swing_deg.max()):.3g} "
+                          "deg); a wider cone lightens its hub, and the net was designed again with it.")
+    return best

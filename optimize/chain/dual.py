@@ -18,13 +18,15 @@ pushes the right way, by a small linear program.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from optimize.chain.model import ActiveSet, Chain, kkt_residual
 
 __all__ = [
+    "SET_CACHE",
     "SetSolution",
     "close_at_kink",
     "dual_newton",
@@ -32,6 +34,13 @@ __all__ = [
     "rigid_reaction",
     "solve_set",
 ]
+
+#: How many answers of :func:`solve_set` are kept: a multi-start's starts and the planner's
+#: repeated checks of one chain walk through the same active sets from the same reactions,
+#: and the answer is a function of (chain, set, start) alone (the least recently used goes).
+SET_CACHE = 4096
+
+_solved: OrderedDict[bytes, SetSolution | None] = OrderedDict()
 
 
 @dataclass
@@ -241,8 +250,23 @@ def rigid_reaction(chain: Chain, theta: np.ndarray, act: np.ndarray) -> complex:
     return complex(x[0] * weight, x[1] * weight)
 
 
+def _problem_key(chain: Chain, aset: ActiveSet, lam: complex) -> bytes:
+    """Every number the set's solution depends on, to the bit (the chain's arrays, its
+    gravity, the active set, the starting reaction)."""
+    arrays = (chain.lengths, chain.masses, chain.com, chain.limits, chain.anchor_a, chain.anchor_b,
+              chain.end_limits, np.array([chain.g]), np.array([lam], complex), aset.act)
+    return b"|".join(f"{a.dtype.str}{a.shape}".encode() + np.ascontiguousarray(a).tobytes() for a in arrays)
+
+
+def _copy(sol: SetSolution | None) -> SetSolution | None:
+    if sol is None:
+        return None
+    return replace(sol, theta=sol.theta.copy(), W=None if sol.W is None else sol.W.copy())
+
+
 def solve_set(chain: Chain, aset: ActiveSet, lam: complex) -> SetSolution | None:
-    """The equilibrium for one active set: every free group along its load.
+    """The equilibrium for one active set: every free group along its load (kept: the
+    same question again is answered from :data:`SET_CACHE`, the same answer).
 
     Args:
         chain: the problem.
@@ -252,6 +276,18 @@ def solve_set(chain: Chain, aset: ActiveSet, lam: complex) -> SetSolution | None
     Returns:
         SetSolution, or None when the set cannot close the chain.
     """
+    key = _problem_key(chain, aset, lam)
+    if key in _solved:
+        _solved.move_to_end(key)
+        return _copy(_solved[key])
+    sol = _solve_set(chain, aset, lam)
+    _solved[key] = _copy(sol)
+    if len(_solved) > SET_CACHE:
+        _solved.popitem(last=False)
+    return sol
+
+
+def _solve_set(chain: Chain, aset: ActiveSet, lam: complex) -> SetSolution | None:
     if aset.reachable():
         free = aset.free
         P, Q = aset.groups.P[free], aset.groups.Q[free]

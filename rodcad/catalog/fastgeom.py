@@ -341,6 +341,19 @@ def _outline(g: RodGeometry) -> _Outline:
     return _Outline(g)
 
 
+#: How many rods' moments :func:`rod_mass_properties` keeps: the planner asks again for the
+#: same rods (a graduated rod's scale is bisected for each mass it is designed at).
+MOMENTS_CACHE = 8192
+
+
+@lru_cache(maxsize=MOMENTS_CACHE)
+def _moments(key: str, g: RodGeometry) -> tuple[float, float, float]:
+    """The solid's moments (:meth:`_Outline.moments`), kept by ``key``, the geometry's repr:
+    every field to the last digit, the sign of a zero too (equal geometries can differ there)."""
+    del key
+    return _outline(g).moments()
+
+
 def rod_mass_properties(g: RodGeometry, *, cell: float = 0.05) -> tuple[float, tuple[float, float, float]]:
     """Volume (mm^3) and centre of mass (x, y, z) (mm) of the solid
     :func:`rodcad.cad.solids.build_rod` builds for ``g``, without the CAD kernel.
@@ -350,7 +363,7 @@ def rod_mass_properties(g: RodGeometry, *, cell: float = 0.05) -> tuple[float, t
     accepted for callers written for a grid integration and not used.
     """
     del cell
-    vol, mx, my = _outline(g).moments()
+    vol, mx, my = _moments(repr(g), g)
     return vol, (mx / vol, my / vol, 0.0)
 
 

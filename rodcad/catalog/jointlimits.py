@@ -180,10 +180,43 @@ class EndOutline:
         """Whether points (M, 2) lie inside the outline, more than ``e`` from its edge
         (a negative ``e``: inside or within ``-e`` of the edge)."""
         x, y = p[:, 0], p[:, 1]
-        lo = -self.height / 2 + e
+        body = self._body(x, y, e) & ~self._far_cut(x, y, e)
+        return self._clear_of_ends(x, y, e) & (body | self._knuckle(x, y, e))
+
+    def meets(self, p: np.ndarray, e: float | np.ndarray = INSIDE_TOL) -> bool:
+        """``contains(p, e).any()``, each of its tests made only on the points the ones
+        before left (``e``: a number, or one per point)."""
+        x, y = p[:, 0], p[:, 1]
+        per_point = np.ndim(e) > 0
+
+        def keep(mask: np.ndarray) -> bool:
+            nonlocal x, y, e
+            x, y = x[mask], y[mask]
+            if per_point:
+                e = e[mask]
+            return x.size > 0
+
+        if not keep(self._clear_of_ends(x, y, e)):
+            return False
+        if self._knuckle(x, y, e).any():
+            return True
+        return keep(self._body(x, y, e)) and bool((~self._far_cut(x, y, e)).any())
+
+    def _clear_of_ends(self, x: np.ndarray, y: np.ndarray, e) -> np.ndarray:
+        """Points on the body's side of this end's faces, outside its hinge zone."""
         face = np.where(y >= 0, (x < -self.setback - y * self.tan_top - e) | (y > self.cut_top + e),
                         (x < -self.setback + y * self.tan_bottom - e) | (y < -self.cut_bottom - e))
-        outside_zone = x * x + y * y > (self.zone + e) * abs(self.zone + e)
+        return face & (x * x + y * y > (self.zone + e) * abs(self.zone + e))
+
+    def _knuckle(self, x: np.ndarray, y: np.ndarray, e) -> np.ndarray:
+        """Points in the knuckle around the other axis."""
+        q = self.far_axis()
+        return (x - q[0]) ** 2 + (y - q[1]) ** 2 < (self.far_knuckle - e) * abs(self.far_knuckle - e)
+
+    def _body(self, x: np.ndarray, y: np.ndarray, e) -> np.ndarray:
+        """Points in the body (the stub, the bar or band behind the axis, the far stub),
+        before the far end's faces cut it."""
+        lo = -self.height / 2 + e
         stub = (x >= 0) & (x < self.stub - e) & (y > lo) & (y < self.top - e)
         k = self.curvature
         if k == 0:
@@ -198,11 +231,8 @@ class EndOutline:
             back = np.arctan2(-x, np.sign(k) * (cy - y))
             top = np.where((back <= self.reach / rho) | (back >= (self.far - self.far_reach) / rho), self.top, self.body)
             behind = (x < 0) & (w > lo) & (w < top - e) & (back > 0) & (back < min(self.depth, self.far) / rho)
-        q = self.far_axis()
-        knuckle = (x - q[0]) ** 2 + (y - q[1]) ** 2 < (self.far_knuckle - e) * abs(self.far_knuckle - e)
-        # the body past the far axis is cut by the far end's faces; its knuckle is not
-        body = (stub | behind | self._far_stub(x, y, e)) & ~self._far_cut(x, y, e)
-        return face & outside_zone & (body | knuckle)
+        # the body past the far axis is cut by the far end's faces (:meth:`_far_cut`); its knuckle is not
+        return stub | behind | self._far_stub(x, y, e)
 
     def _far_stub(self, x: np.ndarray, y: np.ndarray, e: float) -> np.ndarray:
         """The straight stub past the other axis (what its faces leave of it)."""
@@ -218,7 +248,7 @@ class EndOutline:
     def corners(self) -> np.ndarray:
         """Points along the outline's boundary, :data:`ARC_STEP` apart, with its corners
         exactly (where the faces meet the zone circle and the sides)."""
-        pts = []
+        pts: list[np.ndarray] = []  # blocks of rows
         r = self.zone
         for sign in (1.0, -1.0):
             # the face, x = -s - |y| t on this side, from the zone circle to the side
@@ -228,22 +258,22 @@ class EndOutline:
             end = self._face_meets_side(sign)
             u1 = float((end - p0) @ d)
             if u1 > u0:
-                pts += list(p0 + np.outer(_steps(u0, u1), d))
-            pts.append(end)
+                pts.append(p0 + np.outer(_steps(u0, u1), d))
+            pts.append(end[None])
         pts += self._side_samples()
         if math.isfinite(self.far):  # the body's far end (across the band) and the far knuckle
             end = min(self.depth, self.far)
             w = _steps(-self.height / 2, max(self.top, self.body))
             k = self.curvature
             if k == 0:
-                pts += list(np.column_stack([np.full(w.size, -end), w]))
+                pts.append(np.column_stack([np.full(w.size, -end), w]))
             else:
                 rho, sk = 1 / abs(k), math.copysign(1.0, k)
                 radius, ang = rho - sk * w, end / rho
-                pts += list(np.column_stack([-radius * math.sin(ang), sk * rho - sk * radius * math.cos(ang)]))
+                pts.append(np.column_stack([-radius * math.sin(ang), sk * rho - sk * radius * math.cos(ang)]))
             q, r = self.far_axis(), self.far_knuckle
             ang = np.linspace(0.0, 2 * math.pi, int(2 * math.pi * r / ARC_STEP) + 2)
-            pts += list(q + r * np.column_stack([np.cos(ang), np.sin(ang)]))
+            pts.append(q + r * np.column_stack([np.cos(ang), np.sin(ang)]))
             if self.far_end is not None:  # the far faces and the far stub's sides
                 setback, t_top, t_bottom, _, _ = self.far_end
                 u, v = self.far_frame()
@@ -251,18 +281,18 @@ class EndOutline:
                 hmax = max(self.top, self.height / 2) + 1.0
                 for side, t in ((1.0, t_top), (-1.0, t_bottom)):
                     ys = _steps(0.0, hmax)
-                    pts += list(a + np.outer(-ys * t, u) + np.outer(side * ys, v))
+                    pts.append(a + np.outer(-ys * t, u) + np.outer(side * ys, v))
                     xs = _steps(0.0, self.stub)
                     w = self.top if side > 0 else -self.height / 2
-                    pts += list(q + np.outer(xs, u) + w * v)
+                    pts.append(q + np.outer(xs, u) + w * v)
         for sign, cut, t in ((1.0, self.cut_top, self.tan_top), (-1.0, self.cut_bottom, self.tan_bottom)):
             if math.isfinite(cut):  # the end cut's far edge, where the body reaches past it
                 x0 = -self.setback - cut * t
                 xs = -_steps(-x0, self.depth) if x0 < 0 else -_steps(0.0, self.depth)
-                pts += list(np.column_stack([xs, np.full(xs.size, sign * cut)]))
+                pts.append(np.column_stack([xs, np.full(xs.size, sign * cut)]))
         ang = np.linspace(0.0, 2 * math.pi, int(2 * math.pi * r / ARC_STEP) + 1)
-        pts += list(r * np.column_stack([np.cos(ang), np.sin(ang)]))
-        pts = np.array(pts, dtype=float)
+        pts.append(r * np.column_stack([np.cos(ang), np.sin(ang)]))
+        pts = np.concatenate(pts, dtype=float)
         return pts[self.contains(pts, -1e-7)]  # only points of this outline (its boundary)
 
     def _face(self, sign: float) -> tuple[np.ndarray, np.ndarray]:
@@ -293,7 +323,7 @@ class EndOutline:
         return q
 
     def _side_samples(self) -> list[np.ndarray]:
-        """Points along the top and bottom sides: the stub's straight sides ahead of the
+        """Points (blocks of rows) along the top and bottom sides: the stub's straight sides ahead of the
         axis, then the bar's straight sides or a curved rod's arcs behind it (a graduated
         rod's top steps to its body's ``reach`` behind the axis)."""
         k = self.curvature
@@ -302,7 +332,7 @@ class EndOutline:
             near = self.top if sign > 0 else -self.height / 2
             far = self.body if sign > 0 else near
             ahead = _steps(0.0, self.stub)
-            out += list(np.column_stack([ahead, np.full(ahead.size, near)]))
+            out.append(np.column_stack([ahead, np.full(ahead.size, near)]))
             end = min(self.depth, self.far)
             cut = min(self.reach, end)
             spans = [(0.0, cut, near)] + ([(cut, end, far)] if cut < end else [])
@@ -314,9 +344,9 @@ class EndOutline:
             if k == 0:
                 for a, b, w in spans:
                     back = -_steps(a, b)
-                    out += list(np.column_stack([back, np.full(back.size, w)]))
+                    out.append(np.column_stack([back, np.full(back.size, w)]))
                 for at in steps_at:
-                    out += list(np.column_stack([np.full(step.size, -at), step]))
+                    out.append(np.column_stack([np.full(step.size, -at), step]))
                 continue
             rho = 1 / abs(k)
             cy = math.copysign(rho, k)
@@ -324,11 +354,11 @@ class EndOutline:
             for a, b, w in spans:
                 radius = rho - sk * w
                 ang = _steps(a, b) / rho  # back along the arc from the axis's radial line
-                out += list(np.column_stack([-radius * np.sin(ang), cy - sk * radius * np.cos(ang)]))
+                out.append(np.column_stack([-radius * np.sin(ang), cy - sk * radius * np.cos(ang)]))
             radius = rho - sk * step
             for at in steps_at:
                 ang = at / rho
-                out += list(np.column_stack([-radius * math.sin(ang), cy - sk * radius * math.cos(ang)]))
+                out.append(np.column_stack([-radius * math.sin(ang), cy - sk * radius * math.cos(ang)]))
         return out
 
 
@@ -437,12 +467,14 @@ def _inside(outline: EndOutline, box: tuple[np.ndarray, np.ndarray], pts: np.nda
     """Whether any of the points lies inside the outline (only those in its box are tested);
     with ``grow`` (per point, mm), inside it or within ``grow`` of its edges along x or y
     (:attr:`EndOutline.growth` turns a distance into that)."""
+    x, y = pts[:, 0], pts[:, 1]
+    (x0, y0), (x1, y1) = box
     if grow is None:
-        near = pts[((pts >= box[0]) & (pts <= box[1])).all(axis=1)]
-        return bool(near.size and outline.contains(near).any())
+        near = pts[(x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)]
+        return bool(near.size and outline.meets(near))
     g = np.broadcast_to(np.asarray(grow, float), pts.shape[:1])
-    keep = ((pts >= box[0] - g[:, None]) & (pts <= box[1] + g[:, None])).all(axis=1)
-    return bool(keep.any() and outline.contains(pts[keep], -g[keep]).any())
+    keep = (x >= x0 - g) & (x <= x1 + g) & (y >= y0 - g) & (y <= y1 + g)
+    return bool(keep.any() and outline.meets(pts[keep], -g[keep]))
 
 
 def _contact(pair: _Pair, start: float, direction: float, bound: float) -> float | None:

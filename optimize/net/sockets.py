@@ -39,10 +39,10 @@ __all__ = ["FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "SocketBalance", "SocketP
 #: hub grid's joint solve spent 50 s in LSMR for the same residual (1.4e-6 of the force scale)
 #: that 200 iterations a step reach in 15 s (inexact steps: the trust region still decides).
 LSMR_UNKNOWNS = 4000
+LSMR_ITER = 200
 
 #: A socket whose turn is bounded by this little (deg) stays where it starts (no unknowns).
 FIXED_TURN = 1e-6
-LSMR_ITER = 200
 
 
 @dataclass

@@ -56,8 +56,9 @@ def part_specs(check) -> tuple[list, list]:
         balls, cavity, _ = hw.rod_fill(float(fill[e]), mass)
         rods.append(RodSpec(hw, L, int(balls), float(cavity), arcs[e]))
     hubs = []
+    ends = t.node_ends()
     for k in range(t.n if hw.is_hub else 0):
-        at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+        at = ends[k]
         if not at:  # an anchor no rod reaches (a boundary-held grid's corner): no hub to print
             hubs.append(None)
             continue

@@ -41,8 +41,8 @@ import numpy as np
 from rodcad.catalog.net.splice import Splice, splice_fill, splice_intervals, splice_numbers
 from rodcad.catalog.stock import DEFAULT_MODULUS
 
-__all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "largest_clear_turn", "node_hardware",
-           "socket_centres"]
+__all__ = ["DEFAULT_NODE", "NODE_KINDS", "NetRodNumbers", "NodeHardware", "largest_clear_turn", "least_angle_deg",
+           "node_hardware", "socket_centres"]
 
 #: Node kinds a catalog's ``node.kind`` may name.
 NODE_KINDS = ("hub", "point")
@@ -54,6 +54,17 @@ DEFAULT_NODE = {"kind": "hub", "diameter": 24.0, "pivot_radius": 7.5, "ball": 6.
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
 
+
+
+def least_angle_deg(directions: np.ndarray) -> float:
+    """The least angle between two of ``directions`` ((k, 3), any lengths) (deg; 180 for fewer than two)."""
+    d = np.asarray(directions, float).reshape(-1, 3)
+    if d.shape[0] < 2:
+        return 180.0
+    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    cos = np.clip(d @ d.T, -1.0, 1.0)
+    np.fill_diagonal(cos, -1.0)
+    return float(np.degrees(np.arccos(cos.max())))
 
 
 def largest_clear_turn(clear) -> float:
@@ -219,12 +230,7 @@ class NodeHardware:
         own = self.cone_deg
         if hi <= own:
             return own
-        d = np.asarray(directions, float).reshape(-1, 3)
-        if d.shape[0] < 2:
-            return hi
-        cos = np.clip(d @ d.T, -1.0, 1.0)
-        np.fill_diagonal(cos, -1.0)
-        room = math.degrees(math.acos(float(cos.max())))
+        room = least_angle_deg(directions)
         if self.cone_lip_deg(hi) <= room:
             return hi
         if self.cone_lip_deg(own) > room:

@@ -6,8 +6,8 @@ socket until its neck touches the cone. The hubs' sockets are turned so that eve
 at the target (:mod:`rodcad.design.net.hubs`), so the rods meet them a little off their axes,
 and where the net's rods meet a hub at awkward angles, by more than the nominal cone lets them.
 Such a hub is printed with wider cones: the narrowest of the catalog's range that lets its rods
-turn as far (plus :data:`CONE_MARGIN`), as wide as the range and the wall between its sockets'
-openings on the hub's surface allow (:meth:`rodcad.catalog.net.node.NodeHardware.widest_cone`).
+turn as far (plus :data:`CONE_MARGIN`), as wide as the range and its neighbours' openings, which must leave each socket's lip whole,
+allow (:meth:`rodcad.catalog.net.node.NodeHardware.widest_cone`).
 A wider cone takes plastic out of the hub, so the hub is lighter and its centre of mass moves:
 the net is designed again with the new hubs, round after round (:data:`CONE_ROUNDS`) while
 some rod still turns too far, each round widening from the last.
@@ -61,9 +61,10 @@ def _needed_cones(check, planned: NetPlan) -> np.ndarray | None:
             continue
         need[k] = max(need[k], float(check.swing_deg[e, c]) + CONE_MARGIN)
     new = cones.copy()
+    ends = t.node_ends()
     for k in np.flatnonzero(need > 0):
         hub = planned.hub(int(k))
-        at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+        at = ends[k]
         dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
         dirs /= np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
         new[k] = max(cones[k], min(hub.cone_for_turn(need[k]), hub.widest_cone(dirs)))
@@ -98,14 +99,15 @@ def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_R
             break
         if _swing_only(cur) and _excess(cur) < _excess(best):
             best = cur
-    if best is not check:
-        best.carry(check)
-    if best is not check and best.ok:
+    if best is check:
+        return check
+    best.carry(check)
+    if best.ok:
         cones = best.plan.node_cone
         nominal = best.plan.hardware.cone_deg
         wide = int(np.count_nonzero(cones > nominal + 1e-9))
         best.chose(f"{wide} hub(s) have their sockets' cones opened wider than the catalog's nominal "
-                          f"{nominal:g} deg (up to {float(cones.max()):.3g} deg, within its node.cone_deg range), so "
-                          f"that their rods turn as the design hangs them (at most {float(best.swing_deg.max()):.3g} "
-                          "deg); a wider cone lightens its hub, and the net was designed again with it.")
+                   f"{nominal:g} deg (up to {float(cones.max()):.3g} deg, within its node.cone_deg range), so that "
+                   f"their rods turn as the design hangs them (at most {float(best.swing_deg.max()):.3g} deg); a "
+                   "wider cone lightens its hub, and the net was designed again with it.")
     return best

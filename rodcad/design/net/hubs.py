@@ -65,6 +65,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     r = float(plan.end_pivot.max())  # (the scale of the pivot changes; each hub keeps its own radius)
     rk = plan.end_pivot
     free = ~t.anchored_mask
+    at_node = t.node_ends()
     axis = plan.pivots.copy()  # along the rods' lines between node points
     rounds = 0
     best, best_res, stall = plan, np.inf, 0
@@ -99,7 +100,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
         F[:, :, 2] -= share
         new = plan.pivots.copy()
         for k in np.flatnonzero(free):
-            at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+            at = at_node[k]
             if len(at) < 2:
                 continue
             f = np.array([F[e, c] for e, c in at])
@@ -214,8 +215,7 @@ def _room(plan: NetPlan, lines: np.ndarray) -> np.ndarray:
     box's corner (``sqrt(2)`` times its side) within it."""
     t = plan.target
     out = np.full((t.m, 2), 90.0)
-    for k in range(t.n):
-        at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+    for k, at in enumerate(t.node_ends()):
         if len(at) < 2:
             continue
         d = np.array([lines[e, c] for e, c in at], float)

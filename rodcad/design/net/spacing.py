@@ -18,6 +18,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
+from rodcad.catalog.net.node import least_angle_deg
+
 __all__ = ["GROW", "GROW_ROUNDS", "SPACING_TOL", "TIGHT_DEG", "grow_tight_hubs", "socket_clashes", "spaced_turn", "tight_hubs",
            "too_close"]
 
@@ -35,17 +37,7 @@ GROW_ROUNDS = 2
 def too_close(a: np.ndarray, need_deg: float) -> bool:
     """Whether any two of the sockets along ``a`` ((k, 3), from the hub's centre) are closer
     than ``need_deg`` (deg, less :data:`SPACING_TOL`)."""
-    return _least_angle(a) < need_deg - SPACING_TOL
-
-
-def _least_angle(a: np.ndarray) -> float:
-    d = np.asarray(a, float).reshape(-1, 3)
-    if d.shape[0] < 2:
-        return 180.0
-    d = d / np.linalg.norm(d, axis=1, keepdims=True)
-    cos = np.clip(d @ d.T, -1.0, 1.0)
-    np.fill_diagonal(cos, -1.0)
-    return float(np.degrees(np.arccos(cos.max())))
+    return least_angle_deg(a) < need_deg - SPACING_TOL
 
 
 def spaced_turn(axis: np.ndarray, f: np.ndarray, cw: np.ndarray, rad: float, need_deg: float,
@@ -121,18 +113,14 @@ def socket_clashes(plan) -> list[tuple[int, float, float]]:
     t = plan.target
     if not plan.hardware.is_hub or t.m == 0:
         return []
-    ends = t.edges.ravel()  # rod end q = 2 e + c
-    order = np.argsort(ends, kind="stable")
-    starts = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=t.n))])
-    piv = plan.pivots.reshape(-1, 3)
     out = []
-    for k in range(t.n):
-        at = order[starts[k]:starts[k + 1]]
-        if at.size < 2:
+    for k, at in enumerate(t.node_ends()):
+        if len(at) < 2:
             continue
+        a = np.array([plan.pivots[e, c] for e, c in at], float)
         need = plan.hub(k).socket_angle_deg
-        if too_close(piv[at], need):
-            out.append((k, _least_angle(piv[at]), need))
+        if too_close(a, need):
+            out.append((k, least_angle_deg(a), need))
     return out
 
 
@@ -140,10 +128,11 @@ def tight_hubs(plan) -> np.ndarray:
     """The free hubs of ``plan`` whose turned sockets are within :data:`TIGHT_DEG` of their least angle."""
     t = plan.target
     out = []
+    ends = t.node_ends()
     for k in np.flatnonzero(~t.anchored_mask & (plan.degree >= 2)):
-        at = [(e, c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k)]
+        at = ends[k]
         a = np.array([plan.pivots[e, c] for e, c in at], float)
-        if _least_angle(a) < plan.hub(int(k)).socket_angle_deg + TIGHT_DEG:
+        if least_angle_deg(a) < plan.hub(int(k)).socket_angle_deg + TIGHT_DEG:
             out.append(int(k))
     return np.array(out, int)
 

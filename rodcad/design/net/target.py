@@ -129,6 +129,15 @@ class NetTarget:
             pts = np.vstack([pts, self.drawn.positions])
         return float(np.max(np.ptp(pts, axis=0)))
 
+    def node_ends(self) -> list[list[tuple[int, int]]]:
+        """Per node, the rod ends at it, (rod, end): the rods that start there, then those that
+        end there, each in rod order."""
+        out: list[list[tuple[int, int]]] = [[] for _ in range(self.n)]
+        for c in (0, 1):
+            for e, k in enumerate(self.edges[:, c].tolist()):
+                out[k].append((e, c))
+        return out
+
     @property
     def anchored_mask(self) -> np.ndarray:
         mask = np.zeros(self.n, dtype=bool)

@@ -18,7 +18,7 @@ import pytest
 from test_equilibrium import balance_residual
 
 from optimize import solve_equilibrium
-from optimize.chain.branches import descend
+from optimize.chain.branches import descend, reach_start
 from optimize.chain.model import Chain, Groups, is_stable, kkt_residual, sag_guess, violations
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
@@ -78,6 +78,22 @@ def test_descent_from_the_symmetric_sag(seed):
     assert not primal.any() and not dual.any()
     assert kkt_residual(chain, theta, lam, side) < 1e-9
     assert is_stable(chain, theta, lam, side)
+
+
+@pytest.mark.parametrize("seed", [55, 47, 185])
+def test_reach_start_closes_the_chain_within_the_limits(seed):
+    # the descent's last starts: each of the usual ones moved to the nearest shape that reaches
+    # B within the limits (seed 55's usual starts all ended on kinks on an AVX2 machine)
+    lengths, masses, com, limits, a, b = compressed_chain(seed)
+    chain = Chain.from_args(lengths, masses, a, b, com, limits)
+    theta = reach_start(chain, sag_guess(chain))
+    assert theta is not None
+    end = np.asarray(a, float) + np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)])
+    assert np.linalg.norm(end - b) <= 1e-9 * lengths.sum()
+    bends = np.diff(theta)
+    assert np.all(bends >= limits[:, 0] - 1e-12) and np.all(bends <= limits[:, 1] + 1e-12)
+    res = solve_equilibrium(lengths, masses, a, b, com=com, limits=limits)
+    assert res.success and res.stable and res.info["path"] in ("exchange", "descent")
 
 
 @pytest.mark.parametrize("seed", [14, 47, 185, 328])

@@ -26,7 +26,7 @@ from optimize.chain.model import ActiveSet, Chain, Groups, fixture_moments, mult
 from optimize.chain.dual import rigid_reaction
 from optimize.chain.endlimits import limit_turn, near, reach
 
-__all__ = ["branch_newton", "descend", "polish_nlp", "polish_point"]
+__all__ = ["branch_newton", "descend", "polish_nlp", "polish_point", "reach_start"]
 
 
 def _nlp_point(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
@@ -293,6 +293,39 @@ def _feasible_start(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
             b = mid
     bends = np.clip(phi - b, lo, hi)
     return theta[0] + np.concatenate([[0.0], np.cumsum(bends)])
+
+
+def reach_start(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
+    """The configuration nearest ``theta0`` (from its bends clipped to the limits) that reaches
+    anchor B: L-BFGS-B on the squared gap to B over the first rod's angle (within its anchor
+    stops' reach) and the bends (within their limits). None where it ends short of B by more
+    than round-off over the chain's length. A start on the limits that closes the chain, for
+    :func:`descend` where the exchanges' iterates and the hanging shape leave it on kinks (which
+    of them do depends on the last bits of the machine's arithmetic)."""
+    from scipy.optimize import minimize
+
+    l = chain.lengths
+    lo = np.concatenate([[reach(chain.end_limits[0])[0]], chain.limits[:, 0]])
+    hi = np.concatenate([[reach(chain.end_limits[0])[1]], chain.limits[:, 1]])
+    t0 = near(theta0[0], chain.end_limits[0]) if chain.end_limited[0] else theta0[0]
+    x0 = np.clip(np.concatenate([[t0], np.diff(theta0)]), np.where(np.isfinite(lo), lo, -np.inf),
+                 np.where(np.isfinite(hi), hi, np.inf))
+
+    def gap(x):
+        t = np.cumsum(x)
+        e = np.exp(1j * t)
+        r = np.sum(l * e) - chain.d
+        grad_t = 2 * (r.real * (-l * e.imag) + r.imag * (l * e.real))  # d|r|^2 / d theta_k
+        return float(abs(r) ** 2), np.cumsum(grad_t[::-1])[::-1]  # theta_k = sum of x_0..x_k
+
+    bounds = [(a if np.isfinite(a) else None, b if np.isfinite(b) else None) for a, b in zip(lo, hi)]
+    res = minimize(gap, x0, jac=True, method="L-BFGS-B", bounds=bounds,
+                   options={"ftol": 0.0, "gtol": 0.0, "maxiter": 200 + 20 * chain.n})
+    scale = float(l.sum())
+    if not np.all(np.isfinite(res.x)) or gap(res.x)[0] > (1e-10 * scale) ** 2:
+        return None
+    t = np.cumsum(res.x)
+    return t - t0 + theta0[0] if chain.end_limited[0] else t
 
 
 def descend(chain: Chain, theta0: np.ndarray, max_iter: int = 300):

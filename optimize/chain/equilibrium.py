@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.chain.branches import descend, polish_nlp
+from optimize.chain.branches import descend, polish_nlp, reach_start
 from optimize.chain.model import (
     MESSAGES,
     ActiveSet,
@@ -297,7 +297,10 @@ def _descend_from_starts(chain: Chain, hanging, lasts, alone: bool = False):
     starts += lasts
     if len(starts) < 2:
         starts.append(sag_guess(chain))
-    return _first_stable(chain, starts)
+    found = _first_stable(chain, starts)
+    if found is None:  # the same starts moved, within the limits, to the nearest shapes that reach B
+        found = _first_stable(chain, (t for t in map(lambda s: reach_start(chain, s), starts) if t is not None))
+    return found
 
 
 def _first_stable(chain: Chain, starts):

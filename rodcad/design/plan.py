@@ -223,6 +223,10 @@ def plan_chain(
 #: this many radians of the target bend; the joints are then moved onto the stops.
 STOP_REACH = np.radians(5.0)
 
+#: Two sets of stops whose chains hang within this share of each other from the curve are
+#: told apart by how near their joints hang to the target (:func:`_better`).
+STOP_TIE = 0.01
+
 
 def _make_plan(curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
                fixed=()) -> ChainPlan:
@@ -279,6 +283,16 @@ def _fit_error(plan: ChainPlan) -> tuple[float, object]:
     return curve_distance(plan.curve, r.equilibrium.points), r
 
 
+def _better(err: float, joints: float, best_err: float, best_joints: float) -> bool:
+    """Whether a plan whose chain hangs ``err`` mm from the curve with its joints at most
+    ``joints`` mm from their targets beats the best so far: the nearer curve, but between two
+    within :data:`STOP_TIE` of each other (which the refine's own convergence does not tell
+    apart: which wins depended on the machine's last bits) the nearer joints."""
+    if abs(err - best_err) <= STOP_TIE * best_err:
+        return joints < best_joints * (1 - STOP_TIE)
+    return err < best_err - 1e-6
+
+
 def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds, snap_stops,
                        rounds: int = 2) -> ChainPlan:
     """Where fabrication bounds keep the masses from holding a sagging target, rest joints
@@ -299,8 +313,8 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
 
     if exact_masses(plan.problem)[2]:
         return plan  # the masses alone hold the target
-    free_err, _ = _fit_error(plan)
-    best, best_err = plan, free_err
+    free_err, free_res = _fit_error(plan)
+    best, best_err, best_joints = plan, free_err, float(free_res.distance.max)
     lo_all, hi_all = joinable[..., 0], joinable[..., 1]
     seen: set[tuple[int, ...]] = set()
     current = plan
@@ -350,9 +364,10 @@ def _with_added_stops(plan: ChainPlan, allowed, joinable, names, t_com, t_bounds
             disc.corners = list(plan.discretization.corners)
             cand = _make_plan(current.curve, disc, chosen, limits, names, t_com, t_bounds, snap_stops,
                               fixed=[j for j in fixed if j not in on_limit])
-            err, _ = _fit_error(cand)
-            if err < best_err - 1e-6:
-                best, best_err, improved = cand, err, True
+            err, res = _fit_error(cand)
+            joints = float(res.distance.max)
+            if _better(err, joints, best_err, best_joints):
+                best, best_err, best_joints, improved = cand, err, joints, True
         if not improved or exact_masses(best.problem)[2]:
             break
         current = best

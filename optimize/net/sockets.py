@@ -26,13 +26,14 @@ Units: mm, g, forces in g x the unit of ``g``.
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import least_squares
 
-__all__ = ["FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
+__all__ = ["DENSE_UNKNOWNS", "FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
 
 #: Above LSMR_UNKNOWNS unknowns, each trust-region step's sparse least squares (LSMR) stops
 #: after LSMR_ITER iterations instead of running to its default (one per unknown): a 2,000-rod
@@ -40,6 +41,19 @@ __all__ = ["FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "SocketBalance", "SocketP
 #: that 200 iterations a step reach in 15 s (inexact steps: the trust region still decides).
 LSMR_UNKNOWNS = 4000
 LSMR_ITER = 200
+
+#: Up to DENSE_UNKNOWNS unknowns each trust-region step is solved exactly on the dense Jacobian
+#: (an SVD, about 10 ms at 174 unknowns, growing as their cube); LSMR's matrix-free iterations, one
+#: per unknown by default at about 0.3 ms each, spent minutes on a 40-hub strip's joint solve.
+DENSE_UNKNOWNS = 400
+
+#: A solve whose cost (half the squared imbalances over the force scale) is still above STALL_COST
+#: and fell by less than STALL_DROP of itself over the last STALL_ITERS iterations stops there:
+#: bounds hold it far from balancing (a strip's joint solve crawled 150 more iterations from 5.67
+#: to 5.66), and the statics at its sockets judge it as they would at the 200th.
+STALL_COST = 1e-6
+STALL_DROP = 1e-2
+STALL_ITERS = 20
 
 #: A socket whose turn is bounded by this little (deg) stays where it starts (no unknowns).
 FIXED_TURN = 1e-6
@@ -91,6 +105,23 @@ class SocketProblem:
     unpack: object
     hub_com: object
 
+class _Stall:
+    """``least_squares``' callback that stops a stalled solve (:data:`STALL_COST`)."""
+
+    def __init__(self) -> None:
+        self.costs: list[float] = []
+
+    def __call__(self, intermediate_result) -> None:
+        c = self.costs
+        c.append(float(intermediate_result.cost))
+        if len(c) > STALL_ITERS and c[-1] > STALL_COST and c[-1] > (1 - STALL_DROP) * c[-1 - STALL_ITERS]:
+            raise StopIteration
+
+
+#: ``least_squares`` takes a callback (SciPy 1.16 on); before it, a solve runs to ``max_nfev``.
+_CALLBACK = "callback" in inspect.signature(least_squares).parameters
+
+
 def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, node_masses, socket_com,
                     masses0, tensions0, start=None, max_turn_deg: float = 15.0, bound_slopes=None, com=None,
                     allow_compression: bool = False, g: float = 9.81, max_nfev: int = 200,
@@ -131,10 +162,15 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
                         socket_com=socket_com, masses0=masses0, tensions0=tensions0, start=start,
                         max_turn_deg=max_turn_deg, bound_slopes=bound_slopes, com=com,
                         allow_compression=allow_compression, g=g)
-    big = pr.x0.size > LSMR_UNKNOWNS
-    ls = least_squares(pr.fun, pr.x0, jac=pr.jac, bounds=(pr.lo, pr.hi), method="trf", x_scale="jac",
-                       max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol, tr_solver="lsmr",
-                       tr_options={"maxiter": LSMR_ITER} if big else {})
+    kw = dict(bounds=(pr.lo, pr.hi), method="trf", x_scale="jac", max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
+    if _CALLBACK:
+        kw["callback"] = _Stall()
+    if pr.x0.size <= DENSE_UNKNOWNS:  # each step's subproblem solved exactly (an SVD of the dense Jacobian)
+        ls = least_squares(pr.fun, pr.x0, jac=lambda x: pr.jac(x).toarray(), tr_solver="exact", **kw)
+    else:
+        big = pr.x0.size > LSMR_UNKNOWNS
+        ls = least_squares(pr.fun, pr.x0, jac=pr.jac, tr_solver="lsmr",
+                           tr_options={"maxiter": LSMR_ITER} if big else {}, **kw)
     P, T, mass = pr.unpack(ls.x)
     P0 = np.asarray(pivots, float)
     r = np.linalg.norm(P0, axis=2)

@@ -105,6 +105,25 @@ class CavityPool:
         sizes = np.array([len(im) for im in self.images], dtype=int)
         return np.concatenate(self.images), np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
 
+    @cached_property
+    def apart(self) -> np.ndarray:
+        """(n, n): the distance between two candidates (their nearest images), computed once
+        for every radius the pool is thrown with (as :func:`_throw` measured it dart by dart:
+        the square root of the least squared distance)."""
+        flat, starts = self.flat
+        n = len(self.images)
+        out = np.empty((n, n))
+        step = 32  # candidates per block: (their images x every image) distances at once
+        for a in range(0, n, step):
+            b = min(n, a + step)
+            lo, hi = starts[a], (starts[b] if b < n else len(flat))
+            d = flat[lo:hi, None, :] - flat[None, :, :]
+            d2 = np.einsum("ijk,ijk->ij", d, d)
+            d2 = np.minimum.reduceat(np.minimum.reduceat(d2, starts, axis=1),
+                                     starts[a:b] - lo, axis=0)
+            out[a:b] = np.sqrt(d2)
+        return out
+
 
 def _distinct(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     out: list[np.ndarray] = []
@@ -212,19 +231,13 @@ def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, so
     if len(sockets) and len(pool.images):  # clear of the ball sockets, all candidates at once
         ok &= _socket_clearance(pool, sockets, socket_r, socket_h) >= need
     accepted: list[np.ndarray] = []
-    placed = np.empty((sum(len(im) for im in pool.images), 3))
-    n = 0
+    apart = pool.apart
+    free = ok.copy()  # still allowed: feasible and at least ``spacing`` from every accepted one
     for i in pool.order:
-        if not ok[i]:
+        if not free[i]:
             continue
-        im = pool.images[i]
-        if n:
-            d = im[:, None, :] - placed[None, :n]
-            if np.sqrt(np.einsum("ijk,ijk->ij", d, d).min()) < spacing:
-                continue
-        accepted.append(im)
-        placed[n:n + len(im)] = im
-        n += len(im)
+        accepted.append(pool.images[i])
+        free &= apart[i] >= spacing
     return accepted
 
 
@@ -288,15 +301,25 @@ def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
     solid = type_solid(rod)
     com = mass_properties(solid).center
     clr = solid_clearance(rod)
+    wall = rod.material.min_wall
 
-    def clearance(p: np.ndarray) -> np.ndarray:
-        return np.minimum(clr(p), silo_distance(p, sockets, socket_r, socket_h))
+    def clearance_for(need: float) -> Callable[[np.ndarray], np.ndarray]:
+        """The clearance beside the sockets where the solid leaves ``need`` (the cavities'
+        test), the solid's alone elsewhere (too little either way)."""
+        def clearance(p: np.ndarray) -> np.ndarray:
+            c = np.array(clr(p))
+            if len(sockets):
+                room = np.flatnonzero(c >= need)
+                c[room] = np.minimum(c[room], silo_distance(p[room], sockets, socket_r, socket_h))
+            return c
+
+        return clearance
 
     info = mass_info(rod)
     radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
     for rd in radii:
         if not skip(rd):
-            yield rd, sphere_layout(clearance, clr.bounds, com, rd, rod.material.min_wall, void="capped")
+            yield rd, sphere_layout(clearance_for(rd + wall), clr.bounds, com, rd, wall, void="capped")
 
 
 class _MemoClearance:

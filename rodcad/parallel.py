@@ -20,7 +20,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["PARTS_PER_WORKER", "KeyValueStore", "cached_map", "default_jobs", "in_process", "task_runner", "worker_pool"]
+__all__ = ["PARTS_PER_WORKER", "WORKER_PRELOAD", "KeyValueStore", "cached_map", "default_jobs", "in_process",
+           "start_workers", "task_runner", "worker_pool"]
 
 #: A build starts a local Dask cluster by default when it has at least this many tasks per
 #: CPU (a distinct net part: 0.5-2 s of kernel work each); fewer run in this process, where
@@ -37,14 +38,35 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def worker_pool(jobs: int) -> ProcessPoolExecutor:
-    """A process pool of ``jobs`` workers that may use the CAD kernel."""
+#: What the forkserver imports before it forks any worker: the CAD kernel and the modules
+#: whose functions the workers run (the tables of reachable masses, the rods' solids).
+WORKER_PRELOAD = ("rodcad.cad.solids", "rodcad.cad.collision", "rodcad.cad.export",
+                  "rodcad.fabrication.intervals", "rodcad.cad.rods")
+
+
+def _context() -> multiprocessing.context.BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["rodcad.cad.solids", "rodcad.cad.collision", "rodcad.cad.export"])
-    else:  # pragma: no cover - Windows / macOS default
-        ctx = multiprocessing.get_context("spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+        ctx.set_forkserver_preload(list(WORKER_PRELOAD))
+        return ctx
+    return multiprocessing.get_context("spawn")  # pragma: no cover - Windows / macOS default
+
+
+def worker_pool(jobs: int) -> ProcessPoolExecutor:
+    """A process pool of ``jobs`` workers that may use the CAD kernel."""
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=_context())
+
+
+def start_workers() -> None:
+    """Start the forkserver the workers of :func:`worker_pool` come from now, so that its
+    imports (:data:`WORKER_PRELOAD`: the CAD kernel, a few seconds) run beside the caller's
+    own instead of when the first pool is made (no-op where it runs already or where workers
+    are spawned)."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        from multiprocessing import forkserver
+
+        _context()
+        forkserver.ensure_running()
 
 
 class KeyValueStore(Protocol):

@@ -422,7 +422,7 @@ def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
         heights[idx] = height
         raised.append(idx)
     need = rod.material.min_wall + WALL_MARGIN
-    clr = RodClearance(rod.geometry)
+    clr = solid_clearance(rod)
     for idx in raised:
         top = silo_top_points(out[idx], socket_r, float(heights[idx[0]]))
         bottom = (out[idx][:, None, :] + _LOWER_HALF[None] * socket_r).reshape(-1, 3)  # a socket below the

@@ -432,7 +432,7 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
 def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
                   center: Sequence[float], radius: float, wall: float,
                   symmetries: Iterable[str] = SYMMETRIES, lattices: Iterable[str] = LATTICES, *,
-                  void: str = "sphere", raise_by: float = 0.0) -> SphereLayout:
+                  void: str = "sphere", raise_by: float = 0.0, beat: int = 0) -> SphereLayout:
     """Most equal voids of ``radius`` that fit with ``wall`` everywhere, in a
     symmetric lattice layout centred on ``center``.
 
@@ -455,6 +455,8 @@ def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[
         raise_by: the voids sit this far (mm) above their symmetric sites along
             :data:`UP` (see :func:`ball_offset`); the returned centres are the
             raised ones.
+        beat: only layouts of more voids than this are wanted: the empty layout when
+            none has more (lattices with no more sites are not tried).
     """
     void_volume(void, radius)  # validates the kind
     need = radius + wall
@@ -462,26 +464,28 @@ def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[
     pitch = 2 * radius + wall
     lift = UP * raise_by
     best = SphereLayout.empty()
+    most = int(beat)  # the count to beat
     symmetries = tuple(symmetries)
     if void == "silo":
         lattices = [k for k in lattices if k == "cubic"]
     for kind in lattices:
         for offset in ((ox, oy, oz) for ox in (0.0, 0.5) for oy in (0.0, 0.5) for oz in (0.0, 0.5)):
             pts = lattice_sites(inner, center, pitch, offset, kind)
-            if len(pts) <= best.count:
+            if len(pts) <= most:
                 continue
             feasible = clearance(pts + lift) >= need
             if void == "silo" and feasible.any():
                 idx = np.flatnonzero(feasible)
                 rim = clearance(silo_rim_points(pts[idx] + lift, radius)).reshape(len(idx), -1)
                 feasible[idx] = rim.min(axis=1) >= wall
-            if feasible.sum() <= best.count:
+            if feasible.sum() <= most:
                 continue
             for sym in symmetries:
                 near = lattice_image_map(inner, center, pitch, offset, kind, sym)
                 keep = symmetric_subset(pts, feasible, center, sym, near=near)
-                if keep.sum() > best.count:
+                if keep.sum() > most:
                     best = SphereLayout(radius, pts[keep] + lift, sym, kind, void)
+                    most = best.count
     return best
 
 
@@ -499,7 +503,14 @@ def max_cavity_layout(clearance: Clearance, bounds: tuple[Sequence[float], Seque
     best = SphereLayout.empty()
     r = r_max
     while r >= r_min - 1e-12:
-        layout = sphere_layout(clearance, bounds, center, r, wall, void=void)
+        # only a layout of more voids than ``beat`` removes more than the best so far
+        each, bar = void_volume(void, r), best.volume + 1e-9
+        beat = int(bar // each)
+        while (beat + 1) * each <= bar:
+            beat += 1
+        while beat > 0 and beat * each > bar:
+            beat -= 1
+        layout = sphere_layout(clearance, bounds, center, r, wall, void=void, beat=beat)
         if layout.volume > best.volume + 1e-9:
             best = layout
         r *= RADIUS_STEP

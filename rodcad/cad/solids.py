@@ -39,6 +39,7 @@ from rodcad.catalog.model import RodGeometry, RodType
 from rodcad.errors import InputError
 
 __all__ = [
+    "PortableSolid",
     "CONTACT_TOL",
     "build_rod",
     "collision_proxy",
@@ -319,6 +320,28 @@ class MassProperties:
 
     volume: float
     center: tuple[float, float, float]
+
+
+class PortableSolid:
+    """A solid as bytes that cross between processes (OCCT's BinTools: the exact B-rep; a
+    solid from a boolean keeps a history that does not pickle), without the meshes the
+    sending process made of it (they would change the receiver's STL). :meth:`restore` gives it
+    back with its label."""
+
+    def __init__(self, solid: Solid) -> None:
+        from build123d.persistence import serialize_shape
+        from OCP.BRepTools import BRepTools
+
+        BRepTools.Clean_s(solid.wrapped)  # no meshes: the solid arrives as it was built, meshed where it is used
+        self.data = serialize_shape(solid.wrapped)
+        self.label = solid.label
+
+    def restore(self) -> Solid:
+        from build123d.persistence import deserialize_shape
+
+        solid = Solid(deserialize_shape(self.data))
+        solid.label = self.label
+        return solid
 
 
 def mass_properties(solid: Solid) -> MassProperties:

@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -58,6 +59,7 @@ from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
 from rodcad.outputs.view import write_chain_view
+from rodcad.parallel import default_jobs, kept_workers, worker_pool
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
@@ -165,18 +167,20 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     arrays = arrays_step(design, jobs, progress)
     spec = ChainSpec("", np.asarray(design.anchors, float), design.target_curve)
     ivfn = intervals_step(design, jobs, progress) if cad else None
-    (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
-                             n_starts=N_STARTS, g=design.g, progress=progress, intervals=ivfn)
-    cd = chain.design
-    if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
-        design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
-    result = hung_result(design, cd, method=method, seed=seed, intervals=ivfn, progress=progress)
-    p = result.plan
+    with kept_workers(jobs if cad else 1):  # a rod type's table and its rods made in one worker
+        (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
+                                 n_starts=N_STARTS, g=design.g, progress=progress, intervals=ivfn)
+        cd = chain.design
+        if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
+            design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
+        result = hung_result(design, cd, method=method, seed=seed, intervals=ivfn, progress=progress)
+        p = result.plan
+        if cad:
+            (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
+                                              progress=progress,
+                                              label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
+                                              fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
     if cad:
-        (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
-                                      progress=progress,
-                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
-                                      fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
         result.fabrication = fab
         result.notes += problems
         if p.fused:
@@ -373,6 +377,31 @@ def _design_notes(r: BuildResult) -> list[str]:
     return notes
 
 
+@contextmanager
+def _previews(result: BuildResult, tmp: Path) -> Iterator[Callable[[], None]]:
+    """Yields ``draw()``, which leaves preview.png and preview.svg in ``tmp``. With solids to
+    write, they are drawn meanwhile in a worker process (matplotlib's import and the drawing
+    beside the STEP, STL and 3MF files; the chain without its solids crosses over), else
+    when asked."""
+    paths = (Path(tmp).resolve() / "preview.png", Path(tmp).resolve() / "preview.svg")
+    if result.fabrication is None or default_jobs() < 2:
+        yield lambda: plot_chain(result, *paths)
+        return
+    pool = worker_pool(1)
+    try:
+        drawn = pool.submit(plot_chain, dataclasses.replace(result, fabrication=None, fixture=None), *paths)
+
+        def draw() -> None:
+            try:
+                drawn.result()
+            except Exception:  # noqa: BLE001 - drawn here instead, where an error is the plot's own
+                plot_chain(result, *paths)
+
+        yield draw
+    finally:
+        pool.shutdown(cancel_futures=True)
+
+
 def write_outputs(result: BuildResult, outdir: str | Path, *,
                   progress: Progress | None = None) -> dict[str, Any]:
     """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files.
@@ -383,7 +412,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     Returns:
         The data written to design.json.
     """
-    with staged(outdir, progress) as (tmp, progress):
+    with staged(outdir, progress) as (tmp, progress), _previews(result, tmp) as previews:
         if result.fabrication is not None:
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
                 write_rod_files(result.fabrication, tmp)
@@ -405,7 +434,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                                   profile=print_profile(result.design.catalog))
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
-            plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
+            previews()
             write_design(tmp, data, report_markdown(result, data))
             write_chain_view(result, data, tmp)  # assembly.glb, view.html
     return data

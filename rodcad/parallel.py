@@ -130,12 +130,14 @@ _KEPT: list[KeptWorkers] = []
 def kept_workers(jobs: int | None = None) -> Iterator[KeptWorkers | None]:
     """Within this context, :func:`cached_map` calls given ``homes`` and the rods'
     fabrication (:func:`rodcad.cad.rods.fabricate_chain`) run their tasks in the same ``jobs``
-    worker processes (default: the CPUs; none with one), each rod type's in the worker that
-    computed its table of reachable masses. Nested contexts share the outer one's workers."""
+    worker processes (none with one), each rod type's in the worker that
+    computed its table of reachable masses. By default one worker more than the CPUs: a few
+    tasks of unequal length (a chain's rod types) then end together, the CPUs shared among them.
+    Nested contexts share the outer one's workers."""
     if _KEPT:
         yield _KEPT[-1]
         return
-    n = jobs or default_jobs()
+    n = jobs or (default_jobs() + 1 if default_jobs() > 1 else 1)
     if n <= 1:
         yield None
         return

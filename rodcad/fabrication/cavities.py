@@ -106,31 +106,34 @@ class CavityPool:
         return np.concatenate(self.images), np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
 
     @cached_property
-    def apart(self) -> np.ndarray:
-        """(n, n): the distance between two candidates (their nearest images), computed once
+    def _rows(self) -> dict[int, np.ndarray]:
+        return {}
+
+    def apart(self, i: int) -> np.ndarray:
+        """(n,): candidate ``i``'s distance from every candidate (their nearest images), kept
         for every radius the pool is thrown with (as :func:`_throw` measured it dart by dart:
         the square root of the least squared distance)."""
-        flat, starts = self.flat
-        n = len(self.images)
-        out = np.empty((n, n))
-        step = 32  # candidates per block: (their images x every image) distances at once
-        for a in range(0, n, step):
-            b = min(n, a + step)
-            lo, hi = starts[a], (starts[b] if b < n else len(flat))
-            d = flat[lo:hi, None, :] - flat[None, :, :]
-            d2 = np.einsum("ijk,ijk->ij", d, d)
-            d2 = np.minimum.reduceat(np.minimum.reduceat(d2, starts, axis=1),
-                                     starts[a:b] - lo, axis=0)
-            out[a:b] = np.sqrt(d2)
-        return out
+        row = self._rows.get(i)
+        if row is None:
+            flat, starts = self.flat
+            d = self.images[i][:, None, :] - flat[None, :, :]
+            d2 = np.minimum.reduceat(np.einsum("ijk,ijk->ij", d, d).min(axis=0), starts)
+            row = self._rows[i] = np.sqrt(d2)
+        return row
 
 
-def _distinct(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    out: list[np.ndarray] = []
-    for p in points:
-        if all(np.linalg.norm(p - q) > tol for q in out):
-            out.append(p)
-    return np.array(out)
+def _distinct_images(images: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """(n, g) mask of each candidate's images (n, g, 3) kept in order: an image is kept when it
+    is further than ``tol`` from every image kept before it."""
+    n, g, _ = images.shape
+    keep = np.zeros((n, g), dtype=bool)
+    for j in range(g):
+        ok = np.ones(n, dtype=bool)
+        for k in range(j):
+            d = images[:, j] - images[:, k]
+            ok &= ~keep[:, k] | (np.sqrt(np.einsum("ij,ij->i", d, d)) > tol)
+        keep[:, j] = ok
+    return keep
 
 
 @lru_cache(maxsize=64)
@@ -160,7 +163,8 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
             p[:, axis] = com[axis]
         cands.append(p)
     pts = np.concatenate(cands)
-    images = tuple(_distinct(np.concatenate([p[None], *symmetric_images(p[None], com, symmetry)])) for p in pts)
+    every = np.stack([pts, *symmetric_images(pts, com, symmetry)], axis=1)  # (n, group, 3)
+    images = tuple(every[k][keep] for k, keep in enumerate(_distinct_images(every)))
     flat = np.concatenate(images)
     clr = clearance(flat)
     sizes = np.array([len(im) for im in images])
@@ -231,13 +235,12 @@ def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, so
     if len(sockets) and len(pool.images):  # clear of the ball sockets, all candidates at once
         ok &= _socket_clearance(pool, sockets, socket_r, socket_h) >= need
     accepted: list[np.ndarray] = []
-    apart = pool.apart
     free = ok.copy()  # still allowed: feasible and at least ``spacing`` from every accepted one
     for i in pool.order:
         if not free[i]:
             continue
         accepted.append(pool.images[i])
-        free &= apart[i] >= spacing
+        free &= pool.apart(i) >= spacing
     return accepted
 
 

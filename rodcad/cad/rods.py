@@ -61,7 +61,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from rodcad.fabrication.layers import LayerGrid
 from rodcad.cad.export import check_files, print_matrix, rod_matrices
 from rodcad.cad.solids import (NO_SHIFT, OWN_SIZES, Holes, PortableSolid, Sizes, hole_volume_change, mass_properties,
-                               type_solid, with_voids)
+                               share_type_solid, type_solid, with_voids)
 from rodcad.colors import mass_colors
 from rodcad.fabrication.cavities import (
     CAPPED_K,
@@ -276,11 +276,12 @@ def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, Roof
 
 
 def _type_star(args: tuple[RodType, list[tuple[float, RoofPlan | None, Holes, Sizes]], int, dict[str, Any] | None]
-               ) -> tuple[dict[str, Any], list[tuple[dict[str, Any], FabricatedRod]]]:
+               ) -> tuple[dict[str, Any], list[tuple[dict[str, Any], FabricatedRod]], PortableSolid]:
     """Worker: the type's table of reachable masses (unless given), then every
     rod of that type (the type's candidate pools are built once per worker): its solved
     plan and the rod built from it with its pin holes (:func:`_assemble_result`; the solid
-    comes back pickled, BinTools' exact B-rep)."""
+    comes back pickled, BinTools' exact B-rep); and the type's plain solid (the anchor
+    fixture's checks place it)."""
     rod, targets, seed, table = args
     table = table if table is not None else compute_table(rod, seed)
     out = []
@@ -288,7 +289,7 @@ def _type_star(args: tuple[RodType, list[tuple[float, RoofPlan | None, Holes, Si
         plan = _fabricate_star((rod, m, seed, table, roof))
         built = _assemble_result(rod, m, 0, plan, holes, sizes)
         out.append((plan, dataclasses.replace(built, solid=PortableSolid(built.solid))))
-    return table, out
+    return table, out, PortableSolid(type_solid(rod))
 
 
 def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
@@ -495,8 +496,10 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
             results: Any = workers.map(_type_star, args, homes)
         else:
             results = pool.map(_type_star, args, chunksize=1) if pool is not None else map(_type_star, args)
-        for idx, (table, res) in zip(tasks, results):
+        for idx, (table, res, plain) in zip(tasks, results):
             rod = distinct[idx[0]][0]
+            if workers is not None or pool is not None:  # built in a worker: this process has none yet
+                share_type_solid(rod, plain.restore())
             if tables[rod.name] is None:
                 tables[rod.name] = table
                 cache.put("fabint", intervals_key(rod, seed), table)

@@ -22,6 +22,7 @@ Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 from __future__ import annotations
 
 import dataclasses
+import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -377,16 +378,23 @@ def _design_notes(r: BuildResult) -> list[str]:
     return notes
 
 
+#: Whether this process has had its previews drawn in a worker (:func:`_previews`: once).
+_DRAWN_AWAY: list[bool] = []
+
+
 @contextmanager
 def _previews(result: BuildResult, tmp: Path) -> Iterator[Callable[[], None]]:
-    """Yields ``draw()``, which leaves preview.png and preview.svg in ``tmp``. With solids to
-    write, they are drawn meanwhile in a worker process (matplotlib's import and the drawing
-    beside the STEP, STL and 3MF files; the chain without its solids crosses over), else
-    when asked."""
+    """Yields ``draw()``, which leaves preview.png and preview.svg in ``tmp``. A process's first
+    previews with solids to write (a fresh ``rodcad build``: matplotlib not loaded yet) are
+    drawn meanwhile in a worker process (matplotlib's import and the drawing beside the STEP,
+    STL and 3MF files; the chain without its solids crosses over); any others here when asked
+    (a process that builds again has matplotlib loaded)."""
     paths = (Path(tmp).resolve() / "preview.png", Path(tmp).resolve() / "preview.svg")
-    if result.fabrication is None or default_jobs() < 2:
+    if (result.fabrication is None or default_jobs() < 2 or "matplotlib.pyplot" in sys.modules
+            or _DRAWN_AWAY):
         yield lambda: plot_chain(result, *paths)
         return
+    _DRAWN_AWAY.append(True)
     pool = worker_pool(1)
     try:
         drawn = pool.submit(plot_chain, dataclasses.replace(result, fabrication=None, fixture=None), *paths)

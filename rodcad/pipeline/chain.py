@@ -378,24 +378,25 @@ def _design_notes(r: BuildResult) -> list[str]:
     return notes
 
 
-#: Whether this process has had its previews drawn in a worker (:func:`_previews`: once).
+#: Whether this process has had its previews drawn in a worker (:func:`_side_work`: once).
 _DRAWN_AWAY: list[bool] = []
 
 
 @contextmanager
-def _previews(result: BuildResult, tmp: Path) -> Iterator[Callable[[], None]]:
-    """Yields ``draw()``, which leaves preview.png and preview.svg in ``tmp``. A process's first
-    previews with solids to write (a fresh ``rodcad build``: matplotlib not loaded yet) are
-    drawn meanwhile in a worker process (matplotlib's import and the drawing beside the STEP,
-    STL and 3MF files; the chain without its solids crosses over); any others here when asked
-    (a process that builds again has matplotlib loaded)."""
+def _side_work(result: BuildResult, tmp: Path) -> Iterator[tuple[Callable[[], None], Any]]:
+    """Yields (``draw()``, which leaves preview.png and preview.svg in ``tmp``; where the rods'
+    files are checked, or None: here). A process's first build with solids to write (a fresh
+    ``rodcad build``: matplotlib, trimesh not loaded yet) draws its previews and checks its
+    files meanwhile in two worker processes (their imports and work beside the STEP, STL and
+    3MF files written here; the chain crosses over without its solids); any other draws and
+    checks here when asked (a process that builds again has them loaded)."""
     paths = (Path(tmp).resolve() / "preview.png", Path(tmp).resolve() / "preview.svg")
     if (result.fabrication is None or default_jobs() < 2 or "matplotlib.pyplot" in sys.modules
             or _DRAWN_AWAY):
-        yield lambda: plot_chain(result, *paths)
+        yield (lambda: plot_chain(result, *paths)), None
         return
     _DRAWN_AWAY.append(True)
-    pool = worker_pool(1)
+    pool = worker_pool(2)
     try:
         drawn = pool.submit(plot_chain, dataclasses.replace(result, fabrication=None, fixture=None), *paths)
 
@@ -405,7 +406,7 @@ def _previews(result: BuildResult, tmp: Path) -> Iterator[Callable[[], None]]:
             except Exception:  # noqa: BLE001 - drawn here instead, where an error is the plot's own
                 plot_chain(result, *paths)
 
-        yield draw
+        yield draw, pool
     finally:
         pool.shutdown(cancel_futures=True)
 
@@ -420,10 +421,10 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     Returns:
         The data written to design.json.
     """
-    with staged(outdir, progress) as (tmp, progress), _previews(result, tmp) as previews:
+    with staged(outdir, progress) as (tmp, progress), _side_work(result, tmp) as (previews, checks):
         if result.fabrication is not None:
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
-                write_rod_files(result.fabrication, tmp)
+                write_rod_files(result.fabrication, tmp, checks=checks)
             extra = []
             if result.fixture is not None:
                 with progress.step("writing and checking fixture.step, fixture.stl"):

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import shutil
 from collections.abc import Sequence
-from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,7 @@ from rodcad.colors import mass_colors
 __all__ = ["chain_parts", "write_assembly", "write_rod_files"]
 
 
-def write_rod_files(fab: ChainFabrication, outdir: Path, *, checks: Executor | None = None) -> list[Path]:
+def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     """Write outdir/rods/NN_TYPE.step and .stl for every chain position (one NN-MM_piece
     file for the rods of a fused piece, :attr:`ChainFabrication.parts`).
 
@@ -30,12 +29,6 @@ def write_rod_files(fab: ChainFabrication, outdir: Path, *, checks: Executor | N
     a solid are written and checked once, then copied. Checks: the STEP
     re-imports as one valid solid of the same volume (1e-6), the STL is
     watertight and encloses the B-rep's volume within 0.1 %.
-
-    Args:
-        fab: the built chain.
-        outdir: where ``rods/`` goes.
-        checks: where the files are read back and checked (a worker process, while the next
-            rods are written); None: here, each after it is written.
 
     Returns:
         The paths written (STEP, STL per rod).
@@ -49,7 +42,6 @@ def write_rod_files(fab: ChainFabrication, outdir: Path, *, checks: Executor | N
     rods_dir.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     first: dict[int, tuple[Path, Path]] = {}
-    pending = []
     for r in fab.parts:
         step = rods_dir / f"{r.file_stem}.step"
         stl = rods_dir / f"{r.file_stem}.stl"
@@ -58,17 +50,12 @@ def write_rod_files(fab: ChainFabrication, outdir: Path, *, checks: Executor | N
             on_bed = transformed(r.solid, r.print_matrix)
             export_step(on_bed, step, r.file_stem)
             export_stl(on_bed, stl)
-            if checks is None:
-                check_files(step, stl, r.plastic_volume)
-            else:
-                pending.append(checks.submit(check_files, step.resolve(), stl.resolve(), r.plastic_volume))
+            check_files(step, stl, r.plastic_volume)
             first[id(r.solid)] = (step, stl)
         else:
             shutil.copyfile(src[0], step)
             shutil.copyfile(src[1], stl)
         written += [step, stl]
-    for done in pending:
-        done.result()  # a failed check raises here
     return written
 
 

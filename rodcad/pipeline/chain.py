@@ -22,10 +22,8 @@ Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 from __future__ import annotations
 
 import dataclasses
-import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -60,7 +58,7 @@ from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
 from rodcad.outputs.view import write_chain_view
-from rodcad.parallel import default_jobs, kept_workers, worker_pool
+from rodcad.parallel import kept_workers
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
@@ -378,39 +376,6 @@ def _design_notes(r: BuildResult) -> list[str]:
     return notes
 
 
-#: Whether this process has had its previews drawn in a worker (:func:`_side_work`: once).
-_DRAWN_AWAY: list[bool] = []
-
-
-@contextmanager
-def _side_work(result: BuildResult, tmp: Path) -> Iterator[tuple[Callable[[], None], Any]]:
-    """Yields (``draw()``, which leaves preview.png and preview.svg in ``tmp``; where the rods'
-    files are checked, or None: here). A process's first build with solids to write (a fresh
-    ``rodcad build``: matplotlib, trimesh not loaded yet) draws its previews and checks its
-    files meanwhile in two worker processes (their imports and work beside the STEP, STL and
-    3MF files written here; the chain crosses over without its solids); any other draws and
-    checks here when asked (a process that builds again has them loaded)."""
-    paths = (Path(tmp).resolve() / "preview.png", Path(tmp).resolve() / "preview.svg")
-    if (result.fabrication is None or default_jobs() < 2 or "matplotlib.pyplot" in sys.modules
-            or _DRAWN_AWAY):
-        yield (lambda: plot_chain(result, *paths)), None
-        return
-    _DRAWN_AWAY.append(True)
-    pool = worker_pool(2)
-    try:
-        drawn = pool.submit(plot_chain, dataclasses.replace(result, fabrication=None, fixture=None), *paths)
-
-        def draw() -> None:
-            try:
-                drawn.result()
-            except Exception:  # noqa: BLE001 - drawn here instead, where an error is the plot's own
-                plot_chain(result, *paths)
-
-        yield draw, pool
-    finally:
-        pool.shutdown(cancel_futures=True)
-
-
 def write_outputs(result: BuildResult, outdir: str | Path, *,
                   progress: Progress | None = None) -> dict[str, Any]:
     """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files.
@@ -421,10 +386,10 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     Returns:
         The data written to design.json.
     """
-    with staged(outdir, progress) as (tmp, progress), _side_work(result, tmp) as (previews, checks):
+    with staged(outdir, progress) as (tmp, progress):
         if result.fabrication is not None:
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
-                write_rod_files(result.fabrication, tmp, checks=checks)
+                write_rod_files(result.fabrication, tmp)
             extra = []
             if result.fixture is not None:
                 with progress.step("writing and checking fixture.step, fixture.stl"):
@@ -443,7 +408,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                                   profile=print_profile(result.design.catalog))
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
-            previews()
+            plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             write_design(tmp, data, report_markdown(result, data))
             write_chain_view(result, data, tmp)  # assembly.glb, view.html
     return data

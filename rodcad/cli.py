@@ -44,6 +44,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if _builds_solids(argv):  # the workers' process imports the CAD kernel while this one imports the rest
+        from rodcad.parallel import start_workers
+
+        start_workers()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "handler", None):
@@ -75,6 +80,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"rodcad: internal error ({type(err).__name__}: {err}); outputs left as they were. Please report it "
               "with the design file; RODCAD_DEBUG=1 shows the traceback", file=sys.stderr)
         return 1
+
+
+def _builds_solids(argv: Sequence[str]) -> bool:
+    """Whether the command line is a ``rodcad build`` that may build solids in worker
+    processes (no ``--no-cad``, no ``--jobs 1``, no ``--help``)."""
+    if not argv or argv[0] != "build" or any(a in ("--no-cad", "-h", "--help") for a in argv):
+        return False
+    for a, b in zip(argv, argv[1:] + [""]):
+        if (a == "--jobs" and b == "1") or a == "--jobs=1":
+            return False
+    return True
 
 
 def _terminate(signum: int, frame: object) -> None:

@@ -20,7 +20,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["PARTS_PER_WORKER", "KeyValueStore", "cached_map", "default_jobs", "in_process", "task_runner", "worker_pool"]
+__all__ = ["PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore", "cached_map", "default_jobs",
+           "in_process", "kept", "kept_workers", "start_workers", "task_runner", "worker_pool"]
 
 #: A build starts a local Dask cluster by default when it has at least this many tasks per
 #: CPU (a distinct net part: 0.5-2 s of kernel work each); fewer run in this process, where
@@ -37,14 +38,121 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def worker_pool(jobs: int) -> ProcessPoolExecutor:
-    """A process pool of ``jobs`` workers that may use the CAD kernel."""
+#: What the forkserver imports before it forks any worker: the CAD kernel and the modules
+#: whose functions the workers run (the tables of reachable masses, the rods' solids).
+WORKER_PRELOAD = ("rodcad.cad.solids", "rodcad.cad.collision", "rodcad.cad.export",
+                  "rodcad.fabrication.intervals", "rodcad.cad.rods")
+
+
+def _context() -> multiprocessing.context.BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["rodcad.cad.solids", "rodcad.cad.collision", "rodcad.cad.export"])
-    else:  # pragma: no cover - Windows / macOS default
-        ctx = multiprocessing.get_context("spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+        ctx.set_forkserver_preload(list(WORKER_PRELOAD))
+        return ctx
+    return multiprocessing.get_context("spawn")  # pragma: no cover - Windows / macOS default
+
+
+def worker_pool(jobs: int) -> ProcessPoolExecutor:
+    """A process pool of ``jobs`` workers that may use the CAD kernel."""
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=_context())
+
+
+def start_workers() -> None:
+    """Start the forkserver the workers of :func:`worker_pool` come from now, so that its
+    imports (:data:`WORKER_PRELOAD`: the CAD kernel, a few seconds) run beside the caller's
+    own instead of when the first pool is made (no-op where it runs already or where workers
+    are spawned)."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        from multiprocessing import forkserver
+
+        _context()
+        forkserver.ensure_running()
+
+
+class KeptWorkers:
+    """Worker processes kept from one step to the next (:func:`kept_workers`): a task with a
+    home (a rod type's name) runs in the worker that ran that home's tasks before, so that what
+    the worker keeps in memory (the type's solid, its cavity pools and dart throws) serves it
+    again. A task whose home has no worker yet goes to the first idle one."""
+
+    def __init__(self, jobs: int) -> None:
+        self.jobs = jobs
+        self._pools: list[ProcessPoolExecutor | None] = [None] * jobs
+        self._home: dict[str, int] = {}
+
+    def _pool(self, w: int) -> ProcessPoolExecutor:
+        pool = self._pools[w]
+        if pool is None:
+            pool = self._pools[w] = worker_pool(1)
+        return pool
+
+    def map(self, fn: Callable[[Any], Any], items: Sequence[Any], homes: Sequence[str]) -> Iterator[Any]:
+        """``fn(item)`` for every item, each in its home's worker; results in item order."""
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        results: dict[int, Any] = {}
+        queue = list(range(len(items)))
+        running: dict[Any, tuple[int, int]] = {}  # future -> (item, worker)
+        nxt = 0
+        while queue or running:
+            busy = {w for _, w in running.values()}
+            for w in range(self.jobs):
+                if w in busy:
+                    continue
+                pick = next((i for i in queue if self._home.get(homes[i]) == w), None)
+                if pick is None:
+                    pick = next((i for i in queue if homes[i] not in self._home), None)
+                if pick is None:
+                    continue
+                queue.remove(pick)
+                self._home[homes[pick]] = w
+                running[self._pool(w).submit(fn, items[pick])] = (pick, w)
+            finished, _ = wait(list(running), return_when=FIRST_COMPLETED)
+            for fut in finished:
+                i, _ = running.pop(fut)
+                results[i] = fut.result()
+            while nxt in results:
+                yield results.pop(nxt)
+                nxt += 1
+
+    def shutdown(self) -> None:
+        for pool in self._pools:
+            if pool is not None:
+                pool.shutdown(cancel_futures=True)
+        self._pools = [None] * self.jobs
+
+
+#: The workers :func:`kept_workers` keeps, while it does.
+_KEPT: list[KeptWorkers] = []
+
+
+@contextmanager
+def kept_workers(jobs: int | None = None) -> Iterator[KeptWorkers | None]:
+    """Within this context, :func:`cached_map` calls given ``homes`` and the rods'
+    fabrication (:func:`rodcad.cad.rods.fabricate_chain`) run their tasks in the same ``jobs``
+    worker processes (none with one), each rod type's in the worker that
+    computed its table of reachable masses. By default one worker more than the CPUs: a few
+    tasks of unequal length (a chain's rod types) then end together, the CPUs shared among them.
+    Nested contexts share the outer one's workers."""
+    if _KEPT:
+        yield _KEPT[-1]
+        return
+    n = jobs or (default_jobs() + 1 if default_jobs() > 1 else 1)
+    if n <= 1:
+        yield None
+        return
+    workers = KeptWorkers(n)
+    _KEPT.append(workers)
+    try:
+        yield workers
+    finally:
+        _KEPT.remove(workers)
+        workers.shutdown()
+
+
+def kept() -> KeptWorkers | None:
+    """The workers of the innermost :func:`kept_workers`, or None outside one."""
+    return _KEPT[-1] if _KEPT else None
 
 
 class KeyValueStore(Protocol):
@@ -58,7 +166,7 @@ class KeyValueStore(Protocol):
 def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[str], *, kind: str,
                cache: KeyValueStore, jobs: int | None = None, progress: Callable[[int, int], None] | None = None,
                usable: Callable[[Any], bool] = lambda value: value is not None,
-               computed: set[str] | None = None) -> list[Any]:
+               computed: set[str] | None = None, homes: Sequence[str] | None = None) -> list[Any]:
     """``fn(item)`` for every item, from the cache where it has a usable value.
 
     Items without one are computed once per distinct key, in ``jobs`` worker
@@ -76,6 +184,8 @@ def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[st
         progress: called after each computed item.
         usable: whether a cached value can be used (an older format is recomputed).
         computed: if given, the keys computed (not read from the cache) are added to it.
+        homes: one per item: where it runs within :func:`kept_workers` (items of one home
+            in the same worker); without, or outside one, in a pool of its own.
 
     Returns:
         The results in item order.
@@ -84,7 +194,8 @@ def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[st
         raise ValueError(f"{len(keys)} keys for {len(items)} items")
     found: dict[str, Any] = {}
     todo: dict[str, Any] = {}
-    for item, key in zip(items, keys):
+    home: dict[str, str] = {}
+    for n, (item, key) in enumerate(zip(items, keys)):
         if key in found or key in todo:
             continue
         hit = cache.get(kind, key)
@@ -92,12 +203,17 @@ def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[st
             found[key] = hit
         else:
             todo[key] = item
+            home[key] = homes[n] if homes is not None else key
     work = list(todo.items())
     jobs = max(1, min(jobs or default_jobs(), len(work))) if work else 1
-    pool = worker_pool(jobs) if jobs > 1 else None
+    workers = kept() if homes is not None and jobs > 1 else None
+    pool = worker_pool(jobs) if jobs > 1 and workers is None else None
     try:
-        results = (pool.map(fn, [item for _, item in work], chunksize=1) if pool is not None
-                   else map(fn, [item for _, item in work]))
+        if workers is not None:
+            results: Any = workers.map(fn, [item for _, item in work], [home[key] for key, _ in work])
+        else:
+            results = (pool.map(fn, [item for _, item in work], chunksize=1) if pool is not None
+                       else map(fn, [item for _, item in work]))
         for i, ((key, _), value) in enumerate(zip(work, results)):
             cache.put(kind, key, value)
             found[key] = value

@@ -16,6 +16,7 @@ from rodcad.catalog.massrange import compute_mass_info, layouts, mass_info, mass
 from rodcad.fabrication.layout import (
     LATTICES,
     SYMMETRIES,
+    lattice_image_map,
     lattice_sites,
     sphere_layout,
     symmetric_subset,
@@ -51,6 +52,26 @@ def test_lattices_are_symmetric_with_the_given_pitch(kind: str, offset) -> None:
     assert pdist(pts).min() == pytest.approx(2.5)
     keep = symmetric_subset(pts, np.ones(len(pts), bool), center, "point-xy")
     assert np.allclose(pts[keep].mean(axis=0)[:2], center[:2])
+
+
+@pytest.mark.parametrize("kind", LATTICES)
+@pytest.mark.parametrize("symmetry", SYMMETRIES)
+def test_lattice_image_maps_match_the_search(kind: str, symmetry: str) -> None:
+    # the image map from lattice indices keeps what the nearest-point search keeps, every offset
+    rng = np.random.default_rng(7)
+    for _ in range(6):
+        center = rng.normal(size=3) * 3
+        pitch = float(rng.uniform(0.8, 4.0))
+        lo = center - rng.uniform(2, 12, size=3)
+        hi = center + rng.uniform(2, 12, size=3)
+        for offset in ((ox, oy, oz) for ox in (0.0, 0.5) for oy in (0.0, 0.5) for oz in (0.0, 0.5)):
+            pts = lattice_sites((tuple(lo), tuple(hi)), center, pitch, offset, kind)
+            if not len(pts):
+                continue
+            near = lattice_image_map((tuple(lo), tuple(hi)), center, pitch, offset, kind, symmetry)
+            for feasible in (np.ones(len(pts), bool), rng.random(len(pts)) < 0.9):
+                assert np.array_equal(symmetric_subset(pts, feasible, center, symmetry, near=near),
+                                      symmetric_subset(pts, feasible, center, symmetry))
 
 
 @pytest.mark.parametrize("symmetry", SYMMETRIES)

@@ -42,6 +42,7 @@ may sit off the hinge axes (``holes``: the pin-play compensation). Units: mm, mm
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Collection, Sequence
@@ -53,14 +54,14 @@ import numpy as np
 from rodcad.catalog.cache import DiskCache, make_key
 from rodcad.catalog.massrange import MASSRANGE_VERSION
 from rodcad.fabrication.layout import UP
-from rodcad.parallel import default_jobs, worker_pool
+from rodcad.parallel import default_jobs, kept, worker_pool
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
     from rodcad.fabrication.layers import LayerGrid
 from rodcad.cad.export import check_files, print_matrix, rod_matrices
-from rodcad.cad.solids import (NO_SHIFT, OWN_SIZES, Holes, Sizes, hole_volume_change, mass_properties, type_solid,
-                               with_voids)
+from rodcad.cad.solids import (NO_SHIFT, OWN_SIZES, Holes, PortableSolid, Sizes, hole_volume_change, mass_properties,
+                               share_type_solid, type_solid, with_voids)
 from rodcad.colors import mass_colors
 from rodcad.fabrication.cavities import (
     CAPPED_K,
@@ -274,13 +275,21 @@ def _fabricate_star(args: tuple[RodType, float, int, dict[str, Any] | None, Roof
     return plan.to_json()
 
 
-def _type_star(args: tuple[RodType, list[tuple[float, RoofPlan | None]], int, dict[str, Any] | None]
-               ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+def _type_star(args: tuple[RodType, list[tuple[float, RoofPlan | None, Holes, Sizes]], int, dict[str, Any] | None]
+               ) -> tuple[dict[str, Any], list[tuple[dict[str, Any], FabricatedRod]], PortableSolid]:
     """Worker: the type's table of reachable masses (unless given), then every
-    rod of that type (the type's candidate pools are built once per worker)."""
+    rod of that type (the type's candidate pools are built once per worker): its solved
+    plan and the rod built from it with its pin holes (:func:`_assemble_result`; the solid
+    comes back pickled, BinTools' exact B-rep); and the type's plain solid (the anchor
+    fixture's checks place it)."""
     rod, targets, seed, table = args
     table = table if table is not None else compute_table(rod, seed)
-    return table, [_fabricate_star((rod, m, seed, table, roof)) for m, roof in targets]
+    out = []
+    for m, roof, holes, sizes in targets:
+        plan = _fabricate_star((rod, m, seed, table, roof))
+        built = _assemble_result(rod, m, 0, plan, holes, sizes)
+        out.append((plan, dataclasses.replace(built, solid=PortableSolid(built.solid))))
+    return table, out, PortableSolid(type_solid(rod))
 
 
 def fabricate_rod(rod: RodType, target: float, *, index: int = 0, seed: int = 0,
@@ -465,27 +474,38 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     jobs = max(1, min(jobs or default_jobs(), len(todo))) if todo else 1
     share = max(1, math.ceil(len(todo) / jobs)) if len(by_type) < jobs else len(todo)
     tasks: list[list[int]] = []
-    for idx in by_type.values():
+    homes: list[str] = []  # a type's first task runs where its table was made (kept workers)
+    for name, idx in by_type.items():
         tasks += [idx[k:k + share] for k in range(0, len(idx), share)]
-    tasks.sort(key=len, reverse=True)
+        homes += [name if k == 0 else f"{name} #{k}" for k in range(0, len(idx), share)]
+    order = sorted(range(len(tasks)), key=lambda t: -len(tasks[t]))
+    tasks, homes = [tasks[t] for t in order], [homes[t] for t in order]
     tables: dict[str, dict[str, Any] | None] = {}
     for idx in tasks:
         rod = distinct[idx[0]][0]
         if rod.name not in tables:
             hit = cache.get("fabint", intervals_key(rod, seed))
             tables[rod.name] = hit if isinstance(hit, dict) and "options" in hit else None
-    pool = worker_pool(jobs) if jobs > 1 and len(tasks) > 1 else None
+    assembled: dict[int, FabricatedRod] = {}  # distinct rods built with their holes where their plans were made
+    workers = kept() if jobs > 1 and len(tasks) > 1 else None
+    pool = worker_pool(jobs) if jobs > 1 and len(tasks) > 1 and workers is None else None
     try:
-        args = [(distinct[idx[0]][0], [distinct[i][1:] for i in idx], seed, tables[distinct[idx[0]][0].name])
-                for idx in tasks]
-        results = pool.map(_type_star, args, chunksize=1) if pool is not None else map(_type_star, args)
-        for idx, (table, res) in zip(tasks, results):
+        args = [(distinct[idx[0]][0], [(*distinct[i][1:], *moved[i]) for i in idx], seed,
+                 tables[distinct[idx[0]][0].name]) for idx in tasks]
+        if workers is not None:
+            results: Any = workers.map(_type_star, args, homes)
+        else:
+            results = pool.map(_type_star, args, chunksize=1) if pool is not None else map(_type_star, args)
+        for idx, (table, res, plain) in zip(tasks, results):
             rod = distinct[idx[0]][0]
+            if workers is not None or pool is not None:  # built in a worker: this process has none yet
+                share_type_solid(rod, plain.restore())
             if tables[rod.name] is None:
                 tables[rod.name] = table
                 cache.put("fabint", intervals_key(rod, seed), table)
-            for i, plan in zip(idx, res):
+            for i, (plan, rod_built) in zip(idx, res):
                 plans[i] = plan
+                assembled[i] = dataclasses.replace(rod_built, solid=rod_built.solid.restore())
                 cache.put("fab", _key(*distinct[i][:2], seed, distinct[i][2]), plan)
                 done += 1
                 if progress:
@@ -493,7 +513,8 @@ def fabricate_chain(types: Sequence[RodType], masses: Sequence[float], *, seed: 
     finally:
         if pool is not None:
             pool.shutdown()
-    built = [_filled_result(rod, m, *moved[i]) if rod.fill is not None else _assemble_result(rod, m, 0, plans[i], *moved[i])
+    built = [_filled_result(rod, m, *moved[i]) if rod.fill is not None else
+             assembled[i] if i in assembled else _assemble_result(rod, m, 0, plans[i], *moved[i])
              for i, (rod, m, _) in enumerate(distinct)]
     rods: list[FabricatedRod] = []
     problems: list[str] = []

@@ -39,6 +39,8 @@ from rodcad.catalog.model import RodGeometry, RodType
 from rodcad.errors import InputError
 
 __all__ = [
+    "PortableSolid",
+    "share_type_solid",
     "CONTACT_TOL",
     "build_rod",
     "collision_proxy",
@@ -321,6 +323,30 @@ class MassProperties:
     center: tuple[float, float, float]
 
 
+class PortableSolid:
+    """A solid as bytes that cross between processes (OCCT's BinTools: the exact B-rep; a
+    solid from a boolean keeps a history that does not pickle), without the meshes the
+    sending process made of it (they would change the receiver's STL). :meth:`restore` gives it
+    back with its label."""
+
+    def __init__(self, solid: Solid) -> None:
+        import io
+
+        from OCP.BinTools import BinTools, BinTools_FormatVersion
+
+        out = io.BytesIO()  # no meshes: the solid arrives as it was built, meshed where it is used
+        BinTools.Write_s(solid.wrapped, out, False, False, BinTools_FormatVersion.BinTools_FormatVersion_CURRENT)
+        self.data = out.getvalue()
+        self.label = solid.label
+
+    def restore(self) -> Solid:
+        from build123d.persistence import deserialize_shape
+
+        solid = Solid(deserialize_shape(self.data))
+        solid.label = self.label
+        return solid
+
+
 def mass_properties(solid: Solid) -> MassProperties:
     """Volume and centre of mass from the B-rep (build123d / OCP GProp)."""
     c = solid.center(CenterOf.MASS)
@@ -429,7 +455,22 @@ def type_solid(rod: RodType, holes: Holes = NO_SHIFT, sizes: Sizes = OWN_SIZES) 
         InputError: when the parameters make no valid solid (pointing at the family
             in the catalog).
     """
+    given = _GIVEN.get((rod.geometry, rod.name, holes, sizes))
+    if given is not None:
+        return given
     try:
         return rod_solid(rod.geometry, rod.name, holes, sizes)
     except GeometryError as err:
         raise InputError([rod.origin.problem(f"rod type {rod.name!r}: {err}")]) from None
+
+
+def share_type_solid(rod: RodType, solid: Solid) -> None:
+    """Take ``solid`` as this process's :func:`type_solid` of ``rod`` (plain holes): the one
+    a worker built (:class:`PortableSolid`), instead of building it again here."""
+    if len(_GIVEN) >= 128:
+        _GIVEN.clear()
+    _GIVEN[(rod.geometry, rod.name, NO_SHIFT, OWN_SIZES)] = solid
+
+
+#: Type solids built elsewhere (:func:`share_type_solid`), by :func:`rod_solid`'s arguments.
+_GIVEN: dict[tuple[Any, ...], Solid] = {}

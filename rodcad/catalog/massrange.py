@@ -186,18 +186,31 @@ def is_cached(rod: RodType, cache: DiskCache) -> bool:
 
 
 def mass_info(rod: RodType, *, cache: DiskCache | None = None) -> MassInfo:
-    """:class:`MassInfo` of a rod type, from the disk cache when possible."""
-    cache = cache if cache is not None else DiskCache()
+    """:class:`MassInfo` of a rod type, from this process's memory or the disk cache when
+    possible."""
     key = _key(rod)
+    known = _KNOWN.get(key)
+    if known is not None:
+        return known
+    cache = cache if cache is not None else DiskCache()
     hit = cache.get("mass", key)
+    info = None
     if hit is not None:
         try:
-            return MassInfo.from_json(hit)
+            info = MassInfo.from_json(hit)
         except (TypeError, KeyError, ValueError):
             pass
-    info = compute_mass_info(rod)
-    cache.put("mass", key, info.to_json())
+    if info is None:
+        info = compute_mass_info(rod)
+        cache.put("mass", key, info.to_json())
+    if len(_KNOWN) >= 4096:
+        _KNOWN.clear()
+    _KNOWN[key] = info
     return info
+
+
+#: :func:`mass_info` by its cache key, this process's (the fabrication asks for it often).
+_KNOWN: dict[str, MassInfo] = {}
 
 
 def _compute_star(rod: RodType) -> dict[str, object]:

@@ -105,13 +105,35 @@ class CavityPool:
         sizes = np.array([len(im) for im in self.images], dtype=int)
         return np.concatenate(self.images), np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
 
+    @cached_property
+    def _rows(self) -> dict[int, np.ndarray]:
+        return {}
 
-def _distinct(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    out: list[np.ndarray] = []
-    for p in points:
-        if all(np.linalg.norm(p - q) > tol for q in out):
-            out.append(p)
-    return np.array(out)
+    def apart(self, i: int) -> np.ndarray:
+        """(n,): candidate ``i``'s distance from every candidate (their nearest images), kept
+        for every radius the pool is thrown with (as :func:`_throw` measured it dart by dart:
+        the square root of the least squared distance)."""
+        row = self._rows.get(i)
+        if row is None:
+            flat, starts = self.flat
+            d = self.images[i][:, None, :] - flat[None, :, :]
+            d2 = np.minimum.reduceat(np.einsum("ijk,ijk->ij", d, d).min(axis=0), starts)
+            row = self._rows[i] = np.sqrt(d2)
+        return row
+
+
+def _distinct_images(images: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """(n, g) mask of each candidate's images (n, g, 3) kept in order: an image is kept when it
+    is further than ``tol`` from every image kept before it."""
+    n, g, _ = images.shape
+    keep = np.zeros((n, g), dtype=bool)
+    for j in range(g):
+        ok = np.ones(n, dtype=bool)
+        for k in range(j):
+            d = images[:, j] - images[:, k]
+            ok &= ~keep[:, k] | (np.sqrt(np.einsum("ij,ij->i", d, d)) > tol)
+        keep[:, j] = ok
+    return keep
 
 
 @lru_cache(maxsize=64)
@@ -141,7 +163,8 @@ def cavity_pool(rod: RodType, symmetry: str, seed: int) -> CavityPool:
             p[:, axis] = com[axis]
         cands.append(p)
     pts = np.concatenate(cands)
-    images = tuple(_distinct(np.concatenate([p[None], *symmetric_images(p[None], com, symmetry)])) for p in pts)
+    every = np.stack([pts, *symmetric_images(pts, com, symmetry)], axis=1)  # (n, group, 3)
+    images = tuple(every[k][keep] for k, keep in enumerate(_distinct_images(every)))
     flat = np.concatenate(images)
     clr = clearance(flat)
     sizes = np.array([len(im) for im in images])
@@ -212,19 +235,12 @@ def _throw(pool: CavityPool, radius: float, wall: float, sockets: np.ndarray, so
     if len(sockets) and len(pool.images):  # clear of the ball sockets, all candidates at once
         ok &= _socket_clearance(pool, sockets, socket_r, socket_h) >= need
     accepted: list[np.ndarray] = []
-    placed = np.empty((sum(len(im) for im in pool.images), 3))
-    n = 0
+    free = ok.copy()  # still allowed: feasible and at least ``spacing`` from every accepted one
     for i in pool.order:
-        if not ok[i]:
+        if not free[i]:
             continue
-        im = pool.images[i]
-        if n:
-            d = im[:, None, :] - placed[None, :n]
-            if np.sqrt(np.einsum("ijk,ijk->ij", d, d).min()) < spacing:
-                continue
-        accepted.append(im)
-        placed[n:n + len(im)] = im
-        n += len(im)
+        accepted.append(pool.images[i])
+        free &= pool.apart(i) >= spacing
     return accepted
 
 
@@ -288,15 +304,25 @@ def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
     solid = type_solid(rod)
     com = mass_properties(solid).center
     clr = solid_clearance(rod)
+    wall = rod.material.min_wall
 
-    def clearance(p: np.ndarray) -> np.ndarray:
-        return np.minimum(clr(p), silo_distance(p, sockets, socket_r, socket_h))
+    def clearance_for(need: float) -> Callable[[np.ndarray], np.ndarray]:
+        """The clearance beside the sockets where the solid leaves ``need`` (the cavities'
+        test), the solid's alone elsewhere (too little either way)."""
+        def clearance(p: np.ndarray) -> np.ndarray:
+            c = np.array(clr(p))
+            if len(sockets):
+                room = np.flatnonzero(c >= need)
+                c[room] = np.minimum(c[room], silo_distance(p[room], sockets, socket_r, socket_h))
+            return c
+
+        return clearance
 
     info = mass_info(rod)
     radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
     for rd in radii:
         if not skip(rd):
-            yield rd, sphere_layout(clearance, clr.bounds, com, rd, rod.material.min_wall, void="capped")
+            yield rd, sphere_layout(clearance_for(rd + wall), clr.bounds, com, rd, wall, void="capped")
 
 
 class _MemoClearance:
@@ -399,7 +425,7 @@ def raised_rows(rod: RodType, sockets: np.ndarray, socket_r: float, kind: int,
         heights[idx] = height
         raised.append(idx)
     need = rod.material.min_wall + WALL_MARGIN
-    clr = RodClearance(rod.geometry)
+    clr = solid_clearance(rod)
     for idx in raised:
         top = silo_top_points(out[idx], socket_r, float(heights[idx[0]]))
         bottom = (out[idx][:, None, :] + _LOWER_HALF[None] * socket_r).reshape(-1, 3)  # a socket below the

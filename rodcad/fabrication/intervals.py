@@ -38,6 +38,7 @@ from rodcad.fabrication.cavities import (
 __all__ = [
     "GAP_MERGE",
     "INTERVALS_VERSION",
+    "ROWS",
     "achievable_intervals",
     "chain_intervals",
     "compute_table",
@@ -233,6 +234,9 @@ def row_alternates(rod: RodType, seed: int, cache: DiskCache | None = None, *,
         return hit
     given = table is not None
     table = table if given else interval_table(rod, seed, cache)
+    if not given and isinstance(table.get(ROWS), list):  # found with the table (:func:`chain_intervals`)
+        cache.put("fabrow", key, table[ROWS])
+        return table[ROWS]
     wanted = {(len(o["sockets"]), int(o["kind"])) for o in table["options"]
               if len(o["sockets"]) and np.ptp(np.asarray(o["sockets"], float).reshape(-1, 3) @ UP) > 1e-6}
     info = mass_info(rod)
@@ -301,14 +305,26 @@ def chain_intervals(types: Sequence[RodType], *, seed: int = 0, jobs: int | None
                     cache: DiskCache | None = None) -> dict[str, list[tuple[float, float]]]:
     """:func:`achievable_intervals` of several rod types (name -> intervals),
     the uncached ones computed in ``jobs`` worker processes (default: the CPUs)."""
+    from rodcad.catalog.fastgeom import rod_mass_properties
+
     cache = cache if cache is not None else DiskCache()
     uniq = list({rod.name: rod for rod in types}.values())
-    tabled = [rod for rod in uniq if rod.fill is None]  # rods with a fill need no table
+    # rods with a fill need no table; the largest first (the longest to compute: the workers end together)
+    tabled = sorted((rod for rod in uniq if rod.fill is None), key=lambda rod: -rod_mass_properties(rod.geometry)[0])
     cached_map(_table_star, [(rod, seed) for rod in tabled], [intervals_key(rod, seed) for rod in tabled], kind="fabint",
-               cache=cache, jobs=jobs, usable=lambda hit: isinstance(hit, dict))
+               cache=cache, jobs=jobs, usable=lambda hit: isinstance(hit, dict), homes=[rod.name for rod in tabled])
     return {rod.name: achievable_intervals(rod, seed=seed, cache=cache) for rod in uniq}
+
+
+#: The key under which a table computed by :func:`chain_intervals` carries the type's
+#: :func:`row_alternates` (found in the same worker, from the same cavity pools; the
+#: fabrication asks for them when it shares the sockets' roofs). A table without it (cached
+#: before, or from :func:`compute_table`) has them computed when asked.
+ROWS = "row_alternates"
 
 
 def _table_star(args: tuple[RodType, int]) -> dict[str, Any]:
     rod, seed = args
-    return compute_table(rod, seed)
+    table = compute_table(rod, seed)
+    table[ROWS] = row_alternates(rod, seed, table=table)
+    return table

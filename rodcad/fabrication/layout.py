@@ -25,6 +25,7 @@ __all__ = [
     "ball_offset",
     "memo_key",
     "Clearance",
+    "lattice_image_map",
     "lattice_sites",
     "max_ball_layout",
     "max_cavity_layout",
@@ -354,8 +355,57 @@ def _image_map(points: np.ndarray, center: Sequence[float], symmetry: str, tol: 
     return _IMAGE_MAPS.get(memo_key(points, tuple(c.tolist()), symmetry, tol), compute)
 
 
+def lattice_image_map(bounds: tuple[Sequence[float], Sequence[float]], center: Sequence[float], pitch: float,
+                      offset: Sequence[float], kind: str, symmetry: str) -> np.ndarray:
+    """The image map (:func:`symmetric_subset`'s ``near``: (flips, n), the index of each
+    point's image under each flip of ``symmetry``, -1 where it has none) of the points
+    ``lattice_sites(bounds, center, pitch, offset, kind)``, from their lattice indices instead
+    of a search: under a flip about the lattice's centre a lattice point goes to the lattice
+    point whose doubled indices are the flipped ones, if the bounds keep it. Offsets must be
+    0 or half a step. Memoised by the arguments."""
+    key = (tuple(map(float, bounds[0])), tuple(map(float, bounds[1])), tuple(map(float, center)), float(pitch),
+           tuple(map(float, offset)), kind, symmetry)
+
+    def compute() -> np.ndarray:
+        if any(2 * o != round(2 * o) for o in offset):
+            raise ValueError(f"lattice offsets must be 0 or half a step, not {tuple(offset)}")
+        points = lattice_sites(bounds, center, pitch, offset, kind)
+        flips = np.asarray(_flips(symmetry), dtype=np.int64)
+        if not len(points):
+            return np.zeros((len(flips), 0), dtype=np.int64)
+        rel = points - np.asarray(center, dtype=float)
+        a2x, a2y = (pitch / 2, pitch * math.sqrt(3) / 2) if kind == "hex" else (0.0, pitch)
+        jj = np.rint(2 * rel[:, 1] / a2y).astype(np.int64)  # doubled indices: 2 (j + oy), ...
+        kk = np.rint(2 * rel[:, 2] / pitch).astype(np.int64)
+        ii = np.rint(2 * (rel[:, 0] - jj / 2 * a2x) / pitch).astype(np.int64)
+        idx = np.stack([ii, jj, kk], axis=1)
+        lo = idx.min(axis=0)
+        shape = idx.max(axis=0) - lo + 1
+        grid = np.full(tuple(shape), -1, dtype=np.int64)
+        grid[tuple((idx - lo).T)] = np.arange(len(idx))
+        out = np.full((len(flips), len(idx)), -1, dtype=np.int64)
+        for n, (fx, fy, fz) in enumerate(flips):
+            if kind == "hex":  # x - cx = ii p / 2 + jj p / 4, flipped: ii' = fx ii + jj (fx - fy) / 2
+                twice = 2 * fx * ii + jj * (fx - fy)
+                ok = twice % 2 == 0
+                fi = twice // 2
+            else:
+                ok = np.ones(len(idx), dtype=bool)
+                fi = fx * ii
+            img = np.stack([fi, fy * jj, fz * kk], axis=1) - lo
+            ok &= np.all((img >= 0) & (img < shape), axis=1)
+            out[n, ok] = grid[tuple(img[ok].T)]
+        return out
+
+    return _LATTICE_MAPS.get(key, compute)
+
+
+#: :func:`lattice_image_map` by its arguments.
+_LATTICE_MAPS = BoundedMemo(4096)
+
+
 def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[float], symmetry: str,
-                     tol: float = 1e-6) -> np.ndarray:
+                     tol: float = 1e-6, *, near: np.ndarray | None = None) -> np.ndarray:
     """Mask of the feasible points whose every image under ``symmetry`` is a
     feasible point too; the kept set is invariant, so its centroid is ``center``.
 
@@ -365,6 +415,7 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
         center: the centre of symmetry (mm).
         symmetry: one of :data:`SYMMETRIES`.
         tol: distance within which an image matches a point (mm).
+        near: the points' image map (:func:`lattice_image_map`), if known.
     """
     feasible = np.asarray(feasible, dtype=bool)
     if len(points) == 0:
@@ -372,7 +423,8 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
     keep = feasible.copy()
     if not keep.any():
         return keep
-    near = _image_map(np.asarray(points, dtype=float), center, symmetry, tol)
+    if near is None:
+        near = _image_map(np.asarray(points, dtype=float), center, symmetry, tol)
     keep &= ((near >= 0) & feasible[np.maximum(near, 0)]).all(axis=0)
     return keep
 
@@ -380,7 +432,7 @@ def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[
 def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
                   center: Sequence[float], radius: float, wall: float,
                   symmetries: Iterable[str] = SYMMETRIES, lattices: Iterable[str] = LATTICES, *,
-                  void: str = "sphere", raise_by: float = 0.0) -> SphereLayout:
+                  void: str = "sphere", raise_by: float = 0.0, beat: int = 0) -> SphereLayout:
     """Most equal voids of ``radius`` that fit with ``wall`` everywhere, in a
     symmetric lattice layout centred on ``center``.
 
@@ -403,6 +455,8 @@ def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[
         raise_by: the voids sit this far (mm) above their symmetric sites along
             :data:`UP` (see :func:`ball_offset`); the returned centres are the
             raised ones.
+        beat: only layouts of more voids than this are wanted: the empty layout when
+            none has more (lattices with no more sites are not tried).
     """
     void_volume(void, radius)  # validates the kind
     need = radius + wall
@@ -410,25 +464,28 @@ def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[
     pitch = 2 * radius + wall
     lift = UP * raise_by
     best = SphereLayout.empty()
+    most = int(beat)  # the count to beat
     symmetries = tuple(symmetries)
     if void == "silo":
         lattices = [k for k in lattices if k == "cubic"]
     for kind in lattices:
         for offset in ((ox, oy, oz) for ox in (0.0, 0.5) for oy in (0.0, 0.5) for oz in (0.0, 0.5)):
             pts = lattice_sites(inner, center, pitch, offset, kind)
-            if len(pts) <= best.count:
+            if len(pts) <= most:
                 continue
             feasible = clearance(pts + lift) >= need
             if void == "silo" and feasible.any():
                 idx = np.flatnonzero(feasible)
                 rim = clearance(silo_rim_points(pts[idx] + lift, radius)).reshape(len(idx), -1)
                 feasible[idx] = rim.min(axis=1) >= wall
-            if feasible.sum() <= best.count:
+            if feasible.sum() <= most:
                 continue
             for sym in symmetries:
-                keep = symmetric_subset(pts, feasible, center, sym)
-                if keep.sum() > best.count:
+                near = lattice_image_map(inner, center, pitch, offset, kind, sym)
+                keep = symmetric_subset(pts, feasible, center, sym, near=near)
+                if keep.sum() > most:
                     best = SphereLayout(radius, pts[keep] + lift, sym, kind, void)
+                    most = best.count
     return best
 
 
@@ -446,7 +503,14 @@ def max_cavity_layout(clearance: Clearance, bounds: tuple[Sequence[float], Seque
     best = SphereLayout.empty()
     r = r_max
     while r >= r_min - 1e-12:
-        layout = sphere_layout(clearance, bounds, center, r, wall, void=void)
+        # only a layout of more voids than ``beat`` removes more than the best so far
+        each, bar = void_volume(void, r), best.volume + 1e-9
+        beat = int(bar // each)
+        while (beat + 1) * each <= bar:
+            beat += 1
+        while beat > 0 and beat * each > bar:
+            beat -= 1
+        layout = sphere_layout(clearance, bounds, center, r, wall, void=void, beat=beat)
         if layout.volume > best.volume + 1e-9:
             best = layout
         r *= RADIUS_STEP

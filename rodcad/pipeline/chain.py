@@ -58,6 +58,7 @@ from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
 from rodcad.outputs.view import write_chain_view
+from rodcad.parallel import kept_workers
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
@@ -165,18 +166,20 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
     arrays = arrays_step(design, jobs, progress)
     spec = ChainSpec("", np.asarray(design.anchors, float), design.target_curve)
     ivfn = intervals_step(design, jobs, progress) if cad else None
-    (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
-                             n_starts=N_STARTS, g=design.g, progress=progress, intervals=ivfn)
-    cd = chain.design
-    if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
-        design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
-    result = hung_result(design, cd, method=method, seed=seed, intervals=ivfn, progress=progress)
-    p = result.plan
+    with kept_workers(jobs if cad else 1):  # a rod type's table and its rods made in one worker
+        (chain,) = design_chains([spec], arrays, design.constraints, design.problem, method=method, seed=seed,
+                                 n_starts=N_STARTS, g=design.g, progress=progress, intervals=ivfn)
+        cd = chain.design
+        if cd.plan.rods:  # rods printed to order: the catalog now knows them by name
+            design = dataclasses.replace(design, catalog=design.catalog.with_types(cd.plan.rods))
+        result = hung_result(design, cd, method=method, seed=seed, intervals=ivfn, progress=progress)
+        p = result.plan
+        if cad:
+            (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
+                                              progress=progress,
+                                              label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
+                                              fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
     if cad:
-        (fab,), problems = fabricate_step(design, [(result.type_names, result.printed_masses)], jobs=jobs,
-                                      progress=progress,
-                                      label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
-                                      fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
         result.fabrication = fab
         result.notes += problems
         if p.fused:

@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import least_squares
 
-__all__ = ["DENSE_UNKNOWNS", "FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
+__all__ = ["FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
 
 #: Above LSMR_UNKNOWNS unknowns, each trust-region step's sparse least squares (LSMR) stops
 #: after LSMR_ITER iterations instead of running to its default (one per unknown): a 2,000-rod
@@ -41,11 +41,6 @@ __all__ = ["DENSE_UNKNOWNS", "FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "STALL_
 #: that 200 iterations a step reach in 15 s (inexact steps: the trust region still decides).
 LSMR_UNKNOWNS = 4000
 LSMR_ITER = 200
-
-#: Up to DENSE_UNKNOWNS unknowns each trust-region step is solved exactly on the dense Jacobian
-#: (an SVD, about 10 ms at 174 unknowns, growing as their cube); LSMR's matrix-free iterations, one
-#: per unknown by default at about 0.3 ms each, spent minutes on a 40-hub strip's joint solve.
-DENSE_UNKNOWNS = 400
 
 #: A solve whose cost (half the squared imbalances over the force scale) is still above STALL_COST
 #: and fell by less than STALL_DROP of itself over the last STALL_ITERS iterations stops there:
@@ -165,12 +160,9 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
     kw = dict(bounds=(pr.lo, pr.hi), method="trf", x_scale="jac", max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
     if _CALLBACK:
         kw["callback"] = _Stall()
-    if pr.x0.size <= DENSE_UNKNOWNS:  # each step's subproblem solved exactly (an SVD of the dense Jacobian)
-        ls = least_squares(pr.fun, pr.x0, jac=lambda x: pr.jac(x).toarray(), tr_solver="exact", **kw)
-    else:
-        big = pr.x0.size > LSMR_UNKNOWNS
-        ls = least_squares(pr.fun, pr.x0, jac=pr.jac, tr_solver="lsmr",
-                           tr_options={"maxiter": LSMR_ITER} if big else {}, **kw)
+    big = pr.x0.size > LSMR_UNKNOWNS
+    ls = least_squares(pr.fun, pr.x0, jac=pr.jac, tr_solver="lsmr", tr_options={"maxiter": LSMR_ITER} if big else {},
+                       **kw)
     P, T, mass = pr.unpack(ls.x)
     P0 = np.asarray(pivots, float)
     r = np.linalg.norm(P0, axis=2)

@@ -299,7 +299,8 @@ def _descend_from_starts(chain: Chain, hanging, lasts, alone: bool = False):
         starts.append(sag_guess(chain))
     found = _first_stable(chain, starts)
     if found is None:  # the same starts moved, within the limits, to the nearest shapes that reach B
-        found = _first_stable(chain, (t for t in map(lambda s: reach_start(chain, s), starts) if t is not None))
+        moved = (reach_start(chain, s) for s in starts)
+        found = _first_stable(chain, (t for t in moved if t is not None))
     return found
 
 

@@ -100,6 +100,7 @@ class SocketProblem:
     unpack: object
     hub_com: object
 
+
 class _Stall:
     """``least_squares``' callback that stops a stalled solve (:data:`STALL_COST`)."""
 

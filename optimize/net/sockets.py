@@ -8,10 +8,11 @@ directions, the weight shares' arms and the hub's centre of mass. The turns that
 hub are not unique, and a turn chosen hub by hub (the least turn for given forces) may need
 masses outside what the rods can be built at. :func:`balance_sockets` solves the turns, the
 masses (within their bounds) and the tensions (>= 0 unless compression is allowed) together:
-``scipy.optimize.least_squares`` (trust region reflective, the exact sparse Jacobian: a rod's
-unknowns reach its two nodes' rows; unknowns scaled by the Jacobian's columns) on every free
-hub's force and moment balance, from the sockets given (the turns being a few degrees, it
-stays near them). Finite differences over the rods' node pattern took 30-60 evaluations a
+SciPy's trust region reflective least squares (:func:`optimize.net.trf.trf`: each step's
+direction by a sparse factorization, not LSMR; the exact sparse Jacobian: a rod's unknowns
+reach its two nodes' rows; unknowns scaled by the Jacobian's columns) on every free hub's
+force and moment balance, from the sockets given (the turns being a few degrees, it stays near
+them). Finite differences over the rods' node pattern took 30-60 evaluations a
 Jacobian and, with fixed scales, crawled where masses sit at their bounds.
 
 Each socket turns from ``p0`` (``pivots``, unit direction ``d0``) to ``r (d0 + a b1 + c b2) /
@@ -26,21 +27,15 @@ Units: mm, g, forces in g x the unit of ``g``.
 
 from __future__ import annotations
 
-import inspect
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import least_squares
 
-__all__ = ["FIXED_TURN", "LSMR_ITER", "LSMR_UNKNOWNS", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets", "socket_problem"]
+from optimize.net.trf import trf
 
-#: Above LSMR_UNKNOWNS unknowns, each trust-region step's sparse least squares (LSMR) stops
-#: after LSMR_ITER iterations instead of running to its default (one per unknown): a 2,000-rod
-#: hub grid's joint solve spent 50 s in LSMR for the same residual (1.4e-6 of the force scale)
-#: that 200 iterations a step reach in 15 s (inexact steps: the trust region still decides).
-LSMR_UNKNOWNS = 4000
-LSMR_ITER = 200
+__all__ = ["FIXED_TURN", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets",
+           "socket_problem"]
 
 #: A solve whose cost (half the squared imbalances over the force scale) is still above STALL_COST
 #: and fell by less than STALL_DROP of itself over the last STALL_ITERS iterations stops there:
@@ -102,20 +97,15 @@ class SocketProblem:
 
 
 class _Stall:
-    """``least_squares``' callback that stops a stalled solve (:data:`STALL_COST`)."""
+    """:func:`optimize.net.trf.trf`'s callback that stops a stalled solve (:data:`STALL_COST`)."""
 
     def __init__(self) -> None:
         self.costs: list[float] = []
 
-    def __call__(self, intermediate_result) -> None:
+    def __call__(self, cost: float) -> bool:
         c = self.costs
-        c.append(float(intermediate_result.cost))
-        if len(c) > STALL_ITERS and c[-1] > STALL_COST and c[-1] > (1 - STALL_DROP) * c[-1 - STALL_ITERS]:
-            raise StopIteration
-
-
-#: ``least_squares`` takes a callback (SciPy 1.16 on); before it, a solve runs to ``max_nfev``.
-_CALLBACK = "callback" in inspect.signature(least_squares).parameters
+        c.append(float(cost))
+        return len(c) > STALL_ITERS and c[-1] > STALL_COST and c[-1] > (1 - STALL_DROP) * c[-1 - STALL_ITERS]
 
 
 def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, node_masses, socket_com,
@@ -158,12 +148,8 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
                         socket_com=socket_com, masses0=masses0, tensions0=tensions0, start=start,
                         max_turn_deg=max_turn_deg, bound_slopes=bound_slopes, com=com,
                         allow_compression=allow_compression, g=g)
-    kw = dict(bounds=(pr.lo, pr.hi), method="trf", x_scale="jac", max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
-    if _CALLBACK:
-        kw["callback"] = _Stall()
-    big = pr.x0.size > LSMR_UNKNOWNS
-    ls = least_squares(pr.fun, pr.x0, jac=pr.jac, tr_solver="lsmr", tr_options={"maxiter": LSMR_ITER} if big else {},
-                       **kw)
+    ls = trf(pr.fun, pr.jac, pr.x0, pr.lo, pr.hi, ftol=tol, xtol=tol, gtol=tol, max_nfev=max_nfev,
+             callback=_Stall())
     P, T, mass = pr.unpack(ls.x)
     P0 = np.asarray(pivots, float)
     r = np.linalg.norm(P0, axis=2)

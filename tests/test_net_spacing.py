@@ -193,3 +193,54 @@ def test_a_hub_whose_rod_turns_too_far_gets_the_narrowest_wider_cone_and_the_net
     one = dataclasses.replace(check.planned, hardware=dataclasses.replace(check.planned.hardware, cone_range=None))
     single = dataclasses.replace(over, planned=one)
     assert widen_cones(single, design) is single and len(tried) == 1
+
+
+# --------------------------------------------------------------------------- lengths
+
+
+def test_hubs_grown_leave_no_rod_shorter_than_the_catalog_prints(designed):
+    """Grown hubs shorten their rods: where the shortest rod has almost no room, its hubs grow
+    by less, and at last not at all (four halvings of the growth used to leave it short)."""
+    from rodcad.design.net.spacing import GROW, grown_hubs
+
+    planned = designed.planned
+    t = planned.target
+    L = (t.edge_lengths - planned.node_pivot[t.edges].sum(axis=1)) / planned.rod_pieces
+    tight = dataclasses.replace(planned, length_range=(float(L.min()) - 0.01, planned.length_range[1]))
+    grown = grown_hubs(tight, np.arange(t.n))
+    assert grown is not None and np.any(grown > planned.node_pivot * (GROW - 1e-9) - 1e-9)  # (the others grow)
+    after = (t.edge_lengths - grown[t.edges].sum(axis=1)) / planned.rod_pieces
+    assert after.min() >= tight.length_range[0] - 1e-9
+
+
+def test_a_rod_turned_just_out_of_the_printed_lengths_is_brought_back_by_resizing_its_hubs(designed):
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.choose import WINDOW_REACH, in_window
+
+    check = designed
+    plan, planned = check.plan, check.planned
+    t = plan.target
+    free = ~t.anchored_mask
+    e = int(np.flatnonzero(free[t.edges].all(axis=1))[0])
+    hi = planned.length_range[1]
+    lengths = plan.lengths.copy()
+    lengths[e] = hi + 0.2  # as if its turned sockets had lengthened it 0.2 mm past the window
+    out = dataclasses.replace(check, plan=dataclasses.replace(plan, lengths=lengths))
+    assert not out.ok and "leave the" in out.limit()
+    tried = []
+
+    def design(p):
+        tried.append(p)
+        return design_net_plan(p)
+
+    back = in_window(out, design)
+    p = tried[0]
+    i, j = t.edges[e]
+    assert p.node_pivot[i] == pytest.approx(planned.node_pivot[i] + 0.2)  # each end takes the excess
+    assert p.node_pivot[j] == pytest.approx(planned.node_pivot[j] + 0.2)
+    assert p.lengths[e] == pytest.approx(planned.lengths[e] - 0.4, abs=1e-6)
+    assert back.ok and any("resized within the family" in n for n in back.notes), back.limit()
+    # farther out than the reach: the plan's to say, not resized here
+    lengths[e] = hi + 2 * WINDOW_REACH
+    far = dataclasses.replace(check, plan=dataclasses.replace(plan, lengths=lengths))
+    assert in_window(far, design) is far and len(tried) == 1

@@ -15,7 +15,9 @@ another of their rods too short), round after round (:data:`RETRIES`), the bette
 what still cannot hang is refused with the hardware that would hold it. Last, hubs whose rods
 turn further than their sockets let them get wider cones (:mod:`rodcad.design.net.cones`), after
 the hubs whose sockets' spacing keeps the net from balancing are made larger
-(:func:`rodcad.design.net.spacing.grow_tight_hubs`).
+(:func:`rodcad.design.net.spacing.grow_tight_hubs`); and rods that the hubs' turned sockets
+lengthen or shorten out of the catalog's lengths by a little have their hubs resized to bring
+them back (:func:`in_window`).
 """
 
 from __future__ import annotations
@@ -29,12 +31,18 @@ from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["RETRIES", "design_drawn_net", "slack_joints", "weak_edges"]
+__all__ = ["RETRIES", "WINDOW_REACH", "WINDOW_ROUNDS", "design_drawn_net", "in_window", "slack_joints", "weak_edges"]
 
 #: Rounds of drawn edges made one rod where their joints cannot hang: each round adds the edges
 #: whose joints the last round's design could not hang either (bounded: each round designs the
 #: net again).
 RETRIES = 3
+
+#: Rods that leave the catalog's lengths by at most this (mm), with the hubs' sockets turned, are
+#: brought back by resizing their hubs (:func:`in_window`; farther is the plan's to say)...
+WINDOW_REACH = 2.0
+#: ...in this many rounds at most (each designs the net again).
+WINDOW_ROUNDS = 2
 
 
 def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int = 0,
@@ -54,7 +62,7 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
         check = grow_tight_hubs(check, lambda p: design_net_plan(p, **kw), _rank)
-        return widen_cones(check, lambda p: design_net_plan(p, **kw))
+        return in_window(widen_cones(check, lambda p: design_net_plan(p, **kw)), lambda p: design_net_plan(p, **kw))
     if on_surface:
         other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
         if _rank(other) > _rank(check):
@@ -89,12 +97,55 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
                                "what the rod cannot.")
             check = other
     check = grow_tight_hubs(check, lambda p: design_net_plan(p, **kw), _rank)
-    check = widen_cones(check, lambda p: design_net_plan(p, **kw))
+    check = in_window(widen_cones(check, lambda p: design_net_plan(p, **kw)), lambda p: design_net_plan(p, **kw))
     if not check.ok:
         why = slack_joints(check, None if last is check else last)
         if why:
             check.why = why + (" " + check.why if check.why else "")
             check.notes.append(why)
+    return check
+
+
+def in_window(check: NetCheck, design, rounds: int = WINDOW_ROUNDS) -> NetCheck:
+    """``check``, or where its rods, with the hubs' sockets turned, leave the lengths the catalog
+    prints by a little (:data:`WINDOW_REACH`), the net designed again with each such rod's end hubs
+    resized within the catalog's family by half its excess and as much again (a larger hub
+    shortens its rods, a smaller one lengthens them), round after round, the first that builds
+    kept (or, if none does, the check itself).
+
+    Args:
+        check: a :class:`rodcad.design.net.check.NetCheck` with its ``planned`` plan.
+        design: designs a plan (:func:`rodcad.design.net.check.design_net_plan` with the design's settings).
+        rounds: rounds at most.
+    """
+    from rodcad.design.net.plan import resized
+
+    cur = check
+    for _ in range(rounds):
+        planned = cur.planned
+        out = cur.out_of_window
+        if (cur.ok or planned is None or not planned.hardware.family or not out.size or not cur.meets_tolerance
+                or not cur.in_tension):
+            return check
+        lo, hi = planned.length_range
+        L = cur.plan.piece_lengths
+        excess = np.where(L > hi, L - hi, np.where(L < lo, L - lo, 0.0))  # (mm per piece; < 0: short)
+        if np.max(np.abs(excess[out])) > WINDOW_REACH:
+            return check
+        rp = planned.node_pivot.copy()
+        plo, phi = planned.hardware.pivot_limits
+        t = planned.target
+        for e in out:  # (a rod of k pieces: each end hub takes k times half its excess, and as much again)
+            for k in t.edges[e]:
+                rp[k] = float(np.clip(rp[k] + excess[e] * planned.rod_pieces[e], plo, phi))
+        if np.allclose(rp, planned.node_pivot):
+            return check
+        cur = design(resized(planned, rp))
+        if cur.ok:
+            cur.carry(check).chose(f"{out.size} rod(s) would have left the {lo:g}-{hi:g} mm the catalog prints once "
+                                   "the hubs' sockets were turned to balance them: their hubs were resized within "
+                                   "the family to keep them in, and the net designed again.")
+            return cur
     return check
 
 

@@ -20,8 +20,8 @@ from scipy.optimize import minimize
 
 from rodcad.catalog.net.node import least_angle_deg
 
-__all__ = ["GROW", "GROW_ROUNDS", "SPACING_TOL", "TIGHT_DEG", "grow_tight_hubs", "socket_clashes", "spaced_turn", "tight_hubs",
-           "too_close"]
+__all__ = ["GROW", "GROW_ROUNDS", "SPACING_TOL", "TIGHT_DEG", "grow_tight_hubs", "grown_hubs", "socket_clashes",
+           "spaced_turn", "tight_hubs", "too_close"]
 
 #: Sockets this much closer than their least angle (deg) are still apart: round-off of the turns.
 SPACING_TOL = 1e-6
@@ -137,6 +137,24 @@ def tight_hubs(plan) -> np.ndarray:
     return np.array(out, int)
 
 
+def grown_hubs(planned, hubs: np.ndarray) -> np.ndarray | None:
+    """(n,) the plan's pivot radii with ``hubs`` made :data:`GROW` times larger within the
+    catalog's family, less where a rod would be left shorter than the catalog prints (halved,
+    four times, then not grown at all); None where none grows."""
+    rp = planned.node_pivot.copy()
+    grown = rp.copy()
+    grown[hubs] = np.minimum(rp[hubs] * GROW, planned.hardware.pivot_limits[1])
+    lo = planned.length_range[0]
+    t = planned.target
+    for q in range(5):
+        short = np.flatnonzero((t.edge_lengths - grown[t.edges].sum(axis=1)) / planned.rod_pieces < lo - 1e-9)
+        if not short.size:
+            break
+        ends = np.unique(t.edges[short])
+        grown[ends] = np.maximum(rp[ends], 0.5 * (rp[ends] + grown[ends])) if q < 4 else rp[ends]
+    return grown if np.any(grown > rp + 1e-9) else None
+
+
 def grow_tight_hubs(check, design, rank, rounds: int = GROW_ROUNDS):
     """Where a hub net does not balance (the statics' best fit off the tolerance) and some of its hubs' sockets
     are held apart by the spacing (:func:`tight_hubs`), those hubs made :data:`GROW` times larger
@@ -157,21 +175,8 @@ def grow_tight_hubs(check, design, rank, rounds: int = GROW_ROUNDS):
                 or not cur.equilibrium.success):
             break
         tight = tight_hubs(cur.plan)
-        if not tight.size:
-            break
-        rp = planned.node_pivot.copy()
-        hi = planned.hardware.pivot_limits[1]
-        grown = rp.copy()
-        grown[tight] = np.minimum(rp[tight] * GROW, hi)
-        lo = planned.length_range[0]
-        for _ in range(4):  # (no rod shorter than the catalog prints: grow less where one would be)
-            t = planned.target
-            short = np.flatnonzero((t.edge_lengths - grown[t.edges].sum(axis=1)) / planned.rod_pieces < lo - 1e-9)
-            if not short.size:
-                break
-            ends = np.unique(t.edges[short])
-            grown[ends] = np.maximum(rp[ends], 0.5 * (rp[ends] + grown[ends]))
-        if not np.any(grown > rp + 1e-9):
+        grown = grown_hubs(planned, tight) if tight.size else None
+        if grown is None:
             break
         cur = design(resized(planned, grown))
         if rank(cur) > rank(best):

@@ -189,8 +189,9 @@ def test_a_hub_whose_rod_turns_too_far_gets_the_narrowest_wider_cone_and_the_net
     assert p.node_masses[k] < check.planned.node_masses[k]  # the wider cone's hub is lighter, and designed with
     assert out.ok and out.plan.node_cone[k] == pytest.approx(want), out.limit()
     assert any("wider than the catalog's nominal" in n for n in out.notes)
-    # a catalog of one cone has nothing to widen: the check stays as it was
-    one = dataclasses.replace(check.planned, hardware=dataclasses.replace(check.planned.hardware, cone_range=None))
+    # a catalog of one cone and one hub size has nothing to widen or grow: the check stays as it was
+    one = dataclasses.replace(check.planned, hardware=dataclasses.replace(check.planned.hardware, cone_range=None,
+                                                                          pivot_range=None))
     single = dataclasses.replace(over, planned=one)
     assert widen_cones(single, design) is single and len(tried) == 1
 
@@ -244,3 +245,33 @@ def test_a_rod_turned_just_out_of_the_printed_lengths_is_brought_back_by_resizin
     lengths[e] = hi + 2 * WINDOW_REACH
     far = dataclasses.replace(check, plan=dataclasses.replace(plan, lengths=lengths))
     assert in_window(far, design) is far and len(tried) == 1
+
+
+def test_a_hub_whose_rod_turns_too_far_for_any_cone_is_made_larger(designed):
+    """A catalog of one cone: the hub whose rod turns too far is made larger within the family
+    (its sockets then turn less to balance it) and the net designed again."""
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.cones import widen_cones
+    from rodcad.design.net.spacing import GROW
+
+    check = designed
+    plan = check.plan
+    t = plan.target
+    k = int(np.flatnonzero((~t.anchored_mask) & (plan.degree >= 3))[0])
+    e, c = next((int(e), c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k))
+    swing = check.swing_deg.copy()
+    swing[e, c] = plan.end_swing_limits[e, c] + 3.0
+    one = dataclasses.replace(check.planned, hardware=dataclasses.replace(check.planned.hardware, cone_range=None))
+    over = dataclasses.replace(check, swing_deg=swing, planned=one)
+    tried = []
+
+    def design(p):
+        tried.append(p)
+        return design_net_plan(p)
+
+    out = widen_cones(over, design)
+    (p,) = tried
+    assert p.node_pivot[k] > one.node_pivot[k] and p.node_pivot[k] <= one.node_pivot[k] * GROW + 1e-9
+    assert np.all(np.delete(p.node_pivot, k) == np.delete(one.node_pivot, k))
+    # built: kept, with the reason; not built: the check as it was
+    assert (out.ok and any("balances with its sockets turned less" in n for n in out.notes)) or out is over

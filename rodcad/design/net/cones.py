@@ -10,7 +10,10 @@ turn as far (plus :data:`CONE_MARGIN`), as wide as the range and its neighbours'
 allow (:meth:`rodcad.catalog.net.node.NodeHardware.widest_cone`).
 A wider cone takes plastic out of the hub, so the hub is lighter and its centre of mass moves:
 the net is designed again with the new hubs, round after round (:data:`CONE_ROUNDS`) while
-some rod still turns too far, each round widening from the last.
+some rod still turns too far, each round widening from the last. Where no cone of the catalog
+builds (or it has one), the hubs whose rods turn too far are made larger within the family
+instead (:func:`rodcad.design.net.spacing.grown_hubs`): a larger hub balances with its sockets
+turned less, so its rods meet them nearer their axes.
 """
 
 from __future__ import annotations
@@ -71,6 +74,30 @@ def _needed_cones(check, planned: NetPlan) -> np.ndarray | None:
     return new if np.any(new > cones + 1e-9) else None
 
 
+def _grown_for_swing(check, design: Callable[[NetPlan], object]):
+    """The design with the hubs whose rods turn too far made larger within the catalog's family
+    (:func:`rodcad.design.net.spacing.grown_hubs`; their cones as planned), where that builds: a
+    larger hub balances with its sockets turned less, so its rods meet them nearer their axes.
+    None where the family has one size or that design does not build either."""
+    from rodcad.design.net.plan import resized
+    from rodcad.design.net.spacing import grown_hubs
+
+    planned = check.planned
+    if not _swing_only(check) or not planned.hardware.family:
+        return None
+    hubs = np.unique(check.plan.target.edges[check.over_swing[:, 0], check.over_swing[:, 1]])
+    grown = grown_hubs(planned, hubs)
+    if grown is None:
+        return None
+    cur = design(resized(planned, grown))
+    if not cur.ok:
+        return None
+    cur.carry(check).chose(f"{hubs.size} hub(s) are larger than their rods' angles need: a larger hub balances with "
+                           "its sockets turned less, so its rods meet them nearer their axes (the catalog's cones "
+                           "let them turn no further).")
+    return cur
+
+
 def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_ROUNDS):
     """The design with wider socket cones at the hubs whose rods turn too far (module
     docstring), or ``check`` itself where the catalog has one cone, where the design fails on
@@ -83,8 +110,10 @@ def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_R
         rounds: rounds at most.
     """
     planned = check.planned
-    if planned is None or not planned.hardware.is_hub or planned.hardware.cone_limits[1] <= planned.hardware.cone_deg:
+    if planned is None or not planned.hardware.is_hub:
         return check
+    if planned.hardware.cone_limits[1] <= planned.hardware.cone_deg:  # (one cone: larger hubs, if any)
+        return _grown_for_swing(check, design) or check
     best, cur = check, check
     for _ in range(rounds):
         if not _swing_only(cur):
@@ -99,6 +128,10 @@ def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_R
             break
         if _swing_only(cur) and _excess(cur) < _excess(best):
             best = cur
+    if not best.ok:
+        grown = _grown_for_swing(check, design)
+        if grown is not None:
+            return grown
     if best is check:
         return check
     best.carry(check)

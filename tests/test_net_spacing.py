@@ -160,25 +160,38 @@ def test_a_hub_with_wider_cones_is_a_valid_solid_of_its_closed_form_mass(cat):
     assert hw.hub_mass(d)[0] < cat.node.hub_mass(d)[0]  # lighter than the nominal hub
 
 
-def test_a_hub_whose_rod_turns_too_far_gets_the_narrowest_wider_cone_and_the_net_is_designed_again(designed):
-    from rodcad.design.net.check import design_net_plan
-    from rodcad.design.net.cones import CONE_MARGIN, widen_cones
-
-    check = designed
+def _turned_too_far(check, by: float = 3.0):
+    """(hub k, rod e, its end c at k, swing): a free hub of three or more rods, and the check's
+    swings with that rod end turned ``by`` deg past what its socket lets it."""
     plan = check.plan
     t = plan.target
     k = int(np.flatnonzero((~t.anchored_mask) & (plan.degree >= 3))[0])
     e, c = next((int(e), c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k))
     swing = check.swing_deg.copy()
-    swing[e, c] = plan.end_swing_limits[e, c] + 3.0  # as if that rod turned 3 deg past its socket's swing
-    over = dataclasses.replace(check, swing_deg=swing)
-    assert not over.ok and "turns" in over.limit() and "cone" in over.limit()
+    swing[e, c] = plan.end_swing_limits[e, c] + by
+    return k, e, c, swing
+
+
+def _recording(design):
+    """(the plans designed, a design function that records them)."""
     tried = []
 
-    def design(p):
+    def record(p):
         tried.append(p)
-        return design_net_plan(p)
+        return design(p)
 
+    return tried, record
+
+
+def test_a_hub_whose_rod_turns_too_far_gets_the_narrowest_wider_cone_and_the_net_is_designed_again(designed):
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.cones import CONE_MARGIN, widen_cones
+
+    check = designed
+    k, e, c, swing = _turned_too_far(check)
+    over = dataclasses.replace(check, swing_deg=swing)
+    assert not over.ok and "turns" in over.limit() and "cone" in over.limit()
+    tried, design = _recording(design_net_plan)
     out = widen_cones(over, design)
     (p,) = tried
     hub = check.planned.hub(k)
@@ -228,12 +241,7 @@ def test_a_rod_turned_just_out_of_the_printed_lengths_is_brought_back_by_resizin
     lengths[e] = hi + 0.2  # as if its turned sockets had lengthened it 0.2 mm past the window
     out = dataclasses.replace(check, plan=dataclasses.replace(plan, lengths=lengths))
     assert not out.ok and "leave the" in out.limit()
-    tried = []
-
-    def design(p):
-        tried.append(p)
-        return design_net_plan(p)
-
+    tried, design = _recording(design_net_plan)
     back = in_window(out, design)
     p = tried[0]
     i, j = t.edges[e]
@@ -255,20 +263,10 @@ def test_a_hub_whose_rod_turns_too_far_for_any_cone_is_made_larger(designed):
     from rodcad.design.net.spacing import GROW
 
     check = designed
-    plan = check.plan
-    t = plan.target
-    k = int(np.flatnonzero((~t.anchored_mask) & (plan.degree >= 3))[0])
-    e, c = next((int(e), c) for c in (0, 1) for e in np.flatnonzero(t.edges[:, c] == k))
-    swing = check.swing_deg.copy()
-    swing[e, c] = plan.end_swing_limits[e, c] + 3.0
+    k, _, _, swing = _turned_too_far(check)
     one = dataclasses.replace(check.planned, hardware=dataclasses.replace(check.planned.hardware, cone_range=None))
     over = dataclasses.replace(check, swing_deg=swing, planned=one)
-    tried = []
-
-    def design(p):
-        tried.append(p)
-        return design_net_plan(p)
-
+    tried, design = _recording(design_net_plan)
     out = widen_cones(over, design)
     (p,) = tried
     assert p.node_pivot[k] > one.node_pivot[k] and p.node_pivot[k] <= one.node_pivot[k] * GROW + 1e-9

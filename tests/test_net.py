@@ -370,3 +370,20 @@ def test_pivots_convert_to_and_from_design_json_per_node_form():
     assert np.array_equal(pivots_from_nodes(spec.edges, per_node), kw["pivots"])
     with pytest.raises(ValueError, match="does not end at it"):
         pivots_from_nodes(spec.edges, [{int(np.flatnonzero((spec.edges != 0).all(axis=1))[0]): [1, 0, 0]}])
+
+
+def test_no_perturbed_starts_where_the_given_start_reaches_no_equilibrium():
+    """A multi-start whose given start (and sag) reach no equilibrium within the iterations: the
+    verdict is that, and the perturbed starts, which could not change it, are not run."""
+    x = np.array([[0.0, 0, 0], [80, 0, 0], [40, 70, 0], [40, 25, -20]])
+    edges = [[0, 3], [1, 3], [2, 3]]
+    pivots = np.zeros((3, 2, 3))  # a hub of pivot radius 7.5 with its centre of mass off its point
+    for e in range(3):
+        d = x[edges[e][0]] - x[3]
+        pivots[e, 1] = 7.5 * d / np.linalg.norm(d)
+    kw = dict(node_masses=[0, 0, 0, 5.0], node_com=[[0, 0, 0]] * 3 + [[3, 1, 0]], pivots=pivots, n_starts=4)
+    said = []
+    res = solve_net(x, edges, [60, 55, 65], [1.0, 3.0, 0.5], [0, 1, 2], max_iter=2, callback=said.append, **kw)
+    assert not res.success and said == [] and res.alternatives == []
+    ok = solve_net(x, edges, [60, 55, 65], [1.0, 3.0, 0.5], [0, 1, 2], callback=said.append, **kw)
+    assert ok.success and len(said) == 3  # (with the iterations, the perturbed starts run)

@@ -377,7 +377,8 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
         g: gravitational acceleration, along -z.
         n_starts: starts in all: the given one, then seeded perturbations of it (free nodes
             moved by ``start_scale`` x the mean rod length, bodies turned by that many
-            radians, at random); the distinct stable equilibria go to ``alternatives``.
+            radians, at random); the distinct stable equilibria go to ``alternatives``. Where
+            the given start (and the sag) reach no equilibrium, the perturbed ones are not tried.
         seed: seed of the perturbations (same seed, same result).
         node_com: (n, 3) node bodies' centres of mass from the node point, body frame.
         pivots: (m, 2, 3) each rod's pivot at node i and at node j, from the node point in
@@ -415,7 +416,7 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     first = _result(net, out) if out is not None else _failed(net, start, nres)
     first.n_starts = max(int(n_starts), 1)
     first.counts = [1]
-    if n_starts <= 1:
+    if n_starts <= 1 or not first.success:  # (no equilibrium from the start given: the verdict, whatever else is found)
         return first
     rng = np.random.default_rng(seed)
     size = max(float(np.max(np.ptp(start.x, axis=0))), net.mean_length)

@@ -100,8 +100,9 @@ def _grown_for_swing(check, design: Callable[[NetPlan], object]):
 
 def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_ROUNDS):
     """The design with wider socket cones at the hubs whose rods turn too far (module
-    docstring), or ``check`` itself where the catalog has one cone, where the design fails on
-    anything else, or where no wider cone lets the rods turn (the try that came closest is kept).
+    docstring); where no cone of the catalog lets them (or it has one), with those hubs larger
+    within the family (:func:`_grown_for_swing`); else ``check`` itself where the design fails
+    on anything else, or the try that came closest.
 
     Args:
         check: a :class:`rodcad.design.net.check.NetCheck` with its ``planned`` plan.

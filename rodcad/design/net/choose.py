@@ -22,6 +22,8 @@ them back (:func:`in_window`).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from rodcad.design.net.check import NetCheck, design_net_plan
@@ -55,16 +57,15 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     Raises:
         DesignLimit: what no hardware in the catalog can do.
     """
-    kw = dict(g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=note)
+    design = functools.partial(design_net_plan, g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=note)
     on_surface = target.surface is not None
     plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g)
-    check = design_net_plan(plan, **kw)
+    check = design(plan)
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
-        check = grow_tight_hubs(check, lambda p: design_net_plan(p, **kw), _rank)
-        return in_window(widen_cones(check, lambda p: design_net_plan(p, **kw)), lambda p: design_net_plan(p, **kw))
+        return _hardware_fitted(check, design)
     if on_surface:
-        other = design_net_plan(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g), **kw)
+        other = design(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g))
         if _rank(other) > _rank(check):
             other.chose("The two-rod joints hang at the funicular sag below their chords: on the target "
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
@@ -85,7 +86,7 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
                                 splice_whole=True)
             except DesignLimit:
                 break
-        other = last = design_net_plan(plan, **kw)
+        other = last = design(plan)
         if _rank(other) > _rank(check):
             k = plan.rod_pieces
             spliced = (f" ({int(np.count_nonzero(k > 1))} of them, longer than one rod between the family's largest "
@@ -96,14 +97,21 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
                                f"those edges are one rod each{spliced}, between hubs of the family made larger to take "
                                "what the rod cannot.")
             check = other
-    check = grow_tight_hubs(check, lambda p: design_net_plan(p, **kw), _rank)
-    check = in_window(widen_cones(check, lambda p: design_net_plan(p, **kw)), lambda p: design_net_plan(p, **kw))
+    check = _hardware_fitted(check, design)
     if not check.ok:
         why = slack_joints(check, None if last is check else last)
         if why:
             check.why = why + (" " + check.why if check.why else "")
             check.notes.append(why)
     return check
+
+
+def _hardware_fitted(check: NetCheck, design) -> NetCheck:
+    """The last steps of :func:`design_drawn_net`: hubs grown where their sockets' spacing keeps the
+    net from balancing, cones widened (or hubs grown) where rods turn too far, hubs resized where
+    rods leave the printed lengths; ``design`` designs a plan with the design's settings."""
+    check = grow_tight_hubs(check, design, _rank)
+    return in_window(widen_cones(check, design), design)
 
 
 def in_window(check: NetCheck, design, rounds: int = WINDOW_ROUNDS) -> NetCheck:

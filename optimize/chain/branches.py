@@ -305,8 +305,9 @@ def reach_start(chain: Chain, theta0: np.ndarray) -> np.ndarray | None:
     from scipy.optimize import minimize
 
     l = chain.lengths
-    lo = np.concatenate([[reach(chain.end_limits[0])[0]], chain.limits[:, 0]])
-    hi = np.concatenate([[reach(chain.end_limits[0])[1]], chain.limits[:, 1]])
+    first = reach(chain.end_limits[0])
+    lo = np.concatenate([[first[0]], chain.limits[:, 0]])
+    hi = np.concatenate([[first[1]], chain.limits[:, 1]])
     t0 = near(theta0[0], chain.end_limits[0]) if chain.end_limited[0] else theta0[0]
     x0 = np.clip(np.concatenate([[t0], np.diff(theta0)]), lo, hi)
 

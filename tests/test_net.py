@@ -117,6 +117,20 @@ def test_umbrella_ring_is_an_unstable_equilibrium_the_solver_leaves():
     assert res.energy < sym.energy
 
 
+
+def test_an_unstable_start_is_left_the_same_way_every_time():
+    """The umbrella ring's symmetric equilibrium is left along its most negative curvature,
+    which ARPACK finds from a start vector of its own: seeded, every solve of the same net
+    hangs it the same way (unseeded, two solves in one process came down with the buckled
+    ring turned 34.6 mm apart about half the time)."""
+    x, edges, lengths, _ = _umbrella(6, 50.0, 30.0)
+    masses = np.array([2.0] * 6 + [1.0] * 6)
+    nm = np.array([0] + [0.5] * 6)
+    runs = [solve_net(x, edges, lengths, masses, [0], node_masses=nm) for _ in range(4)]
+    assert all(r.escapes >= 1 and r.success and r.stable for r in runs)
+    for r in runs[1:]:
+        assert np.array_equal(r.positions, runs[0].positions)
+
 def test_lampshade_ring_hangs_in_tension():
     # a ring hung outward from N anchors on a wider circle: spokes and ring in tension
     N, Ra, R, h = 8, 80.0, 50.0, 40.0
@@ -387,3 +401,38 @@ def test_no_perturbed_starts_where_the_given_start_reaches_no_equilibrium():
     assert not res.success and said == [] and res.alternatives == []
     ok = solve_net(x, edges, [60, 55, 65], [1.0, 3.0, 0.5], [0, 1, 2], callback=said.append, **kw)
     assert ok.success and len(said) == 3  # (with the iterations, the perturbed starts run)
+
+
+def _standing_chain(tilt: float):
+    """Three rods hung from one anchor, started standing on it, ``tilt`` off the vertical."""
+    L = 40.0
+    x = np.array([[0, 0, 0], [tilt * L, 0, L], [2 * tilt * L, tilt * L, 2 * L], [0, 0, 3 * L]])
+    return Net.from_args(x, [[0, 1], [1, 2], [2, 3]], [L] * 3, [1.0, 2.0, 1.0], [0], node_masses=[0, 1.0, 0.5, 0.3])
+
+
+def test_a_descent_with_patience_stops_where_its_residual_stops_halving():
+    """The multi-start's perturbed starts stop where the KKT residual has not halved in
+    ``patience`` iterations (status 3): the chain standing a millionth off the vertical creeps
+    off its saddle (the residual grows for a hundred steps and more). Without patience the
+    same start runs on to hang straight down."""
+    from optimize.net.newton import descend, restore
+
+    net, start = _standing_chain(1e-6)
+    state = restore(net, start)[0]
+    out = descend(net, state, patience=40)
+    assert out.status == 3 and out.nit == 40
+    full = descend(net, state)
+    assert full.status == 0 and full.nit > 40
+    np.testing.assert_allclose(full.state.x, [[0, 0, 0], [0, 0, -40], [0, 0, -80], [0, 0, -120]], atol=1e-9 * 40)
+
+
+def test_perturbed_starts_that_stop_are_reported_on_a_small_net_too(monkeypatch):
+    """A perturbed start that stops without an equilibrium (here: no patience at all) is
+    counted in the message on a net of any size, not only on the big nets' limited starts."""
+    import optimize.net.solve as solve_mod
+
+    monkeypatch.setattr(solve_mod, "PERTURBED_PATIENCE", 0)
+    x, edges, lengths, _ = _umbrella()
+    res = solve_net(x, edges, lengths, np.array([2.0] * 6 + [1.0] * 6), [0], node_masses=[0] + [0.5] * 6, n_starts=3)
+    assert res.success and res.counts == [1] and res.alternatives == []
+    assert "2 of the multi-start's 2 perturbed start(s) found no equilibrium" in res.message

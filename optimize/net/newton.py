@@ -192,7 +192,8 @@ def _negative_direction(net: Net, state: NetState, ev: NetEval, lam: np.ndarray)
     K = newton_matrix(net, hess, ev, gauge, 0.0, RHO, s_h)
     bound = float(abs(K).sum(axis=1).max())
     try:
-        vals, vecs = eigsh(K, k=1, sigma=-2 * bound, which="LM", maxiter=2000)
+        v0 = np.random.default_rng(0).standard_normal(K.shape[0])  # (ARPACK's own start is random)
+        vals, vecs = eigsh(K, k=1, sigma=-2 * bound, which="LM", maxiter=2000, v0=v0)
     except Exception:  # noqa: BLE001 - ARPACK's failures are many; no direction then
         return None
     if vals[0] >= 0:
@@ -285,8 +286,12 @@ def _project(net: Net, state: NetState, fac: Factor, tol: float, max_iter: int =
     return state, ev, ok
 
 
-def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int = 3) -> Outcome:
-    """From a feasible ``state``: Newton descent to a stable KKT point (see the module)."""
+def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int = 3,
+            patience: int | None = None) -> Outcome:
+    """From a feasible ``state``: Newton descent to a stable KKT point (see the module).
+
+    ``patience``: stop (status 3) when the KKT residual has not halved in this many
+    iterations (None: run to ``max_iter``)."""
     ev = evaluate(net, state)
     lam = multipliers(net, ev)
     kkt, r = kkt_residual(net, ev, lam)
@@ -296,6 +301,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     status = 1
     it = 0
     stall = 0
+    best = (kkt, 0)  # the last KKT residual that halved the one before it, and its iteration
     first = 1.0  # the line search's first step: up from the last one accepted (see below)
     while it < max_iter:
         if kkt <= TARGET or (kkt <= CONVERGED and stall >= 2):
@@ -310,6 +316,9 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
                     mu, stall = 0.0, 0
                     continue
             status = 0
+            break
+        if patience is not None and it - best[1] >= patience:
+            status = 3
             break
         it += 1
         hess = hessian(net, state, ev, lam)
@@ -364,6 +373,8 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
         lam = multipliers(net, ev)
         kkt, r = kkt_residual(net, ev, lam)
         stall = stall + 1 if kkt > 0.5 * old else 0
+        if kkt <= 0.5 * best[0]:
+            best = (kkt, it)
         mu = mu / 10 if mu > 1e-6 else 0.0
     if status == 1 and kkt <= CONVERGED:
         status = 0

@@ -210,12 +210,20 @@ PERTURBED_RESTORE = 60
 PERTURBED_ITER = 100
 
 
-def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200):
-    """(Outcome or None, restoration iterations) from one start."""
+#: A perturbed start of the multi-start whose KKT residual has not halved in this many Newton
+#: iterations stops there (it counts as a start that found no equilibrium): such a descent
+#: creeps (a step a hundred-thousandth of Newton's, a degenerate point it cannot leave) and
+#: would run to the iteration limit.
+PERTURBED_PATIENCE = 40
+
+
+def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200, perturbed: bool = False):
+    """(Outcome or None, restoration iterations) from one start; a perturbed start of the
+    multi-start stops where it stops making progress (:data:`PERTURBED_PATIENCE`)."""
     state, ev, ok, nres = restore(net, start, max_iter=max_restore)
     if not ok:
         return None, nres
-    out = descend(net, state, max_iter=max_iter)
+    out = descend(net, state, max_iter=max_iter, patience=PERTURBED_PATIENCE if perturbed else None)
     out.nrestore = nres
     return out, nres
 
@@ -379,6 +387,8 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
             moved by ``start_scale`` x the mean rod length, bodies turned by that many
             radians, at random); the distinct stable equilibria go to ``alternatives``. Where
             the given start (and the sag) reach no equilibrium, the perturbed ones are not tried.
+            A perturbed start stops where its KKT residual stops halving
+            (:data:`PERTURBED_PATIENCE`); the message says how many found no equilibrium.
         seed: seed of the perturbations (same seed, same result).
         node_com: (n, 3) node bodies' centres of mass from the node point, body frame.
         pivots: (m, 2, 3) each rod's pivot at node i and at node j, from the node point in
@@ -430,8 +440,8 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
             callback(f"multi-start: start {k + 2} of {n_starts} (a perturbed shape)")
         o, _ = _solve_from(net, _perturbed(net, start, rng, start_scale),
                            min(max_iter, PERTURBED_ITER) if big else max_iter,
-                           PERTURBED_RESTORE if big else 200)
-        if big and (o is None or o.status != 0):
+                           PERTURBED_RESTORE if big else 200, perturbed=True)
+        if o is None or o.status != 0:
             lost += 1
         if o is None:
             continue

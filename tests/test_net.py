@@ -436,3 +436,19 @@ def test_perturbed_starts_that_stop_are_reported_on_a_small_net_too(monkeypatch)
     res = solve_net(x, edges, lengths, np.array([2.0] * 6 + [1.0] * 6), [0], node_masses=[0] + [0.5] * 6, n_starts=3)
     assert res.success and res.counts == [1] and res.alternatives == []
     assert "2 of the multi-start's 2 perturbed start(s) found no equilibrium" in res.message
+
+
+def test_patience_counts_from_an_escape_from_an_unstable_equilibrium():
+    """The umbrella ring's start is an unstable equilibrium (its residual at round-off): the
+    descent leaves it and then falls with a residual far above that for a few iterations.
+    Patience counts from the escape, so a short one (5) still ends at the same stable shape
+    (counted from the start's round-off residual, it stopped after 5 iterations)."""
+    from optimize.net.model import Net
+    from optimize.net.newton import descend, restore
+
+    x, edges, lengths, _ = _umbrella(6, 50.0, 30.0)
+    net, start = Net.from_args(x, edges, lengths, np.array([2.0] * 6 + [1.0] * 6), [0], node_masses=[0] + [0.5] * 6)
+    state = restore(net, start)[0]
+    free, patient = descend(net, state), descend(net, state, patience=5)
+    assert free.status == 0 and free.escapes >= 1
+    assert patient.status == 0 and np.array_equal(patient.state.x, free.state.x)

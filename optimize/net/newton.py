@@ -314,6 +314,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
                     lam = multipliers(net, ev)
                     kkt, r = kkt_residual(net, ev, lam)
                     mu, stall = 0.0, 0
+                    best = (kkt, it)  # (patience counts from the escape: a new descent)
                     continue
             status = 0
             break

@@ -301,7 +301,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     status = 1
     it = 0
     stall = 0
-    best = (kkt, 0)  # the last KKT residual that halved the one before it, and its iteration
+    best = (kkt, 0)  # (KKT residual, iteration) where it last fell to half the mark before
     first = 1.0  # the line search's first step: up from the last one accepted (see below)
     while it < max_iter:
         if kkt <= TARGET or (kkt <= CONVERGED and stall >= 2):

@@ -50,6 +50,16 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
+def _first_rows(a: np.ndarray) -> np.ndarray:
+    """Indices, in order, of the rows of ``a`` that equal no earlier row (NumPy's
+    ``np.unique(a, axis=0, return_index=True)`` sorted, without its structured-dtype sort)."""
+    order = np.lexsort(a.T[::-1])  # stable: equal rows keep their order
+    rows = a[order]
+    first = np.ones(len(a), dtype=bool)
+    first[1:] = (rows[1:] != rows[:-1]).any(axis=1)
+    return np.sort(order[first])
+
+
 class _Outline:
     """The rod's plane primitives, their membership tests and the bands' boundaries."""
 
@@ -114,13 +124,13 @@ class _Outline:
         for r in self.radii:
             for p, _, _ in self.frames:
                 arcs.append((p[0], p[1], r, 0.0, TAU))
-        # coincident curves would count twice: keep one of each
-        ends = np.array([np.concatenate(sorted(s, key=tuple)) for s in segs])
-        keep = np.sort(np.unique(ends.round(12), axis=0, return_index=True)[1])
-        self.A = np.array([segs[i][0] for i in keep])
-        self.B = np.array([segs[i][1] for i in keep])
+        # coincident curves would count twice: keep one of each (its ends in either order)
+        P, Q = np.array([s[0] for s in segs]), np.array([s[1] for s in segs])
+        swap = ((Q[:, 0] < P[:, 0]) | ((Q[:, 0] == P[:, 0]) & (Q[:, 1] < P[:, 1])))[:, None]
+        keep = _first_rows(np.hstack([np.where(swap, Q, P), np.where(swap, P, Q)]).round(12))
+        self.A, self.B = P[keep], Q[keep]
         arcs_a = np.array(arcs)
-        self.arcs = arcs_a[np.sort(np.unique(arcs_a.round(12), axis=0, return_index=True)[1])]
+        self.arcs = arcs_a[_first_rows(arcs_a.round(12))]
         a_half, gap, t = hg.tongue_thickness / 2, hg.layer_gap, g.thickness
         self.a, self.gap = a_half, gap
         m = min(t, g.body_t) / 2 if grad else t / 2
@@ -269,8 +279,8 @@ class _Outline:
         mid_a = C[ai] + R[ai][:, None] * cs
         mid = np.concatenate([mid_s, mid_a])
         nrm = np.concatenate([nrm_s, -cs])
-        left = self.inside(*(mid + SIDE * nrm).T)
-        right = self.inside(*(mid - SIDE * nrm).T)
+        both = self.inside(*np.concatenate([mid + SIDE * nrm, mid - SIDE * nrm]).T)
+        left, right = both[:, :len(mid)], both[:, len(mid):]
         orient = left.astype(np.int8) - right.astype(np.int8)  # (3, pieces)
         ns = len(si)
         self.seg_pieces = (si, sa, sb, orient[:, :ns])

@@ -21,7 +21,9 @@ Units: mm, 1/mm, g, deg.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 from rodcad.catalog.model import Catalog, RodType
@@ -40,15 +42,20 @@ class ScaleChoice:
     Attributes:
         scale: the chosen scale: where the wanted mass is nearest the middle of the rod's
             mass range (the middle grows with the scale).
-        scales: (lowest, highest) scale at which the wanted mass lies in the rod's range.
         rod: the rod at ``scale``.
         numbers: its solid mass, centre of mass and mass range.
+        scales: (lowest, highest) scale at which the wanted mass lies in the rod's range,
+            found when first asked (two more bisections).
     """
 
     scale: float
-    scales: tuple[float, float]
     rod: RodType
     numbers: RodNumbers
+    bounds: Callable[[], tuple[float, float]] = field(repr=False, compare=False)
+
+    @cached_property
+    def scales(self) -> tuple[float, float]:
+        return self.bounds()
 
 
 def numbers_at(catalog: Catalog, family: str, table: MassTable, length: float, scale: float,
@@ -93,7 +100,10 @@ def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: floa
     no scale of its range reaches it (see :func:`mass_span`).
 
     The chosen scale puts ``mass`` nearest the middle of the rod's range (cavities and balls
-    then have room either way); :attr:`ScaleChoice.scales` is every scale whose range holds it.
+    then have room either way): where the middle of the range crosses ``mass``, by one
+    bisection over the scale range. Where the range there does not hold ``mass`` (the range
+    jumps where the mass table's scales are), the crossing is sought again between the
+    lowest and the highest scale whose range holds it (:attr:`ScaleChoice.scales`).
     """
     s_lo, s_hi = catalog.scale_range(family, length, curvature, **ends)
 
@@ -107,13 +117,24 @@ def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: floa
     lo_range, hi_range = rng(s_lo), rng(s_hi)
     if mass < lo_range[0] or mass > hi_range[1]:
         return None
-    a = s_lo if mass <= lo_range[1] else _bisect(lambda s: rng(s)[1] - mass, s_lo, s_hi)
-    b = s_hi if mass >= hi_range[0] else _bisect(lambda s: rng(s)[0] - mass, s_lo, s_hi)
-    if a > b:  # a gap between the ranges of neighbouring scales (not expected)
-        return None
+
+    def holds(s: float) -> bool:
+        m0, m1 = rng(s)
+        return m0 - 1e-9 <= mass <= m1 + 1e-9
+
+    def bounds() -> tuple[float, float]:
+        a = s_lo if mass <= lo_range[1] else _bisect(lambda s: rng(s)[1] - mass, s_lo, s_hi)
+        b = s_hi if mass >= hi_range[0] else _bisect(lambda s: rng(s)[0] - mass, s_lo, s_hi)
+        return a, b
+
     mid = lambda s: sum(rng(s)) / 2 - mass  # noqa: E731
-    s = a if mid(a) >= 0 else b if mid(b) <= 0 else _bisect(mid, a, b)
+    s = s_lo if mid(s_lo) >= 0 else s_hi if mid(s_hi) <= 0 else _bisect(mid, s_lo, s_hi)
+    if not holds(s):
+        a, b = bounds()
+        if a > b:  # a gap between the ranges of neighbouring scales (not expected)
+            return None
+        s = a if mid(a) >= 0 else b if mid(b) <= 0 else _bisect(mid, a, b)
+        if not holds(s):
+            return None
     rod, nums = numbers_at(catalog, family, table, length, s, curvature, **ends)
-    if not nums.mass_range[0] - 1e-9 <= mass <= nums.mass_range[1] + 1e-9:
-        return None
-    return ScaleChoice(s, (a, b), rod, nums)
+    return ScaleChoice(s, rod, nums, bounds)

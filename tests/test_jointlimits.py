@@ -169,9 +169,9 @@ def test_a_pair_takes_few_full_tests():
     calls = [0]
     full = jl._Pair.overlaps
 
-    def counted(self, phi):
+    def counted(self, phi, near=None):
         calls[0] += 1
-        return full(self, phi)
+        return full(self, phi, near)
 
     jl._Pair.overlaps = counted
     try:
@@ -180,3 +180,21 @@ def test_a_pair_takes_few_full_tests():
         jl._Pair.overlaps = full
     assert got == _plain_march(g, g) and math.isfinite(got[1])
     assert calls[0] < 120
+
+
+@pytest.mark.parametrize("name", ["arc-30", "straight-40"])
+def test_the_samples_near_a_contact_decide_as_all_of_them(name):
+    """The bisection tests only the samples that can reach the other outline within its
+    bracket (:meth:`_Pair.near`): over the degree before each contact, and past it, they
+    overlap exactly where all the samples do, and they are a small part of them."""
+    g = load_catalog("pla-pinned")[name].geometry
+    pair = jl._Pair(g, g)
+    for limit, sign in zip(joint_limits(g, g), (-1.0, 1.0)):
+        if limit is None:
+            continue
+        contact = limit + sign * jl.SAFETY_DEG
+        a, b = contact - sign * 1.0, contact + sign * 0.5
+        near = pair.near(a, b - a)
+        assert 0 < len(near[0]) + len(near[1]) < 0.2 * (len(pair.right_pts) + len(pair.left_pts))
+        decided = [(pair.overlaps(m, near), pair.overlaps(m)) for m in np.linspace(a, b, 61)]
+        assert all(x == y for x, y in decided) and decided[0] == (False, False) and decided[-1] == (True, True)

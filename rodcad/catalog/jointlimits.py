@@ -426,14 +426,37 @@ class _Pair:
         right = np.array([[-c, -s], [-s, c]])  # x = -forward, y = forward turned +90 deg
         return left, right
 
-    def overlaps(self, phi_deg: float) -> bool:
+    def overlaps(self, phi_deg: float, near: tuple[np.ndarray, np.ndarray] | None = None) -> bool:
+        """Whether the outlines overlap at the bend ``phi_deg``: a boundary sample of one lies
+        inside the other (with ``near``, :meth:`near`'s samples only)."""
         left, right = self._axes(math.radians(phi_deg))
+        right_pts, left_pts = (self.right_pts, self.left_pts) if near is None else near
         # right corners into the left frame, and left corners into the right frame
-        r_in_l = (self.right_pts @ right) @ left.T
+        r_in_l = (right_pts @ right) @ left.T
         if _inside(self.left, self.left_box, r_in_l):
             return True
-        l_in_r = (self.left_pts @ left) @ right.T
+        l_in_r = (left_pts @ left) @ right.T
         return _inside(self.right, self.right_box, l_in_r)
+
+    def near(self, phi_deg: float, sweep_deg: float) -> tuple[np.ndarray, np.ndarray]:
+        """The boundary samples (right's, left's) that can lie inside the other outline at a
+        bend between ``phi_deg`` and ``phi_deg + sweep_deg``: those within the arc the turn moves
+        them about the axis (radius x turn) of the other outline at ``phi_deg``. A sample left
+        out lies inside at no such bend, so :meth:`overlaps` on these decides as on all."""
+        left, right = self._axes(math.radians(phi_deg))
+        turn = math.radians(abs(sweep_deg))
+        kept = []
+        for pts, outline, box, to_other in ((self.right_pts, self.left, self.left_box, lambda q: (q @ right) @ left.T),
+                                            (self.left_pts, self.right, self.right_box, lambda q: (q @ left) @ right.T)):
+            grow = outline.growth * (np.hypot(pts[:, 0], pts[:, 1]) * turn + 1e-9)
+            q = to_other(pts)
+            (x0, y0), (x1, y1) = box
+            keep = np.flatnonzero((q[:, 0] >= x0 - grow) & (q[:, 0] <= x1 + grow)
+                                  & (q[:, 1] >= y0 - grow) & (q[:, 1] <= y1 + grow))
+            if keep.size:
+                keep = keep[outline.contains(q[keep], -grow[keep])]
+            kept.append(pts[keep])
+        return kept[0], kept[1]
 
 
     def clear_over(self, phi_deg: float, sweep_deg: float = 0.0) -> bool:
@@ -495,9 +518,10 @@ def _contact(pair: _Pair, start: float, direction: float, bound: float) -> float
         if not pair.clear_over(b) and pair.overlaps(b):
             break
         a = b
+    near = pair.near(a, b - a)  # the samples that can meet within the bracket
     while abs(b - a) > BISECT_DEG:
         m = (a + b) / 2
-        if pair.overlaps(m):
+        if pair.overlaps(m, near):
             b = m
         else:
             a = m

@@ -215,10 +215,13 @@ def decide(catalog: Catalog, pf: PrintedFamily, points: np.ndarray, lengths: np.
             stops.update({j: v for j, v in robust[0].stops.items() if j not in stops})
             ends.update({k: v for k, v in robust[0].ends.items() if k not in ends})
         lay = dict(limits=True, same=same, end_limits=end_limits_for(points, ends, end_limits), fused=fused)
-        laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, spans=graded, **lay)
         if graded:  # each rod's scale for the mass the statics give it, then its own numbers
-            laid = _graded(catalog, pf, laid, lambda sc: lay_rods(catalog, pf, points, lengths, kappa, phi, stops,
-                                                                   scales=sc, **lay), mirrored)
+            laid = _graded(catalog, pf, lambda limits: lay_rods(catalog, pf, points, lengths, kappa, phi, stops,
+                                                                spans=True, **{**lay, "limits": limits}),
+                           lambda sc: lay_rods(catalog, pf, points, lengths, kappa, phi, stops, scales=sc, **lay),
+                           mirrored)
+        else:
+            laid = lay_rods(catalog, pf, points, lengths, kappa, phi, stops, **lay)
         verdict = masses = None
         if allowed.verify and n > 1:
             if report is not None:
@@ -273,16 +276,26 @@ GRADE_ROUNDS = 3
 GRADE_NFEV = 100
 
 
-def _graded(catalog: Catalog, pf: PrintedFamily, spans: Laid, lay, mirrored: bool) -> Laid:
+def _graded(catalog: Catalog, pf: PrintedFamily, lay_spans, lay, mirrored: bool) -> Laid:
     """The rods at the scales their masses need: the masses from the statics over each rod's
     span of scales, each rod's scale for its mass (:func:`rodcad.design.laying.graduate`),
     then the masses again with the rods' own centres of mass and ranges, until every mass
-    lies in its rod's range (at most :data:`GRADE_ROUNDS` times)."""
-    problem, laid = spans.problem, spans
+    lies in its rod's range (at most :data:`GRADE_ROUNDS` times).
+
+    ``lay_spans(limits)`` lays the rods over their spans: the statics at the target see only
+    the stops (``limits`` False), the best fit's simulations the rods' own limits too (True,
+    laid only when no masses balance the target: the joint limits of rods that are not
+    printed are most of the work)."""
+    spans = lay_spans(False)
+    problem = spans.problem
+    limited = None
     for _ in range(GRADE_ROUNDS):
         masses, _, reachable, _ = exact_masses(problem)
         if not reachable:  # the best fit over the spans (the scales then hold its masses)
-            masses = design(problem, "refine", max_nfev=GRADE_NFEV).masses
+            if limited is None:
+                limited = lay_spans(True)
+            masses = design(dataclasses.replace(limited.problem, com=problem.com), "refine",
+                            max_nfev=GRADE_NFEV).masses
         if mirrored:  # a symmetric target's rods in mirror pairs, as its stops
             masses = (masses + masses[::-1]) / 2
         laid = lay(tuple(graduate(catalog, pf, spans, masses)))

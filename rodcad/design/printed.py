@@ -413,10 +413,11 @@ def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: Printed
         if length <= 1.05 * mean:
             continue
         try:
+            lay = one_shell if kw.get("same_shell") else _laid_on
+            if lay(curve, pf.family.ranges, length)[0].lengths.size in seen:
+                continue  # the same rods as a length already tried (as plan_printed lays them)
             p = plan_printed(curve, catalog, pf, preferred_length=length, **kw)
         except ValueError:
-            continue
-        if len(p.rods) in seen:  # the same rods as a length already tried
             continue
         seen.add(len(p.rods))
         v = p.verified[1] if p.verified is not None else None

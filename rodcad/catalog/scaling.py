@@ -21,6 +21,7 @@ Units: mm, 1/mm, g, deg.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -29,10 +30,12 @@ from typing import Any
 from rodcad.catalog.model import Catalog, RodType
 from rodcad.catalog.printed import MassTable, RodNumbers, rod_numbers
 
-__all__ = ["ScaleChoice", "mass_span", "numbers_at", "scale_for_mass", "SCALE_TOL"]
+__all__ = ["ScaleChoice", "mass_span", "numbers_at", "scale_for_mass", "SCALE_GRID"]
 
-#: Bisection tolerance on the scale.
-SCALE_TOL = 1e-5
+#: Scales are chosen on a grid of 1 / SCALE_GRID (the range's ends too): a thousandth, 16 um
+#: on a 16 mm section, below what a printer resolves; the rods' names round the scale to it, so
+#: two rods of one name and length are one solid.
+SCALE_GRID = 1000
 
 
 @dataclass(frozen=True)
@@ -80,18 +83,22 @@ def mass_span(catalog: Catalog, family: str, table: MassTable, length: float, cu
 
 
 def _bisect(f: Any, lo: float, hi: float) -> float:
-    """The scale in [lo, hi] where the increasing ``f`` crosses 0 (f(lo) < 0 <= f(hi)).
+    """The first scale of the grid between lo and hi (lo, the grid's points strictly between,
+    hi) at which the increasing ``f`` is not negative (f(lo) < 0 <= f(hi)), by halving.
 
     Halving, not a faster root finder: a rod's mass range is not a smooth function of its scale
     (ball sockets come in whole numbers), and Brent's method found another crossing (the
     semicircle's 22 g rods at scale 1.189 instead of 1.271)."""
-    while hi - lo > SCALE_TOL:
-        mid = (lo + hi) / 2
-        if f(mid) < 0:
-            lo = mid
+    k0, k1 = math.floor(lo * SCALE_GRID + 1e-9) + 1, math.ceil(hi * SCALE_GRID - 1e-9) - 1
+    points = [lo, *(k / SCALE_GRID for k in range(k0, k1 + 1)), hi]
+    a, b = 0, len(points) - 1
+    while b - a > 1:
+        m = (a + b) // 2
+        if f(points[m]) < 0:
+            a = m
         else:
-            hi = mid
-    return hi
+            b = m
+    return points[b]
 
 
 def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: float, mass: float,

@@ -136,6 +136,8 @@ def test_scale_for_a_mass(cat) -> None:
         assert m0 - 1e-9 <= mass <= m1 + 1e-9
         assert choice.scales[0] <= choice.scale <= choice.scales[1]
         assert choice.rod.scale == choice.scale
+        # on the grid of a thousandth the rods' names round to, or an end of the scale range
+        assert abs(choice.scale * 1000 - round(choice.scale * 1000)) < 1e-9 or choice.scale in cat.scale_range("rod", 45.0, 0.01)
     assert scale_for_mass(cat, "rod", table, 45.0, hi * 1.01, 0.01) is None
     # the chosen scale puts the mass nearest the middle: a slightly other scale is further off
     choice = scale_for_mass(cat, "rod", table, 45.0, (lo + hi) / 2, 0.01)

@@ -450,9 +450,7 @@ class _Pair:
                                             (self.left_pts, self.right, self.right_box, lambda q: (q @ left) @ right.T)):
             grow = outline.growth * (np.hypot(pts[:, 0], pts[:, 1]) * turn + 1e-9)
             q = to_other(pts)
-            (x0, y0), (x1, y1) = box
-            keep = np.flatnonzero((q[:, 0] >= x0 - grow) & (q[:, 0] <= x1 + grow)
-                                  & (q[:, 1] >= y0 - grow) & (q[:, 1] <= y1 + grow))
+            keep = np.flatnonzero(_in_box(q, box, grow))
             if keep.size:
                 keep = keep[outline.contains(q[keep], -grow[keep])]
             kept.append(pts[keep])
@@ -496,8 +494,15 @@ def _inside(outline: EndOutline, box: tuple[np.ndarray, np.ndarray], pts: np.nda
         near = pts[(x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)]
         return bool(near.size and outline.meets(near))
     g = np.broadcast_to(np.asarray(grow, float), pts.shape[:1])
-    keep = (x >= x0 - g) & (x <= x1 + g) & (y >= y0 - g) & (y <= y1 + g)
+    keep = _in_box(pts, box, g)
     return bool(keep.any() and outline.meets(pts[keep], -g[keep]))
+
+
+def _in_box(pts: np.ndarray, box: tuple[np.ndarray, np.ndarray], grow: np.ndarray) -> np.ndarray:
+    """Which points lie in the box grown by ``grow`` (per point, mm) on every side."""
+    (x0, y0), (x1, y1) = box
+    x, y = pts[:, 0], pts[:, 1]
+    return (x >= x0 - grow) & (x <= x1 + grow) & (y >= y0 - grow) & (y <= y1 + grow)
 
 
 def _contact(pair: _Pair, start: float, direction: float, bound: float) -> float | None:

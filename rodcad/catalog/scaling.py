@@ -114,12 +114,15 @@ def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: floa
     """
     s_lo, s_hi = catalog.scale_range(family, length, curvature, **ends)
 
-    seen: dict[float, tuple[float, float]] = {}
+    seen: dict[float, tuple[RodType, RodNumbers]] = {}
+
+    def at(s: float) -> tuple[RodType, RodNumbers]:
+        if s not in seen:
+            seen[s] = numbers_at(catalog, family, table, length, s, curvature, **ends)
+        return seen[s]
 
     def rng(s: float) -> tuple[float, float]:
-        if s not in seen:
-            seen[s] = numbers_at(catalog, family, table, length, s, curvature, **ends)[1].mass_range
-        return seen[s]
+        return at(s)[1].mass_range
 
     lo_range, hi_range = rng(s_lo), rng(s_hi)
     if mass < lo_range[0] or mass > hi_range[1]:
@@ -143,5 +146,5 @@ def scale_for_mass(catalog: Catalog, family: str, table: MassTable, length: floa
         s = a if mid(a) >= 0 else b if mid(b) <= 0 else _bisect(mid, a, b)
         if not holds(s):
             return None
-    rod, nums = numbers_at(catalog, family, table, length, s, curvature, **ends)
+    rod, nums = at(s)
     return ScaleChoice(s, rod, nums, bounds)

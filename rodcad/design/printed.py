@@ -119,6 +119,11 @@ def _at_resolution(disc, res: float, bounds: tuple[float, float]):
     return _replace(disc, points=points, lengths=lengths, joint_error=max(disc.joint_error, moved))
 
 
+def _layout(curve: np.ndarray, r, preferred: float | None, same_shell: bool):
+    """(discretization, curvatures) of the rods :func:`plan_printed` lays on ``curve``."""
+    return one_shell(curve, r, preferred) if same_shell else _laid_on(curve, r, preferred)
+
+
 def _laid_on(curve: np.ndarray, r, preferred: float | None):
     """Joints and curvatures: at the preferred length, or the longest rods that follow the
     curve within :data:`rodcad.design.shell.FOLLOW_REL` of the span (the rods' arcs against
@@ -151,7 +156,7 @@ def _laid_on(curve: np.ndarray, r, preferred: float | None):
 def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, preferred_length: float | None = None,
                  stops_allowed: bool = True, same_shell: bool = False, anchor_stops: bool = True,
                  end_limits: np.ndarray | None = None, fuse: str = "auto", n_starts: int = 12, seed: int = 0,
-                 report=None, robust: tuple[float, float, float, float] | None = None):
+                 report=None, robust: tuple[float, float, float, float] | None = None, layout=None):
     """Lay rods printed to order on a target (see the module's docstring); how each joint
     holds its bend is decided, and checked, by :func:`rodcad.design.decide.decide`.
 
@@ -172,6 +177,8 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
         n_starts, seed: the multi-start of the planner's checks.
         report: called with a line of progress now and then (or None).
         robust: design option ``robust`` (:attr:`rodcad.design.decide.Allowed.robust`), or None.
+        layout: the rods' (discretization, curvatures) for these arguments when the caller has
+            them already (:func:`_layout`), or None.
 
     Returns:
         The :class:`PrintedPlan`.
@@ -184,7 +191,7 @@ def plan_printed(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, *, pref
     r = fam.ranges
     assert r is not None
     curve = np.asarray(curve, float)
-    disc, kappa = one_shell(curve, r, preferred_length) if same_shell else _laid_on(curve, r, preferred_length)
+    disc, kappa = _layout(curve, r, preferred_length, same_shell) if layout is None else layout
     points, lengths = disc.points, disc.lengths
     d = np.diff(points, axis=0)
     phi = np.diff(np.unwrap(np.arctan2(d[:, 1], d[:, 0])))
@@ -413,10 +420,10 @@ def freest(curve: np.ndarray, catalog: Catalog, pf: PrintedFamily, plan: Printed
         if length <= 1.05 * mean:
             continue
         try:
-            lay = one_shell if kw.get("same_shell") else _laid_on
-            if lay(curve, pf.family.ranges, length)[0].lengths.size in seen:
-                continue  # the same rods as a length already tried (as plan_printed lays them)
-            p = plan_printed(curve, catalog, pf, preferred_length=length, **kw)
+            layout = _layout(curve, pf.family.ranges, length, bool(kw.get("same_shell")))
+            if layout[0].lengths.size in seen:
+                continue  # the same rods as a length already tried
+            p = plan_printed(curve, catalog, pf, preferred_length=length, layout=layout, **kw)
         except ValueError:
             continue
         seen.add(len(p.rods))

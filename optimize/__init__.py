@@ -20,7 +20,7 @@ from optimize.chain.tolerance import MassBand, mass_band
 from optimize.distance import ShapeDistance, shape_distance
 from optimize.net.design import NetDesign, design_net, shape_jacobian
 from optimize.net.modes import NetModes, net_modes
-from optimize.net.solve import NET_MESSAGES, NetResult, pivots_by_node, pivots_from_nodes, solve_net
+from optimize.net.solve import NET_MESSAGES, NetResult, more_starts, pivots_by_node, pivots_from_nodes, solve_net
 from optimize.net.statics import NetMassDesign, NetStatics, design_net_masses, net_statics
 
 __all__ = [
@@ -54,6 +54,7 @@ __all__ = [
     "friction_capacity",
     "joint_forces",
     "mass_band",
+    "more_starts",
     "shape_distance",
     "shape_jacobian",
     "solve_equilibrium",

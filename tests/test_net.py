@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from netgen import grid_net, jitter, radial_net, random_grid, random_masses
 
-from optimize import net_modes, solve_net
+from optimize import more_starts, net_modes, solve_net
 from optimize.net.solve import pivots_by_node, pivots_from_nodes
 from optimize.net.deriv import assemble, evaluate, hessian, rod_frames
 from optimize.net.model import Net, rotation_exp
@@ -307,6 +307,24 @@ def test_rod_frames_hang_each_centre_of_mass_lowest():
     assert np.allclose(np.sum(offset * F[:, 0], axis=1), 0, atol=1e-12)
     r = np.abs(com[:, 1])
     assert np.allclose(offset[:, 2], -r * np.sqrt(1 - F[:, 0, 2] ** 2), atol=1e-12)
+
+
+def test_more_starts_after_one_start_is_the_multistart_itself():
+    # the planner solves each way of building a net from its target alone, then runs the
+    # multi-start on the one it keeps: the same shapes, counts and message as a multi-start
+    x, edges, lengths, _ = _umbrella()
+    masses = np.array([2.0] * 6 + [1.0] * 6)
+    kw = dict(node_masses=np.array([0] + [0.5] * 6))
+    whole = solve_net(x, edges, lengths, masses, [0], n_starts=6, seed=3, **kw)
+    one = solve_net(x, edges, lengths, masses, [0], **kw)
+    later = more_starts(one, x, edges, lengths, masses, [0], n_starts=6, seed=3, **kw)
+    assert whole.alternatives, "the umbrella has other stable shapes for this test to compare"
+    assert one.n_starts == 1 and one.alternatives == [] and one.counts == [1]  # (left as it was)
+    assert later.n_starts == whole.n_starts == 6 and later.counts == whole.counts
+    assert later.message == whole.message and np.array_equal(later.positions, whole.positions)
+    assert [a.energy for a in later.alternatives] == [a.energy for a in whole.alternatives]
+    for p, q in zip(later.alternatives, whole.alternatives):
+        assert np.array_equal(p.positions, q.positions)
 
 
 def test_a_flat_start_with_longer_rods_hangs():

@@ -22,7 +22,7 @@ from net_settle import settle_from_other_masses
 from rodcad.catalog.loader import catalog_from_text, load_catalog
 from rodcad.catalog.paths import default_catalog_dir
 from rodcad.design.loader import load_design
-from rodcad.design.net.check import design_net_plan
+from rodcad.design.net.check import design_net_plan, with_multistart
 from rodcad.design.net.choose import design_drawn_net, slack_joints
 from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
@@ -127,6 +127,24 @@ def test_drawn_edges_get_joints_at_their_funicular_sag_and_are_spliced_where_tho
 
 
 # --------------------------------------------------------------------------- the hub family
+
+
+def test_the_kept_design_gets_the_multistart_it_would_have_had(cat):
+    """The planner solves each way of building a drawn net from its target alone and runs the
+    multi-start only on the design it keeps (rodcad.design.net.check.with_multistart): the
+    result is the kept plan designed with the whole multi-start."""
+    n = 8
+    x = np.linspace(0, 1, n + 1)
+    pts = np.column_stack([40.0 * n * x, 0 * x, -80.0 * (1 - (2 * x - 1) ** 2)])
+    target = NetTarget("nodes", pts, np.column_stack([np.arange(n), np.arange(1, n + 1)]), np.array([0, n]))
+    kept = design_drawn_net(target, cat, seed=0)
+    whole = design_net_plan(kept.planned, seed=0)
+    a, b = kept.equilibrium, whole.equilibrium
+    assert a.n_starts == b.n_starts == 8 and a.counts == b.counts and sum(a.counts) >= 1
+    assert a.message == b.message and np.array_equal(a.positions, b.positions)
+    assert [q.energy for q in a.alternatives] == [q.energy for q in b.alternatives]
+    assert kept.notes[:len(whole.notes)] == whole.notes and kept.design.message == whole.design.message
+    assert with_multistart(whole) is whole  # (made with as many starts already)
 
 
 def test_a_slack_diagonal_whose_joint_cannot_hang_is_one_rod_between_larger_hubs():

@@ -17,6 +17,7 @@ Example:
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,7 +28,8 @@ from optimize.net.deriv import evaluate, rod_frames
 from optimize.net.model import Net, NetState
 from optimize.net.newton import CONVERGED, descend, is_stable, kkt_residual, restore
 
-__all__ = ["NET_MESSAGES", "NetResult", "net_sag_guess", "pivots_by_node", "pivots_from_nodes", "solve_net"]
+__all__ = ["NET_MESSAGES", "NetResult", "more_starts", "net_sag_guess", "pivots_by_node", "pivots_from_nodes",
+           "solve_net"]
 
 #: Status codes and their messages (one table, as in scipy.optimize).
 NET_MESSAGES = {
@@ -424,6 +426,29 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
         if sag is not None and (out is None or sag.status == 0):
             out = sag
     first = _result(net, out) if out is not None else _failed(net, start, nres)
+    return _multistart(net, start, first, n_starts, seed, start_scale, max_iter, tol, callback)
+
+
+def more_starts(first: NetResult, node_positions0, edges, lengths, masses, anchored, *, n_starts: int,
+                seed: int | None = 0, node_masses=None, com=None, g: float = 9.81, node_com=None, pivots=None,
+                node_rotations0=None, start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7,
+                callback=None) -> NetResult:
+    """The multi-start of :func:`solve_net` run after a one-start solve: ``first`` is
+    ``solve_net(...)``'s result with these same arguments and ``n_starts=1``, and the result is
+    what ``solve_net(..., n_starts=n_starts, seed=seed)`` returns (the same perturbed starts),
+    without descending from the given start again. A planner that designs a net several ways
+    solves each from its target alone, then asks this of the design it keeps. ``first`` itself
+    is left as it was."""
+    net, start = Net.from_args(node_positions0, edges, lengths, masses, anchored, node_masses=node_masses, com=com,
+                               g=g, node_com=node_com, pivots=pivots, node_rotations0=node_rotations0)
+    first = dataclasses.replace(first, alternatives=[], counts=[])
+    return _multistart(net, start, first, n_starts, seed, start_scale, max_iter, tol, callback)
+
+
+def _multistart(net: Net, start: NetState, first: NetResult, n_starts: int, seed, start_scale: float,
+                max_iter: int, tol: float, callback) -> NetResult:
+    """``first`` (the equilibrium from ``start``) with the other stable equilibria that
+    ``n_starts - 1`` seeded perturbations of ``start`` reach (:func:`solve_net`)."""
     first.n_starts = max(int(n_starts), 1)
     first.counts = [1]
     if n_starts <= 1 or not first.success:  # (no equilibrium from the start given: the verdict, whatever else is found)

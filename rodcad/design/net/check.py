@@ -28,7 +28,7 @@ from rodcad.design.net.hubs import buildable_bounds, orient_sockets
 from rodcad.design.net.plan import NetPlan, replan
 
 __all__ = ["BUCKLING_SAFETY", "FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts",
-           "settle_com"]
+           "settle_com", "with_multistart"]
 
 
 #: After the rods' bounds are narrowed to buildable masses, the sockets are turned again
@@ -97,6 +97,9 @@ class NetCheck:
         planned: the plan as it was given to :func:`design_net_plan` (before its sockets were
             turned and its bounds narrowed), or None.
         choices: the planner's choices around this design, in words (also in ``notes``).
+        solved_with: the arguments the equilibrium was solved with (:func:`optimize.solve_net`'s,
+            less its multi-start's), for :func:`with_multistart`.
+        others_at: where in ``notes`` the multi-start's other shapes are told.
     """
 
     plan: NetPlan
@@ -113,6 +116,8 @@ class NetCheck:
     why: str = ""
     planned: NetPlan | None = None
     choices: list[str] = field(default_factory=list)
+    solved_with: dict | None = field(default=None, repr=False)
+    others_at: int | None = field(default=None, repr=False)
 
     def chose(self, text: str) -> None:
         """A choice the planner made around this design (its joints hung, edges made one rod,
@@ -334,7 +339,8 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
                            callback=note, **kw)
         refine = not (probe.equilibrium.success and probe.equilibrium.stable and probe.rel_error <= REFINE_ABOVE)
     note("the masses designed" + (", refined through the solver" if refine else "")
-         + f", the net solved with a multi-start of {n_starts} start(s)")
+         + (f", the net solved with a multi-start of {n_starts} start(s)" if n_starts > 1 else
+            ", the net solved from the target"))
     design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
                         refine=refine, callback=note, statics=probe.statics if probe is not None else None, **kw)
     recheck = False
@@ -352,6 +358,10 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
             design = dataclasses.replace(design, equilibrium=res)
             plan = dataclasses.replace(plan, com=final)
             recheck = True
+    solved_with = dict(node_positions0=t.positions, edges=t.edges, lengths=plan.lengths, masses=design.masses,
+                       anchored=t.anchored, node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
+                       com=plan.com if recheck else plan.statics_com, g=g,
+                       node_rotations0=eq0.rotations if recheck and eq0.success else None)
     eq = design.equilibrium
     size = t.size
     if eq.success:
@@ -408,15 +418,56 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
         notes.append(f"The masses were refined through the solver from the statics' best fit "
                      f"({design.info.get('fit_error', float('nan')):.4g} mm -> "
                      f"{design.info.get('refined_error', float('nan')):.4g} mm).")
+    others_at = len(notes)
     if eq.alternatives:
-        notes.append(f"The multi-start ({n_starts} starts) found {len(eq.alternatives)} other stable shape(s)"
-                     + (", one hanging lower than the design's: a push may move the net there." if eq.lower else
-                        ", none lower than the design's."))
+        notes.append(_others(eq))
     if t.dropped:
         notes.append(f"{t.dropped} rod(s) between two anchored nodes were left out (the anchors hold both ends).")
     masses = np.asarray(design.masses, float)
     return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
-                    swing, time.perf_counter() - t0, notes, why, planned)
+                    swing, time.perf_counter() - t0, notes, why, planned, solved_with=solved_with,
+                    others_at=others_at)
+
+
+def _others(eq) -> str:
+    return (f"The multi-start ({eq.n_starts} starts) found {len(eq.alternatives)} other stable shape(s)"
+            + (", one hanging lower than the design's: a push may move the net there." if eq.lower else
+               ", none lower than the design's."))
+
+
+def with_multistart(check: NetCheck, n_starts: int | None = None, *, seed: int = 0, note=None) -> NetCheck:
+    """``check`` with the multi-start that looks for other stable shapes of its designed net,
+    for a check designed from its target alone (``design_net_plan(..., n_starts=1)``): the
+    same as designing it with ``n_starts`` (:func:`optimize.more_starts`). The planner designs a
+    drawn net several ways and keeps one; only that one's other shapes are reported, so only
+    its multi-start runs. A check already made with as many starts, or with no equilibrium,
+    comes back as it was.
+
+    Args:
+        check: the kept design.
+        n_starts: the multi-start's starts (None: :func:`net_starts`).
+        seed: its seed (the design's).
+        note: progress, as for :func:`design_net_plan`.
+    """
+    from optimize import more_starts
+
+    n = net_starts(check.plan.target.n) if n_starts is None else int(n_starts)
+    eq = check.equilibrium
+    if n <= eq.n_starts or not eq.success or check.solved_with is None:
+        return check
+    t0 = time.perf_counter()
+    with threadpool_limits(limits=1, user_api="blas"):
+        res = more_starts(eq, n_starts=n, seed=seed, callback=note, **check.solved_with)
+    message = check.design.message
+    if res.alternatives:
+        message += (f" The multi-start found {len(res.alternatives)} other stable shape(s)"
+                    + (", one lower than the design's." if res.lower else "."))
+    out = dataclasses.replace(check, design=dataclasses.replace(check.design, equilibrium=res, message=message),
+                              notes=list(check.notes), choices=list(check.choices),
+                              time_s=check.time_s + time.perf_counter() - t0)
+    if res.alternatives:
+        out.notes.insert(len(out.notes) if check.others_at is None else check.others_at, _others(res))
+    return out
 
 
 def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> tuple[NetPlan, int]:

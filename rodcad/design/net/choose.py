@@ -26,7 +26,7 @@ import functools
 
 import numpy as np
 
-from rodcad.design.net.check import NetCheck, design_net_plan
+from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
 from rodcad.design.net.cones import widen_cones
 from rodcad.design.net.spacing import grow_tight_hubs
 from rodcad.design.net.plan import plan_net
@@ -57,7 +57,14 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     Raises:
         DesignLimit: what no hardware in the catalog can do.
     """
-    design = functools.partial(design_net_plan, g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=note)
+    # each way of building the net is solved from its target alone; the multi-start looks for
+    # other stable shapes of the one kept (with_multistart: the same as if each had run it)
+    design = functools.partial(design_net_plan, g=g, seed=seed, tolerance=tolerance, n_starts=1, note=note)
+    return with_multistart(_designed(target, catalog, design, g=g, tolerance=tolerance), n_starts, seed=seed,
+                           note=note)
+
+
+def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float | None) -> NetCheck:
     on_surface = target.surface is not None
     plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g)
     check = design(plan)

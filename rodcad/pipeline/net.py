@@ -3,7 +3,8 @@ pictures out. It sequences the steps and owns none of them::
 
     design.yaml + catalog -> load_design() (net: rodcad.design.net.target)  rodcad.design.loader
     -> hardware, lengths, mass bounds, hub masses                      rodcad.design.net.plan.plan_net
-    -> masses (optimize.design_net), exact equilibrium + multi-start  rodcad.design.net.check.design_net_plan
+    -> masses (optimize.design_net), exact equilibrium                 rodcad.design.net.check.design_net_plan
+    -> the planner's edits, the design kept, its multi-start           rodcad.design.net.choose.design_drawn_net
     -> each distinct hub and rod built once (Dask tasks), the net as built (with CAD)  rodcad.cad.net.build
     -> design.json, report.md, preview.png; rods/, hubs/, assembly.step  rodcad.outputs.net, rodcad.cad.net.build
     -> print.3mf, rods/*.3mf, hubs/*.3mf (PrusaSlicer, with pauses)    rodcad.cad.net.print_files

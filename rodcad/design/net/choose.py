@@ -15,7 +15,8 @@ another of their rods too short), round after round (:data:`RETRIES`), the bette
 what still cannot hang is refused with the hardware that would hold it. Last, hubs whose rods
 turn further than their sockets let them get wider cones (:mod:`rodcad.design.net.cones`), after
 the hubs whose sockets' spacing keeps the net from balancing are made larger
-(:func:`rodcad.design.net.spacing.grow_tight_hubs`); and rods that the hubs' turned sockets
+(:func:`rodcad.design.net.spacing.grow_tight_hubs`) and hubs of two rods that balance only
+upside down lighter (:mod:`rodcad.design.net.inverted`); and rods that the hubs' turned sockets
 lengthen or shorten out of the catalog's lengths by a little have their hubs resized to bring
 them back (:func:`in_window`).
 """
@@ -28,6 +29,7 @@ import numpy as np
 
 from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
 from rodcad.design.net.cones import widen_cones
+from rodcad.design.net.inverted import lighten_inverted
 from rodcad.design.net.spacing import grow_tight_hubs
 from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
@@ -115,9 +117,10 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
 
 def _hardware_fitted(check: NetCheck, design) -> NetCheck:
     """The last steps of :func:`design_drawn_net`: hubs grown where their sockets' spacing keeps the
-    net from balancing, cones widened (or hubs grown) where rods turn too far, hubs resized where
-    rods leave the printed lengths; ``design`` designs a plan with the design's settings."""
-    check = grow_tight_hubs(check, design, _rank)
+    net from balancing, hubs of two rods that balance upside down made lighter, cones widened (or
+    hubs grown) where rods turn too far, hubs resized where rods leave the printed lengths;
+    ``design`` designs a plan with the design's settings."""
+    check = lighten_inverted(grow_tight_hubs(check, design, _rank), design, _rank)
     return in_window(widen_cones(check, design), design)
 
 

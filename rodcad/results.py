@@ -6,13 +6,12 @@ every step found to the outputs; :mod:`rodcad.pipeline` fills them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from optimize import EquilibriumResult
 from optimize.distance import ShapeDistance
-from rodcad.cad.rods import ChainFabrication
 from rodcad.design.asprinted import AsPrinted, HolePlan
 from rodcad.design.chandelier import ChandelierDesign
 from rodcad.design.fit import DEFAULT_TOLERANCE, curve_fit, fit_limit
@@ -22,6 +21,9 @@ from rodcad.design.hung import printed_masses
 from rodcad.design.masses import ChainDesign
 from rodcad.design.model import Design
 from rodcad.design.plan import ChainPlan
+
+if TYPE_CHECKING:  # (the CAD kernel: imported where solids are built)
+    from rodcad.cad.rods import ChainFabrication
 
 __all__ = ["AsBuilt", "BuildResult", "ChandelierBuild"]
 

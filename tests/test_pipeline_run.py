@@ -56,3 +56,20 @@ def test_a_chandelier_and_a_net_take_the_same_steps(tmp_path):
     assert r.kind == "net" and r.ok and isinstance(r.result, NetBuild) and r.result.solids is None
     assert r.outdir == tmp_path / "v" and len(_written(r)["net"]["rods"]) == 2
     assert sorted(p.name for p in r.outdir.iterdir()) == [".rodcad-output", "assembly.glb", "design.json", "preview.png", "report.md", "view.html"]
+
+
+def test_a_net_designed_without_cad_never_loads_the_cad_kernel(tmp_path):
+    """``rodcad build net.yaml --no-cad`` imports neither build123d nor OCP (several seconds on
+    2 cores, a tenth of a small net's design): the pipeline package imports each kind's module
+    when first asked, and the net's design, report and 3D view need no kernel."""
+    import subprocess
+    import sys
+
+    (tmp_path / "v.yaml").write_text(V_NET, encoding="utf-8")
+    code = ("import sys\nfrom rodcad.cli import main\n"
+            f"rc = main(['build', {str(tmp_path / 'v.yaml')!r}, '--no-cad', '-q', '-o', {str(tmp_path / 'out')!r}])\n"
+            "print(rc, 'build123d' in sys.modules, 'OCP' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split()[-3:] == ["0", "False", "False"], out.stdout + out.stderr
+    assert (tmp_path / "out" / "design.json").is_file() and (tmp_path / "out" / "view.html").is_file()

@@ -152,7 +152,7 @@ def net_view_nodes(solids, positions: np.ndarray, ends: np.ndarray, rotations: n
     write_net_files places them in assembly.step: a rod's frame at its first pivot, x along
     its chord, z the upward side of the chord (a bent rod bows toward -z); a hub's at its
     node, turned with its body. Colourless: the view colours them. Returns (rods, hubs)."""
-    from rodcad.cad.net.solids import rod_matrix
+    from rodcad.design.net.frames import rod_matrix
 
     rods = []
     for e, s in enumerate(solids.rods):

@@ -43,7 +43,6 @@ from rodcad.parallel import cached_map
 
 if TYPE_CHECKING:  # pragma: no cover
     from rodcad.catalog.model import RodType
-from rodcad.cad.solids import type_solid
 from rodcad.fabrication.layout import (
     MIN_CAVITY_RADIUS,
     RADIUS_STEP,
@@ -156,6 +155,7 @@ def ball_layout(rod: RodType, kind: int = 0) -> SphereLayout:
 
 def compute_mass_info(rod: RodType) -> MassInfo:
     """Compute :class:`MassInfo` from the B-rep (no cache)."""
+    from rodcad.cad.solids import type_solid  # (build123d: imported where a rod type's range is computed)
     from rodcad.catalog.fastgeom import rod_mass_properties
 
     type_solid(rod)  # the solid must build (a GeometryError names what is wrong)

@@ -26,7 +26,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rodcad.cad.solids import type_solid
 from rodcad.catalog.cache import DiskCache
 from rodcad.catalog.jointlimits import joint_limits
 from rodcad.catalog.limits import TOLERANCE_DEG
@@ -301,6 +300,8 @@ def _compute_tables(catalog: Catalog, *, jobs: int | None, cache: DiskCache | No
         if not limits_mod.is_cached(a, b, cache):
             needed.setdefault(a.name, a)
             needed.setdefault(b.name, b)
+    from rodcad.cad.solids import type_solid  # (build123d: imported where solids are built)
+
     for t in needed.values():
         type_solid(t)
     masses = mass_infos(list(catalog.types), jobs=jobs, cache=cache,
@@ -500,6 +501,8 @@ def _export(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise InputError([Problem(str(out), 0, 0, "", "exists and is not a directory")])
+    from rodcad.cad.solids import type_solid
+
     solids = [(t, type_solid(t)) for t in catalog.types]  # all or nothing: build before writing
     created = not out.exists()
     staged: list[tuple[Path, Path]] = []

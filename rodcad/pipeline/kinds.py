@@ -6,13 +6,13 @@ only in the functions behind those two steps, their pipeline modules' (looked up
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from rodcad.design.model import Design
 from rodcad.outdir import best_fit_folder
-from rodcad.pipeline import chain, chandelier, net
 from rodcad.progress import Progress
 from rodcad.results import ChandelierBuild
 
@@ -83,18 +83,25 @@ def build(design: Design, *, cad: bool | None = None, method: str | None = None,
     or a net's :class:`rodcad.pipeline.net.NetBuild`."""
     kind = kind_of(design)
     if kind == "chandelier":
-        return chandelier.build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
+        return _pipeline("chandelier").build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
     if kind == "net":
-        return net.build_net(design, seed=seed, cad=design.cad if cad is None else cad, jobs=jobs,
+        return _pipeline("net").build_net(design, seed=seed, cad=design.cad if cad is None else cad, jobs=jobs,
                              scheduler=scheduler, progress=progress)
-    return chain.build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
+    return _pipeline("chain").build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
 
 
 def write(result: Any, outdir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
     """Write what :func:`build` returned to ``outdir`` (staged: all or nothing); the data
     written to design.json."""
+    net = _pipeline("net")
     if isinstance(result, net.NetBuild):
         return net.write_net_outputs(result, outdir, progress=progress)
     if isinstance(result, ChandelierBuild):
-        return chandelier.write_chandelier_outputs(result, outdir, progress=progress)
-    return chain.write_outputs(result, outdir, progress=progress)
+        return _pipeline("chandelier").write_chandelier_outputs(result, outdir, progress=progress)
+    return _pipeline("chain").write_outputs(result, outdir, progress=progress)
+
+
+def _pipeline(kind: str):
+    """The pipeline module of a kind, imported when first used (a chain's imports the CAD
+    kernel at its module level; a net designed without CAD never needs it)."""
+    return importlib.import_module(f"rodcad.pipeline.{kind}")

@@ -29,10 +29,11 @@ from rodcad.cad.net.bent import bent_rod_solid, bent_socket_centres
 from rodcad.cad.net.hub import HubSplit, split_hub, split_plane, splittable_sockets
 from rodcad.cad.net.parts import (REL_TOL, HubSpec, PartResult, PartTask, RodSpec, brep_bytes, from_brep,
                                   group_parts, signature)
-from rodcad.cad.net.solids import AS_BUILT_KKT, NetPart, NetSolids, hub_solid, net_rod_solid, place, rod_matrix, whole_hub
+from rodcad.cad.net.solids import AS_BUILT_KKT, NetPart, NetSolids, hub_solid, net_rod_solid, whole_hub
 from rodcad.cad.net.splice import spliced_rod, spliced_rod_solids
 from rodcad.cad.solids import GeometryError
 from rodcad.catalog.net.splice import splice_fill
+from rodcad.design.net.frames import place, rod_matrix
 
 __all__ = ["build_group", "build_net_solids", "distinct_count", "part_specs", "write_net_files"]
 

@@ -26,9 +26,10 @@ from build123d import Axis, Edge, Face, Location, Plane, Solid, Wire
 from rodcad.cad.export import export_step, import_step
 from rodcad.cad.net.hub import split_plane
 from rodcad.cad.solids import GeometryError, one_solid
+from rodcad.design.net.frames import place, rod_matrix
 
 __all__ = ["AS_BUILT_KKT", "NetPart", "NetSolids", "ball_positions", "end_ball", "fill_voids", "hub_solid",
-           "net_rod_solid", "place", "rod_body", "rod_matrix", "whole_hub"]
+           "net_rod_solid", "rod_body", "whole_hub"]
 
 
 def _plane(origin, direction) -> Plane:
@@ -270,28 +271,3 @@ class NetSolids:
         """Every printed hub part as (solid in its hub's frame, 4x4 laying it on the bed, needs
         support): the halves of each split hub on their cut faces, a hub left whole on support."""
         return [(p, m, not h.split) for h in self.hub_splits for p, m in zip(h.parts, h.print_matrices)]
-
-
-def place(R: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """4 x 4 of a rotation R (3 x 3) and a translation (mm)."""
-    m = np.eye(4)
-    m[:3, :3] = R
-    m[:3, 3] = origin
-    return m
-
-
-def rod_matrix(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """4 x 4: the rod frame (:func:`_rod_frame`) placed at its first pivot ``p0``, as
-    assembly.step and the 3D view place a net's rods."""
-    return place(_rod_frame(p0, p1), p0)
-
-
-def _rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """The rod frame in the world: x along the chord, y horizontal, z = x cross y the upward
-    side of the chord (a bent rod, bowing toward -z, hangs so)."""
-    x = (p1 - p0) / np.linalg.norm(p1 - p0)
-    y = np.cross([0.0, 0.0, 1.0], x)
-    if np.linalg.norm(y) < 1e-9:
-        y = np.cross([0.0, 1.0, 0.0], x)
-    y /= np.linalg.norm(y)
-    return np.column_stack([x, y, np.cross(x, y)])

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from rodcad.design.net.frames import rod_matrix
 from rodcad.outputs.viewgeom import Y_UP, ViewPart, ViewScene, cylinder, sphere, tube, unit_cylinder
 from rodcad.outputs.viewscene import ANCHOR, GREY, cad_parts, legend, mass_scale, mm, pct, step_colors
 
@@ -22,9 +23,7 @@ __all__ = ["VIEW_TRIANGLES", "net_scene", "rod_frame"]
 
 
 def rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """4 x 4 rod frame in the world, as assembly.step's (:func:`rodcad.cad.net.solids.rod_matrix`)."""
-    from rodcad.cad.net.solids import rod_matrix
-
+    """4 x 4 rod frame in the world, as assembly.step's (:func:`rodcad.design.net.frames.rod_matrix`)."""
     return rod_matrix(np.asarray(p0, float), np.asarray(p1, float))
 
 

@@ -456,30 +456,6 @@ def test_perturbed_starts_that_stop_are_reported_on_a_small_net_too(monkeypatch)
     assert "2 of the multi-start's 2 perturbed start(s) found no equilibrium" in res.message
 
 
-def test_the_sag_start_after_a_descent_that_ran_out_is_patient(monkeypatch):
-    """Where the given start's descent runs to its iteration limit, the force-density sag is a
-    second opinion with the perturbed starts' patience; the given start itself keeps every
-    iteration (here the limit is 3, so both run out and the result says so)."""
-    import optimize.net.solve as solve_mod
-
-    seen = []
-    descend = solve_mod.descend
-
-    def recording(net, state, **kw):
-        out = descend(net, state, **kw)
-        seen.append((kw.get("patience"), out.status))
-        return out
-
-    monkeypatch.setattr(solve_mod, "descend", recording)
-    flat = grid_net(6, 6, x=(0, 150), y=(0, 150))
-    args = (flat.positions, flat.edges, flat.lengths * 1.15, np.ones(flat.m), flat.anchored)
-    res = solve_net(*args, max_iter=3)
-    assert not res.success and res.status == 1
-    assert seen == [(None, 1), (solve_mod.PERTURBED_PATIENCE, 1)]
-    seen.clear()
-    assert solve_net(*args).success and seen == [(None, 0)]  # (no second opinion where the first converges)
-
-
 def test_patience_counts_from_an_escape_from_an_unstable_equilibrium():
     """The umbrella ring's start is an unstable equilibrium (its residual at round-off): the
     descent leaves it and then falls with a residual far above that for a few iterations.

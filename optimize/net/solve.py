@@ -219,14 +219,13 @@ PERTURBED_ITER = 100
 PERTURBED_PATIENCE = 40
 
 
-def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200, patient: bool = False):
-    """(Outcome or None, restoration iterations) from one start; a ``patient`` descent (a
-    perturbed start of the multi-start, or the sag start after the given start's descent ran
-    out of iterations) stops where it stops making progress (:data:`PERTURBED_PATIENCE`)."""
+def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200, perturbed: bool = False):
+    """(Outcome or None, restoration iterations) from one start; a perturbed start of the
+    multi-start stops where it stops making progress (:data:`PERTURBED_PATIENCE`)."""
     state, ev, ok, nres = restore(net, start, max_iter=max_restore)
     if not ok:
         return None, nres
-    out = descend(net, state, max_iter=max_iter, patience=PERTURBED_PATIENCE if patient else None)
+    out = descend(net, state, max_iter=max_iter, patience=PERTURBED_PATIENCE if perturbed else None)
     out.nrestore = nres
     return out, nres
 
@@ -409,9 +408,7 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     Returns:
         NetResult: the equilibrium reached from the given start (the designed state, when
         it is the target), other stable equilibria in ``alternatives``. If the given start
-        cannot be made feasible, or its descent reaches no equilibrium, the force-density sag
-        (:func:`net_sag_guess`) is tried; after a descent that ran to ``max_iter``, with the
-        perturbed starts' patience.
+        cannot be made feasible, the force-density sag (:func:`net_sag_guess`) is tried.
 
     Raises:
         ValueError: bad arguments (naming the argument), a node no anchor holds up, a rod
@@ -423,13 +420,8 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     out, nres = _solve_from(net, start, max_iter)
     if out is None or out.status != 0:
         # the given start could not be made feasible, or the descent from it stalled (a
-        # flat start with rods longer than its spacing): from the hanging cable-net shape. Where
-        # the given start's descent ran to its iteration limit (a best fit of a net that falls
-        # far from it), the sag start is a second opinion: it stops where its KKT residual
-        # stops halving, as a perturbed start does (a 912-rod hemisphere: 40 iterations
-        # instead of 200, 5 s instead of 18, the same verdict)
-        sag, nres2 = _solve_from(net, net_sag_guess(net, start), max_iter,
-                                 patient=out is not None and out.status == 1)
+        # flat start with rods longer than its spacing): from the hanging cable-net shape
+        sag, nres2 = _solve_from(net, net_sag_guess(net, start), max_iter)
         nres += nres2
         if sag is not None and (out is None or sag.status == 0):
             out = sag
@@ -473,7 +465,7 @@ def _multistart(net: Net, start: NetState, first: NetResult, n_starts: int, seed
             callback(f"multi-start: start {k + 2} of {n_starts} (a perturbed shape)")
         o, _ = _solve_from(net, _perturbed(net, start, rng, start_scale),
                            min(max_iter, PERTURBED_ITER) if big else max_iter,
-                           PERTURBED_RESTORE if big else 200, patient=True)
+                           PERTURBED_RESTORE if big else 200, perturbed=True)
         if o is None or o.status != 0:
             lost += 1
         if o is None:

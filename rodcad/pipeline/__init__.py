@@ -9,6 +9,14 @@ takes any design through build, then write, and is what ``rodcad build`` calls.
 """
 
 import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # (for readers and type checkers; at run time each is imported when first asked for)
+    from rodcad.pipeline.chain import N_STARTS, TAPS, as_built, build, build_fixture_for, simulate, write_outputs
+    from rodcad.pipeline.chandelier import build_chandelier, write_chandelier_outputs
+    from rodcad.pipeline.kinds import Run, kind_of, run
+    from rodcad.pipeline.net import NetBuild, build_net, write_net_outputs
+    from rodcad.results import AsBuilt, BuildResult, ChandelierBuild
 
 #: Where each name lives (imported when first asked for: a net's or a chain's pipeline
 #: without CAD does not import the CAD kernel the other's module level needs).

@@ -83,10 +83,11 @@ def build(design: Design, *, cad: bool | None = None, method: str | None = None,
     or a net's :class:`rodcad.pipeline.net.NetBuild`."""
     kind = kind_of(design)
     if kind == "chandelier":
-        return _pipeline("chandelier").build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
+        return _pipeline("chandelier").build_chandelier(design, method=method, seed=seed, cad=cad, jobs=jobs,
+                                                        progress=progress)
     if kind == "net":
         return _pipeline("net").build_net(design, seed=seed, cad=design.cad if cad is None else cad, jobs=jobs,
-                             scheduler=scheduler, progress=progress)
+                                          scheduler=scheduler, progress=progress)
     return _pipeline("chain").build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
 
 

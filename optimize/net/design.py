@@ -31,7 +31,7 @@ from optimize.net.model import Net, NetState
 from optimize.net.newton import RHO, newton_matrix, pd_factor
 from optimize.net.statics import NetMassDesign, design_net_masses
 
-__all__ = ["NetDesign", "design_net", "shape_jacobian"]
+__all__ = ["NetDesign", "design_net", "multistart_text", "shape_jacobian"]
 
 
 def shape_jacobian(net: Net, state: NetState, tensions: np.ndarray) -> np.ndarray:
@@ -189,11 +189,18 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
         message = "The target is an equilibrium of the designed net, but not a stable one."
     else:
         message = (f"Off target by {error:.4g} mm ({error / size:.3g} of the size): {statics.message}")
-    if check.alternatives:
-        message += (f" The multi-start found {len(check.alternatives)} other stable shape(s)"
-                    + (", one lower than the design's." if check.lower else "."))
+    message += multistart_text(check)
     return NetDesign(masses=masses, statics=statics, equilibrium=check, error=error, rel_error=error / size,
                      size=size, on_target=on_target, refined=refined, message=message, info=info)
+
+
+def multistart_text(check: NetResult) -> str:
+    """What the multi-start of ``check`` adds to a design's message: its other stable shapes, if
+    it found any (else '')."""
+    if not check.alternatives:
+        return ""
+    return (f" The multi-start found {len(check.alternatives)} other stable shape(s)"
+            + (", one lower than the design's." if check.lower else "."))
 
 
 def _refine(target, edges, lengths, anchored, statics, check, mass_bounds, rotations, max_refine, kw, callback=None):

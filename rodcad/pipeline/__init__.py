@@ -18,50 +18,27 @@ if TYPE_CHECKING:  # (for readers and type checkers; at run time each is importe
     from rodcad.pipeline.net import NetBuild, build_net, write_net_outputs
     from rodcad.results import AsBuilt, BuildResult, ChandelierBuild
 
-#: Where each name lives (imported when first asked for: a net's or a chain's pipeline
-#: without CAD does not import the CAD kernel the other's module level needs).
+#: Where each name lives, imported when first asked for (a net's pipeline without CAD then
+#: never imports the CAD kernel the chain's module level needs).
 _WHERE = {
-    "N_STARTS": "chain", "TAPS": "chain", "as_built": "chain", "build": "chain",
-    "build_fixture_for": "chain", "simulate": "chain", "write_outputs": "chain",
-    "build_chandelier": "chandelier", "write_chandelier_outputs": "chandelier",
-    "Run": "kinds", "kind_of": "kinds", "run": "kinds",
-    "NetBuild": "net", "build_net": "net", "write_net_outputs": "net",
+    **dict.fromkeys(("N_STARTS", "TAPS", "as_built", "build", "build_fixture_for", "simulate", "write_outputs"),
+                    "rodcad.pipeline.chain"),
+    **dict.fromkeys(("build_chandelier", "write_chandelier_outputs"), "rodcad.pipeline.chandelier"),
+    **dict.fromkeys(("Run", "kind_of", "run"), "rodcad.pipeline.kinds"),
+    **dict.fromkeys(("NetBuild", "build_net", "write_net_outputs"), "rodcad.pipeline.net"),
+    **dict.fromkeys(("AsBuilt", "BuildResult", "ChandelierBuild"), "rodcad.results"),
 }
-_RESULTS = ("AsBuilt", "BuildResult", "ChandelierBuild")
+
+__all__ = sorted(_WHERE)
 
 
 def __getattr__(name: str):
-    if name in _WHERE:
-        value = getattr(importlib.import_module(f"rodcad.pipeline.{_WHERE[name]}"), name)
-    elif name in _RESULTS:
-        value = getattr(importlib.import_module("rodcad.results"), name)
-    else:
+    if name not in _WHERE:
         raise AttributeError(f"module 'rodcad.pipeline' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_WHERE[name]), name)
     globals()[name] = value
     return value
 
 
 def __dir__():
     return sorted(set(globals()) | set(__all__))
-
-
-__all__ = [
-    "N_STARTS",
-    "TAPS",
-    "AsBuilt",
-    "BuildResult",
-    "ChandelierBuild",
-    "NetBuild",
-    "Run",
-    "as_built",
-    "build",
-    "build_chandelier",
-    "build_fixture_for",
-    "build_net",
-    "kind_of",
-    "run",
-    "simulate",
-    "write_chandelier_outputs",
-    "write_net_outputs",
-    "write_outputs",
-]

@@ -450,6 +450,7 @@ def with_multistart(check: NetCheck, n_starts: int | None = None, *, seed: int =
         note: progress, as for :func:`design_net_plan`.
     """
     from optimize import more_starts
+    from optimize.net.design import multistart_text
 
     n = net_starts(check.plan.target.n) if n_starts is None else int(n_starts)
     eq = check.equilibrium
@@ -458,10 +459,7 @@ def with_multistart(check: NetCheck, n_starts: int | None = None, *, seed: int =
     t0 = time.perf_counter()
     with threadpool_limits(limits=1, user_api="blas"):
         res = more_starts(eq, n_starts=n, seed=seed, callback=note, **check.solved_with)
-    message = check.design.message
-    if res.alternatives:
-        message += (f" The multi-start found {len(res.alternatives)} other stable shape(s)"
-                    + (", one lower than the design's." if res.lower else "."))
+    message = check.design.message + multistart_text(res)
     out = dataclasses.replace(check, design=dataclasses.replace(check.design, equilibrium=res, message=message),
                               notes=list(check.notes), choices=list(check.choices),
                               time_s=check.time_s + time.perf_counter() - t0)

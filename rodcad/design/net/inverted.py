@@ -69,7 +69,7 @@ def lighten_inverted(check, design: Callable, rank: Callable):
         return check
     hubs = inverted_hubs(check)
     smallest = float(planned.hardware.pivot_limits[0])
-    hubs = hubs[planned.node_pivot[hubs] > smallest * (1 + 1e-9)] if hubs.size else hubs
+    hubs = hubs[planned.node_pivot[hubs] > smallest * (1 + 1e-9)]
     if not hubs.size:
         return check
     rp = planned.node_pivot.copy()

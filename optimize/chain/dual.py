@@ -117,18 +117,15 @@ def dual_newton(P, Q, d, lam, length_scale, max_iter=200):
         gx, gy = grad.real, grad.imag
         step = complex(-(hyy * gx - hxy * gy) / det, -(hxx * gy - hxy * gx) / det)
         slope = (np.conj(grad) * step).real
-        t = 1.0
-        while True:
-            trial = lam + t * step
+        trial = lam + step
+        W1, r1, u1, g1, psi1 = evaluate(trial)
+        if not _accepted(psi, psi1, 1.0, slope, lambda: abs(g1) < gn):
+            # backtracking by halves down to 2^-40: Psi at every step length at once (the
+            # steps of a near-piecewise-linear Psi are cut 7-8 times on average), the first
+            # one that decreases Psi enough taken
+            k = 1 + _first_accepted(P, Q, d, lam, step, psi, slope, lambda x: abs(evaluate(x)[3]) < gn)
+            trial = lam + 0.5**k * step
             W1, r1, u1, g1, psi1 = evaluate(trial)
-            if psi1 <= psi + 1e-4 * t * slope:
-                break
-            noise = 1e3 * np.finfo(float).eps * (abs(psi) + abs(psi1))
-            if abs(psi1 - psi) <= noise and abs(g1) < gn:
-                break  # the energy change is below round-off: judge by the gradient
-            if t < 1e-12:
-                break
-            t *= 0.5
         lam, W, r, u, grad, psi = trial, W1, r1, u1, g1, psi1
         k = int(np.argmin(r / safeP))
         if r[k] <= 1e-6 * load_scale * safeP[k]:
@@ -153,6 +150,32 @@ def dual_newton(P, Q, d, lam, length_scale, max_iter=200):
                 lam = Q[k] / P[k]  # no load left on group k: the minimum sits on its kink
                 return lam, P * lam - Q, it, False
     return lam, W, max_iter, abs(grad) <= 1e-9 * length_scale
+
+
+#: The line search halves a step down to 2^-HALVINGS of the Newton step.
+HALVINGS = 40
+
+
+def _accepted(psi: float, psi1: float, t: float, slope: float, gradient_falls) -> bool:
+    """Armijo's test on Psi at step length ``t``; where the change of Psi is below its
+    round-off, whether the gradient's norm falls (``gradient_falls()``)."""
+    if psi1 <= psi + 1e-4 * t * slope:
+        return True
+    noise = 1e3 * np.finfo(float).eps * (abs(psi) + abs(psi1))
+    return abs(psi1 - psi) <= noise and gradient_falls()
+
+
+def _first_accepted(P, Q, d, lam: complex, step: complex, psi: float, slope: float, gradient_falls) -> int:
+    """Index k (0-based, step length 2^-(k+1)) of the first halved step that
+    :func:`_accepted` takes, or the last one: Psi at all :data:`HALVINGS` lengths in one
+    array operation. ``gradient_falls(lam)`` is asked only where Psi's change is round-off."""
+    ts = 0.5 ** np.arange(1, HALVINGS + 1)
+    lams = lam + ts * step
+    psis = np.abs(P[None, :] * lams[:, None] - Q[None, :]).sum(axis=1) - (np.conj(d) * lams).real
+    for k in range(HALVINGS):
+        if _accepted(psi, float(psis[k]), float(ts[k]), slope, lambda: gradient_falls(lam + ts[k] * step)):
+            return k
+    return HALVINGS - 1
 
 
 def close_at_kink(chain: Chain, aset: ActiveSet, W: np.ndarray, theta: np.ndarray) -> np.ndarray:

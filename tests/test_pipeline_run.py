@@ -58,18 +58,31 @@ def test_a_chandelier_and_a_net_take_the_same_steps(tmp_path):
     assert sorted(p.name for p in r.outdir.iterdir()) == [".rodcad-output", "assembly.glb", "design.json", "preview.png", "report.md", "view.html"]
 
 
-def test_a_net_designed_without_cad_never_loads_the_cad_kernel(tmp_path):
-    """``rodcad build net.yaml --no-cad`` imports neither build123d nor OCP (several seconds on
-    2 cores, a tenth of a small net's design): the pipeline package imports each kind's module
-    when first asked, and the net's design, report and 3D view need no kernel."""
+#: A chain the pinned catalog hangs exactly: a few seconds to design.
+CHAIN = ("design: 1\nname: arc\ncatalog: pla-pinned\nanchors: [[0, 0], [150, 0]]\n"
+         "target: {form: catenary, length: 200}\n")
+
+
+def test_a_design_without_cad_never_loads_the_cad_kernel(tmp_path):
+    """``rodcad build design.yaml --no-cad`` imports neither build123d nor OCP (several seconds
+    on 2 cores: a small net's design takes less) for a net, a chain or a chandelier: the
+    pipeline package imports each kind's module when first asked, each imports the kernel only
+    where it builds solids, and the design, report and 3D view need no kernel."""
     import subprocess
     import sys
 
     (tmp_path / "v.yaml").write_text(V_NET, encoding="utf-8")
+    (tmp_path / "arc.yaml").write_text(CHAIN, encoding="utf-8")
     code = ("import sys\nfrom rodcad.cli import main\n"
-            f"rc = main(['build', {str(tmp_path / 'v.yaml')!r}, '--no-cad', '-q', '-o', {str(tmp_path / 'out')!r}])\n"
-            "print(rc, 'build123d' in sys.modules, 'OCP' in sys.modules)\n")
+            f"for name in ('v', 'arc'):\n"
+            f"    rc = main(['build', {str(tmp_path)!r} + '/' + name + '.yaml', '--no-cad', '-q', '-o', "
+            f"{str(tmp_path)!r} + '/out-' + name])\n"
+            "    print('loaded:', rc, 'build123d' in sys.modules, 'OCP' in sys.modules)\n"
+            "import rodcad.pipeline.chandelier\n"
+            "print('loaded:', 'build123d' in sys.modules, 'OCP' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.split()[-3:] == ["0", "False", "False"], out.stdout + out.stderr
-    assert (tmp_path / "out" / "design.json").is_file() and (tmp_path / "out" / "view.html").is_file()
+    loaded = [line.split()[1:] for line in out.stdout.splitlines() if line.startswith("loaded:")]
+    assert loaded == [["0", "False", "False"]] * 2 + [["False", "False"]], out.stdout + out.stderr
+    for name in ("v", "arc"):
+        assert (tmp_path / f"out-{name}" / "design.json").is_file() and (tmp_path / f"out-{name}" / "view.html").is_file()

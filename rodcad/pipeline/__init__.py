@@ -18,8 +18,8 @@ if TYPE_CHECKING:  # (for readers and type checkers; at run time each is importe
     from rodcad.pipeline.net import NetBuild, build_net, write_net_outputs
     from rodcad.results import AsBuilt, BuildResult, ChandelierBuild
 
-#: Where each name lives, imported when first asked for (a net's pipeline without CAD then
-#: never imports the CAD kernel the chain's module level needs).
+#: Where each name lives, imported when first asked for (each kind's module imports the CAD
+#: kernel only where it builds solids: a run without CAD never loads it).
 _WHERE = {
     **dict.fromkeys(("N_STARTS", "TAPS", "as_built", "build", "build_fixture_for", "simulate", "write_outputs"),
                     "rodcad.pipeline.chain"),

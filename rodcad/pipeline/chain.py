@@ -25,7 +25,7 @@ import dataclasses
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,16 +34,6 @@ from optimize import (
     solve_equilibrium,
 )
 from optimize.chain.discretize import MAX_RODS
-from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
-from rodcad.cad.export import AssemblyPart, export_step, export_stl
-from rodcad.cad.printfile import PrintProfile, write_print_files
-from rodcad.cad.rods import (
-    ChainFabrication,
-    FabricatedRod,
-    check_files,
-    fabricate_chain,
-)
-from rodcad.cad.chainfiles import write_assembly, write_rod_files
 from rodcad.design.asprinted import anchor_holes, chain_hardware, plan_holes, printed_chain
 from rodcad.design.hung import design_hung, hung_com
 from rodcad.design.chains import ChainSpec, design_chains
@@ -53,7 +43,6 @@ from rodcad.design.model import Design
 from rodcad.design.plan import CatalogArrays, catalog_arrays
 from rodcad.design.shell import curve_size
 from rodcad.errors import InputError
-from rodcad.fabrication.intervals import chain_intervals
 from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
@@ -62,6 +51,9 @@ from rodcad.parallel import kept_workers
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
+
+if TYPE_CHECKING:  # the CAD kernel is imported where solids are built: a run without CAD never loads it
+    from rodcad.cad.rods import ChainFabrication, FabricatedRod
 
 __all__ = [
     "N_STARTS",
@@ -93,6 +85,8 @@ def arrays_step(design: Design, jobs: int | None, progress: Progress) -> Catalog
 def intervals_step(design: Design, jobs: int | None, progress: Progress):
     """The achievable mass intervals of the planned types (CAD on)."""
     def intervals(types: Sequence[RodType]) -> dict[str, list[tuple[float, float]]]:
+        from rodcad.fabrication.intervals import chain_intervals
+
         with progress.step(f"masses each of {len(types)} rod types can really be built at"):
             return chain_intervals(list(types), seed=design.fabrication_seed, jobs=jobs)
     return intervals
@@ -104,6 +98,9 @@ def fabricate_step(design: Design, chains: Sequence[tuple[Sequence[str], np.ndar
     """Every rod of every chain built in one go (identical rods once); split per chain. The
     sockets' roofs go onto as few print layers as the rods allow (the rods of ``fused``
     runs (first, last) keep theirs: their piece lies on the bed its own way)."""
+    from rodcad.cad.printfile import PrintProfile
+    from rodcad.cad.rods import ChainFabrication, fabricate_chain
+
     types = [design.catalog[name] for names, _ in chains for name in names]
     masses = np.concatenate([np.asarray(m, float) for _, m in chains])
     layers = PrintProfile.from_mapping(print_profile(design.catalog)).layers
@@ -180,6 +177,8 @@ def build(design: Design, *, method: str | None = None, seed: int | None = None,
                                               label=f"building {result.n} rods (cavities, ball sockets, exact B-rep)",
                                               fused=p.fused, holes=result.holes.holes, sizes=result.hole_sizes)
     if cad:
+        from rodcad.cad.pieces import PieceRefused, as_printed_rods, fuse_pieces
+
         result.fabrication = fab
         result.notes += problems
         if p.fused:
@@ -388,6 +387,11 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     """
     with staged(outdir, progress) as (tmp, progress):
         if result.fabrication is not None:
+            from rodcad.cad.chainfiles import write_assembly, write_rod_files
+            from rodcad.cad.export import AssemblyPart, export_step, export_stl
+            from rodcad.cad.printfile import write_print_files
+            from rodcad.cad.rods import check_files
+
             with progress.step("writing and checking rods/*.step, rods/*.stl"):
                 write_rod_files(result.fabrication, tmp)
             extra = []

@@ -22,10 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from rodcad.cad.chainfiles import write_rod_files
-from rodcad.cad.chandelier import build_frame, chandelier_nodes
-from rodcad.cad.export import export_assembly, export_step, export_stl
-from rodcad.cad.printfile import write_print_files
 from rodcad.design.asprinted import anchor_holes
 from rodcad.design.chandelier import bill_of_materials, design_chandelier
 from rodcad.design.frame import frame_outline, plan_frame
@@ -94,7 +90,9 @@ def build_chandelier(design: Design, *, method: str | None = None, seed: int | N
     if cad and any(ch.design.plan.fused for ch in res.chains):
         raise InputError([design.problem("constraints.fuse", "a chandelier's chains are built rod by rod: fused "
                                          "pieces are built for a single chain only; use 'never'")])
-    if cad:
+    if cad:  # (the CAD kernel is imported where solids are built)
+        from rodcad.cad.chandelier import build_frame
+
         with progress.step("frame solid and clearance checks"):
             out.frame = build_frame(frame_plan, design.catalog, res.chains)
         out.notes += [f"frame: {p}" for p in out.frame[1].problems]
@@ -168,6 +166,11 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
     (:func:`rodcad.pipeline.chain.write_outputs`), whose return it shares."""
     with staged(outdir, progress) as (tmp, progress):
         if b.frame is not None:
+            from rodcad.cad.chainfiles import write_rod_files
+            from rodcad.cad.chandelier import chandelier_nodes
+            from rodcad.cad.export import export_assembly, export_step, export_stl
+            from rodcad.cad.printfile import write_print_files
+
             with progress.step("writing and checking the rods' STEP/STL files"):
                 for ch, fab in zip(b.result.chains, b.fabrications):
                     write_rod_files(fab, tmp / ch.name)

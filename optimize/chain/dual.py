@@ -120,9 +120,9 @@ def dual_newton(P, Q, d, lam, length_scale, max_iter=200):
         trial = lam + step
         W1, r1, u1, g1, psi1 = evaluate(trial)
         if not _accepted(psi, psi1, 1.0, slope, lambda: abs(g1) < gn):
-            # backtracking by halves down to 2^-40: Psi at every step length at once (the
-            # steps of a near-piecewise-linear Psi are cut 7-8 times on average), the first
-            # one that decreases Psi enough taken
+            # backtracking by halves down to 2^-40, Psi at several step lengths at once (the
+            # steps of a near-piecewise-linear Psi are cut 7-8 times on average): the first
+            # one that decreases Psi enough is taken
             k = 1 + _first_accepted(P, Q, d, lam, step, psi, slope, lambda x: abs(evaluate(x)[3]) < gn)
             trial = lam + 0.5**k * step
             W1, r1, u1, g1, psi1 = evaluate(trial)
@@ -152,8 +152,10 @@ def dual_newton(P, Q, d, lam, length_scale, max_iter=200):
     return lam, W, max_iter, abs(grad) <= 1e-9 * length_scale
 
 
-#: The line search halves a step down to 2^-HALVINGS of the Newton step.
+#: The line search halves a step down to 2^-HALVINGS of the Newton step, evaluating Psi at
+#: BATCH lengths in one array operation (a step is cut 7-8 times on average).
 HALVINGS = 40
+BATCH = 8
 
 
 def _accepted(psi: float, psi1: float, t: float, slope: float, gradient_falls) -> bool:
@@ -167,14 +169,15 @@ def _accepted(psi: float, psi1: float, t: float, slope: float, gradient_falls) -
 
 def _first_accepted(P, Q, d, lam: complex, step: complex, psi: float, slope: float, gradient_falls) -> int:
     """Index k (0-based, step length 2^-(k+1)) of the first halved step that
-    :func:`_accepted` takes, or the last one: Psi at all :data:`HALVINGS` lengths in one
+    :func:`_accepted` takes, or the last one: Psi at :data:`BATCH` lengths at a time in one
     array operation. ``gradient_falls(lam)`` is asked only where Psi's change is round-off."""
-    ts = 0.5 ** np.arange(1, HALVINGS + 1)
-    lams = lam + ts * step
-    psis = np.abs(P[None, :] * lams[:, None] - Q[None, :]).sum(axis=1) - (np.conj(d) * lams).real
-    for k in range(HALVINGS):
-        if _accepted(psi, float(psis[k]), float(ts[k]), slope, lambda: gradient_falls(lam + ts[k] * step)):
-            return k
+    for first in range(0, HALVINGS, BATCH):
+        ts = 0.5 ** np.arange(first + 1, min(first + BATCH, HALVINGS) + 1)
+        lams = lam + ts * step
+        psis = np.abs(P[None, :] * lams[:, None] - Q[None, :]).sum(axis=1) - (np.conj(d) * lams).real
+        for j, t in enumerate(ts):
+            if _accepted(psi, float(psis[j]), float(t), slope, lambda: gradient_falls(lam + t * step)):
+                return first + j
     return HALVINGS - 1
 
 

@@ -85,3 +85,20 @@ def test_a_stalled_solve_stops_when_the_callback_says():
     r = trf(fun, jac, np.zeros(25), np.full(25, -10.0), np.full(25, 10.0), ftol=1e-15, xtol=1e-15, gtol=1e-15,
             callback=stop)
     assert r.status == -2 and len(costs) == 2
+
+
+def test_a_system_the_symmetric_pivots_cannot_factor_goes_to_partial_pivoting():
+    """The direction's augmented system is quasi-definite, which the symmetric LDL^T solves to
+    round-off after refinement; a singular system, which it cannot solve, returns None for the
+    caller's partial pivoting."""
+    from optimize.net.trf import REFINED, _quasi_definite_solve
+
+    rng = np.random.default_rng(5)
+    J = sp.random(40, 60, density=0.1, random_state=5, format="csr")
+    K = sp.bmat([[sp.diags(rng.uniform(1e-12, 2.0, 60)), J.T], [J, -sp.eye(40)]], format="csc")
+    b = rng.normal(size=100)
+    x = _quasi_definite_solve(K, b)
+    assert x is not None
+    assert np.max(np.abs(K @ x - b)) <= REFINED * (abs(K).max() * np.max(np.abs(x)) + np.max(np.abs(b)))
+    singular = sp.csc_matrix(np.array([[1.0, 1.0], [1.0, 1.0]]))
+    assert _quasi_definite_solve(singular, np.array([1.0, 2.0])) is None

@@ -120,8 +120,9 @@ class Factor:
 
 
 def spd_lu(A: sp.spmatrix):
-    """Sparse LU of a symmetric positive definite matrix with symmetric, diagonal pivoting
-    (a Cholesky in effect: far less fill than partial pivoting)."""
+    """Sparse LU of a symmetric positive definite (or quasi-definite) matrix with a
+    fill-reducing symmetric order and symmetric, diagonal pivoting (a Cholesky, an LDL^T, in
+    effect: far less fill than partial pivoting)."""
     return splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
 
 

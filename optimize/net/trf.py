@@ -35,6 +35,8 @@ from scipy.optimize._lsq.common import (CL_scaling_vector, build_quadratic_1d, c
 from scipy.optimize._lsq.trf import select_step
 from scipy.sparse.linalg import lsmr, splu
 
+from optimize.net.newton import spd_lu
+
 __all__ = ["TrfResult", "gauss_newton_direction", "trf"]
 
 #: The regularization's floor relative to the largest squared column of ``J_h`` (about 1 with
@@ -94,7 +96,7 @@ def _quasi_definite_solve(K: sp.csc_matrix, b: np.ndarray, refine: int = 4) -> n
     refinement; None where the residual does not fall to :data:`REFINED` (tiny pivots of a
     nearly singular system), for the caller's partial pivoting."""
     try:
-        lu = splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        lu = spd_lu(K)
     except RuntimeError:
         return None
     x = lu.solve(b)

@@ -103,6 +103,6 @@ def write(result: Any, outdir: str | Path, *, progress: Progress | None = None) 
 
 
 def _pipeline(kind: str):
-    """The pipeline module of a kind, imported when first used (a chain's imports the CAD
-    kernel at its module level; a net designed without CAD never needs it)."""
+    """The pipeline module of a kind, imported when first used (a run of one kind does not
+    load the others')."""
     return importlib.import_module(f"rodcad.pipeline.{kind}")

@@ -19,12 +19,7 @@ from rodcad.design.net.frames import rod_matrix
 from rodcad.outputs.viewgeom import Y_UP, ViewPart, ViewScene, cylinder, sphere, tube, unit_cylinder
 from rodcad.outputs.viewscene import ANCHOR, GREY, cad_parts, legend, mass_scale, mm, pct, step_colors
 
-__all__ = ["VIEW_TRIANGLES", "net_scene", "rod_frame"]
-
-
-def rod_frame(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """4 x 4 rod frame in the world, as assembly.step's (:func:`rodcad.design.net.frames.rod_matrix`)."""
-    return rod_matrix(np.asarray(p0, float), np.asarray(p1, float))
+__all__ = ["VIEW_TRIANGLES", "net_scene"]
 
 
 def _bent_line(arc, segments: int = 10) -> np.ndarray:
@@ -71,7 +66,7 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
         unit = unit_cylinder(rod_d / 2, 12)
         for e, (r, color, step) in enumerate(zip(rods, colors, steps)):
             p0, p1 = ends[e]
-            m = rod_frame(p0, p1)
+            m = rod_matrix(p0, p1)  # (as assembly.step places the rod)
             if arcs[e] is None:
                 m = m @ np.diag([float(np.linalg.norm(p1 - p0)), 1.0, 1.0, 1.0])
                 parts.append(ViewPart(f"rod-{e:03d}", "rods", f"rod:{step}", unit, m, color))

@@ -23,6 +23,7 @@ from rodcad.fabrication.layout import (
     max_ball_layout,
     silo_top_points,
     sphere_layout,
+    sphere_layouts,
     memo_key,
     symmetric_images,
     tall_silo,
@@ -52,12 +53,14 @@ __all__ = [
     "dart_throw",
     "FabricationError",
     "lattice_layouts",
+    "lattice_layouts_many",
     "orbits",
     "place_cavities",
     "raised_rows",
     "raised_sockets",
     "row_layout",
     "silo_distance",
+    "silo_distances",
     "socket_layout",
     "socket_rows",
 ]
@@ -185,14 +188,23 @@ def silo_distance(points: np.ndarray, centers: np.ndarray, radius: float,
     pts = np.atleast_2d(points)
     if len(centers) == 0:
         return np.full(len(pts), math.inf)
-    top = radius if height is None else np.asarray(height, dtype=float)
-    c = np.asarray(centers, dtype=float)
+    return silo_distances(pts, centers, radius, height).min(axis=1)
+
+
+def silo_distances(points: np.ndarray, centers: np.ndarray, radius: float | np.ndarray,
+                   height: float | Sequence[float] | None = None) -> np.ndarray:
+    """(n, k): each point's distance (mm) from each of k silo sockets (:func:`silo_distance`
+    is its row minimum); ``radius`` a number or one per socket."""
+    pts = np.atleast_2d(points)
+    r = np.asarray(radius, dtype=float)
+    top = r if height is None else np.asarray(height, dtype=float)
+    c = np.asarray(centers, dtype=float).reshape(-1, 3)
     # UP is the y axis: the height along it and the radial distance from the socket's axis
     dx, h, dz = (pts[:, k, None] - c[None, :, k] for k in range(3))  # (n, k) each
     radial2 = dx * dx + dz * dz
-    ball = np.maximum(np.sqrt(radial2 + h * h) - radius, 0.0)
-    cyl = np.hypot(np.maximum(np.sqrt(radial2) - radius, 0.0), np.maximum(np.maximum(-h, h - top), 0.0))
-    return np.minimum(ball, cyl).min(axis=1)
+    ball = np.maximum(np.sqrt(radial2 + h * h) - r, 0.0)
+    cyl = np.hypot(np.maximum(np.sqrt(radial2) - r, 0.0), np.maximum(np.maximum(-h, h - top), 0.0))
+    return np.minimum(ball, cyl)
 
 
 @dataclass(frozen=True)
@@ -323,6 +335,41 @@ def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
     for rd in radii:
         if not skip(rd):
             yield rd, sphere_layout(clearance_for(rd + wall), clr.bounds, com, rd, wall, void="capped")
+
+
+def lattice_layouts_many(rod: RodType, options: Sequence[tuple[np.ndarray, float]],
+                         skip: Callable[[int, float], bool] = lambda j, radius: False
+                         ) -> Iterator[tuple[float, list[SphereLayout | None]]]:
+    """:func:`lattice_layouts` of several ball options at once (``options``: (socket centres,
+    socket radius) each, roofs at their radius): per cavity radius, largest first, one
+    layout per option (None where ``skip(j, radius)``), each the one
+    ``lattice_layouts(rod, *options[j])`` gives. ``skip`` is asked once every option's
+    layout of the larger radii is known."""
+    solid = type_solid(rod)
+    com = mass_properties(solid).center
+    clr = solid_clearance(rod)
+    wall = rod.material.min_wall
+    # every distinct socket once (options share them); per option, the indices of its own
+    keys: dict[tuple[float, ...], int] = {}
+    subsets: list[np.ndarray] = []
+    for socks, rs in options:
+        socks = np.asarray(socks, dtype=float).reshape(-1, 3)
+        subsets.append(np.array([keys.setdefault((*map(float, p), float(rs)), len(keys)) for p in socks],
+                                dtype=np.int64))
+    table = np.array(list(keys), dtype=float).reshape(-1, 4)
+
+    def regions(p: np.ndarray) -> np.ndarray:
+        return silo_distances(p, table[:, :3], table[:, 3])
+
+    info = mass_info(rod)
+    radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
+    for rd in radii:
+        wanted = [j for j in range(len(options)) if not skip(j, rd)]
+        found = sphere_layouts(clr, clr.bounds, com, rd, wall, regions, [subsets[j] for j in wanted], void="capped")
+        out: list[SphereLayout | None] = [None] * len(options)
+        for j, lay in zip(wanted, found):
+            out[j] = lay
+        yield rd, out
 
 
 class _MemoClearance:

@@ -29,7 +29,7 @@ from rodcad.fabrication.cavities import (
     cavity_pool,
     cavity_radii,
     dart_throw,
-    lattice_layouts,
+    lattice_layouts_many,
     orbits,
     row_layout,
     socket_layout,
@@ -46,6 +46,7 @@ __all__ = [
     "interval_table",
     "intervals_key",
     "removable_volumes",
+    "removable_volumes_many",
     "row_alternates",
 ]
 
@@ -139,31 +140,50 @@ def removable_volumes(rod: RodType, sockets: np.ndarray, socket_r: float, seed: 
     not remove more than the Poisson layouts: leaving reachable masses out only
     makes the table conservative, never wrong.
     """
+    return removable_volumes_many(rod, [(sockets, socket_r)], seed, lattice_counts)[0]
+
+
+def removable_volumes_many(rod: RodType, options: Sequence[tuple[np.ndarray, float]], seed: int,
+                           lattice_counts: dict[float, int] | None = None) -> list[list[tuple[float, float]]]:
+    """:func:`removable_volumes` of several ball options ((sockets, socket radius) each) of
+    one rod, the same numbers, their lattices laid once (:func:`lattice_layouts_many`).
+    ``lattice_counts`` is filled in by the options without sockets, which are laid first."""
     wall = rod.material.min_wall
     k_min = CAPPED_K * MIN_CAVITY_RADIUS**3
-    pieces: list[tuple[float, float]] = []
-    for symmetry in ("mirror-xyz", "point-xy"):
-        pool = cavity_pool(rod, symmetry, seed)
-        for rd in cavity_radii(rod):
-            n_prev = 0
-            for orb in dart_throw(pool, rd, wall, sockets, socket_r):
-                n = n_prev + len(orb)
-                lo, hi = max(n * k_min, n_prev * CAPPED_K * rd**3), n * CAPPED_K * rd**3
-                if lo < hi:
-                    pieces.append((lo, hi))
-                n_prev = n
-    top = max((b for _, b in pieces), default=0.0)
-    def known(rd: float) -> bool:  # the lattice without sockets could not remove more
-        return (lattice_counts is not None and len(sockets) > 0 and rd in lattice_counts
-                and lattice_counts[rd] * CAPPED_K * rd**3 <= top)
+    options = [(np.asarray(s, dtype=float).reshape(-1, 3), float(r)) for s, r in options]
+    pieces: list[list[tuple[float, float]]] = [[] for _ in options]
+    for j, (sockets, socket_r) in enumerate(options):
+        for symmetry in ("mirror-xyz", "point-xy"):
+            pool = cavity_pool(rod, symmetry, seed)
+            for rd in cavity_radii(rod):
+                n_prev = 0
+                for orb in dart_throw(pool, rd, wall, sockets, socket_r):
+                    n = n_prev + len(orb)
+                    lo, hi = max(n * k_min, n_prev * CAPPED_K * rd**3), n * CAPPED_K * rd**3
+                    if lo < hi:
+                        pieces[j].append((lo, hi))
+                    n_prev = n
+    top = [max((b for _, b in p), default=0.0) for p in pieces]
 
-    for rd, lay in lattice_layouts(rod, sockets, socket_r, skip=known):
-        if lattice_counts is not None and not len(sockets):
-            lattice_counts[rd] = lay.count
-        if lay.count:
-            pieces.append((lay.count * k_min, lay.count * CAPPED_K * rd**3))
+    def known(j: int, rd: float) -> bool:  # the lattice without sockets could not remove more
+        return (lattice_counts is not None and len(options[j][0]) > 0 and rd in lattice_counts
+                and lattice_counts[rd] * CAPPED_K * rd**3 <= top[j])
+
+    bare = [j for j, o in enumerate(options) if not len(o[0])]
+    for group in (bare, [j for j in range(len(options)) if j not in bare]):
+        if not group:
+            continue
+        for rd, lays in lattice_layouts_many(rod, [options[j] for j in group], lambda i, rd: known(group[i], rd)):
+            for j, lay in zip(group, lays):
+                if lay is None:
+                    continue
+                if lattice_counts is not None and not len(options[j][0]):
+                    lattice_counts[rd] = lay.count
+                if lay.count:
+                    pieces[j].append((lay.count * k_min, lay.count * CAPPED_K * rd**3))
     # a hair inside every edge, so that the edges themselves solve
-    return [(a * (1 + 1e-9), b * (1 - 1e-9)) for a, b in _merge(pieces) if b * (1 - 1e-9) > a * (1 + 1e-9)]
+    return [[(a * (1 + 1e-9), b * (1 - 1e-9)) for a, b in _merge(p) if b * (1 - 1e-9) > a * (1 + 1e-9)]
+            for p in pieces]
 
 
 def intervals_key(rod: RodType, seed: int) -> str:
@@ -183,8 +203,10 @@ def compute_table(rod: RodType, seed: int) -> dict[str, Any]:
     options = []
     pieces: list[tuple[float, float]] = []
     counts: dict[float, int] = {}
-    for mass_k, socks, rs, kind in _ball_options(rod):  # the ball-free rod first
-        reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in removable_volumes(rod, socks, rs, seed, counts)]
+    balls = _ball_options(rod)  # the ball-free rod first
+    volumes = removable_volumes_many(rod, [(socks, rs) for _, socks, rs, _ in balls], seed, counts)
+    for (mass_k, socks, rs, kind), removable in zip(balls, volumes):
+        reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in removable]
         options.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs, "kind": kind,
                          "pieces": [list(p) for p in sorted(reach)]})
         pieces += reach + [(mass_k * (1 - SOLID_TOL), mass_k * (1 + SOLID_TOL))]
@@ -261,10 +283,10 @@ def row_alternates(rod: RodType, seed: int, cache: DiskCache | None = None, *,
                 continue
             seen.add(len(idx))
             socks = row.centers[idx]
-            mass_k = ms + len(idx) * net
-            reach = [(mass_k - b * rho, mass_k - a * rho) for a, b in removable_volumes(rod, socks, rs, seed)]
-            out.append({"mass": mass_k, "sockets": socks.tolist(), "socket_radius": rs, "kind": kind,
-                        "pieces": [list(p) for p in sorted(reach)]})
+            out.append({"mass": ms + len(idx) * net, "sockets": socks.tolist(), "socket_radius": rs, "kind": kind})
+    volumes = removable_volumes_many(rod, [(o["sockets"], o["socket_radius"]) for o in out], seed)
+    for o, removable in zip(out, volumes):
+        o["pieces"] = [list(p) for p in sorted((o["mass"] - b * rho, o["mass"] - a * rho) for a, b in removable)]
     if not given:
         cache.put("fabrow", key, out)
     return out

@@ -33,6 +33,7 @@ __all__ = [
     "silo_top_points",
     "silo_volume",
     "sphere_layout",
+    "sphere_layouts",
     "SphereLayout",
     "symmetric_images",
     "symmetric_subset",
@@ -486,6 +487,60 @@ def sphere_layout(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[
                 if keep.sum() > most:
                     best = SphereLayout(radius, pts[keep] + lift, sym, kind, void)
                     most = best.count
+    return best
+
+
+def sphere_layouts(clearance: Clearance, bounds: tuple[Sequence[float], Sequence[float]],
+                   center: Sequence[float], radius: float, wall: float,
+                   regions: Callable[[np.ndarray], np.ndarray], subsets: Sequence[np.ndarray],
+                   symmetries: Iterable[str] = SYMMETRIES, lattices: Iterable[str] = LATTICES, *,
+                   void: str = "sphere") -> list[SphereLayout]:
+    """:func:`sphere_layout` for several sets of regions kept clear at once (the ball options
+    of one rod, whose cavities must stay clear of different subsets of its sockets).
+
+    Layout ``j`` is exactly ``sphere_layout`` with the clearance
+    ``min(clearance(p), regions(p)[:, subsets[j]].min(axis=1))``: the lattices are laid
+    once, the solid's clearance and each region's distance taken once per lattice, and only
+    the choice of sites is made per subset.
+
+    Args:
+        clearance: signed distance to the solid's boundary (mm), vectorised.
+        bounds, center, radius, wall, symmetries, lattices: as for :func:`sphere_layout`.
+        regions: (n, 3) points -> (n, k) their distance (mm) from each of k regions.
+        subsets: per layout wanted, the indices of the regions it keeps clear of.
+        void: a void that needs no rim check ('silo' is not batched).
+    """
+    if void == "silo":
+        raise ValueError("silo voids are laid one set at a time (sphere_layout)")
+    void_volume(void, radius)  # validates the kind
+    need = radius + wall
+    inner = (tuple(b + need for b in bounds[0]), tuple(b - need for b in bounds[1]))
+    pitch = 2 * radius + wall
+    best = [SphereLayout.empty() for _ in subsets]
+    most = [0] * len(subsets)
+    symmetries = tuple(symmetries)
+    for kind in lattices:
+        for offset in ((ox, oy, oz) for ox in (0.0, 0.5) for oy in (0.0, 0.5) for oz in (0.0, 0.5)):
+            pts = lattice_sites(inner, center, pitch, offset, kind)
+            if len(pts) <= min(most, default=0):
+                continue
+            solid = clearance(pts) >= need
+            room = np.flatnonzero(solid)
+            clear = regions(pts[room]) >= need if len(room) else np.zeros((0, 0), dtype=bool)
+            for j, subset in enumerate(subsets):
+                if len(pts) <= most[j]:
+                    continue
+                feasible = solid.copy()
+                if len(subset) and len(room):
+                    feasible[room] = clear[:, subset].all(axis=1)
+                if feasible.sum() <= most[j]:
+                    continue
+                for sym in symmetries:
+                    near = lattice_image_map(inner, center, pitch, offset, kind, sym)
+                    keep = symmetric_subset(pts, feasible, center, sym, near=near)
+                    if keep.sum() > most[j]:
+                        best[j] = SphereLayout(radius, pts[keep], sym, kind, void)
+                        most[j] = best[j].count
     return best
 
 

@@ -64,6 +64,8 @@ class NetPlan:
         added_anchors: anchor points added midway between two drawn anchors, (node, (a, b)),
             where two rods to them met tighter than the largest hub allows
             (:func:`rodcad.design.net.collapse.join_anchor_pairs`).
+        spread: nodes moved a little so that the family's largest hub holds rods drawn to meet
+            too close, (node, mm moved) (:mod:`rodcad.design.net.spread`).
         pieces: (m,) the printed pieces each rod is spliced from (:mod:`rodcad.catalog.net.splice`;
             1: one piece), or None: every rod one piece.
         node_cone: (n,) each hub's socket cone (deg) within the catalog's ``cone_range``
@@ -87,6 +89,7 @@ class NetPlan:
     collapsed: list = field(default_factory=list)
     between_anchors: int = 0
     added_anchors: list = field(default_factory=list)
+    spread: list = field(default_factory=list)
     pieces: np.ndarray | None = None
     node_cone: np.ndarray | None = None
 
@@ -250,6 +253,7 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     """
     from rodcad.design.fit import DEFAULT_TOLERANCE
     from rodcad.design.net.sizing import size_hubs
+    from rodcad.design.net.spread import SPREAD_SHARE, spread_tight
 
     hw: NodeHardware = catalog.node
     tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
@@ -261,6 +265,9 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     if hw.is_hub:
         t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
     t, between = _collapsed(t, hw, lo_hw, hi)
+    drawn_at = t.positions
+    budget = SPREAD_SHARE * tol * t.size  # the most a node may move to spread rods (mm)
+    t, moved = spread_tight(t, hw, budget)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
     one, floor, spliced = _whole_floor(base, hw, hi, whole, splice_whole)
@@ -281,6 +288,14 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
             raise DesignLimit(f"drawn edges {sorted(set(grow[one[grow]].tolist()))} stay longer than the longest rod "
                               "with the family's largest hubs")
         counts[grow] = np.maximum(counts[grow] + 1, [_first_count(base, e, node_pivot, rp_min, hi) for e in grow])
+    if problems and not long.size:  # rods too close or too short once the long edges are cut: nodes spread
+        floor_t = np.concatenate([floor, np.zeros(t.n - base.n)])
+        wide, rp_wide, left, also = _spread(t, hw, budget - _moved(t, drawn_at), lo_hw, hi, floor_t)
+        len_wide = _lengths(wide, rp_wide)
+        if also.size and not np.any(len_wide / np.maximum(pieces, 1) > hi * (1 + 1e-9)):
+            t, node_pivot, problems, lengths = wide, rp_wide, left, len_wide
+            base = dataclasses.replace(base, positions=t.positions[: base.n].copy())
+            moved = np.union1d(moved, also)
     bends = t.bends
     if np.any(bends > 0):
         flat = [int(e) for e in np.flatnonzero(bends > 0) if lengths[e] - 2 * hw.end_offset <= 0
@@ -297,6 +312,11 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         # the joints moved, and with them the angles their rods meet the hubs at: the hubs sized again
         # (never smaller), so that every two sockets keep their wall
         node_pivot, problems = size_hubs(t, hw, lo_hw, hi, node_pivot)
+        if problems:  # rods the sag brought too close or made too short: the drawn nodes spread
+            # (the joints stay at their sag)
+            t, node_pivot, problems, also = _spread(t, hw, budget - _moved(t, drawn_at), lo_hw, hi, node_pivot,
+                                                    fixed=t.joint_mask)
+            moved = np.union1d(moved, also)
         if problems:
             raise DesignLimit("with the two-rod joints at their funicular sag, " + "; ".join(problems))
     plan = _plan(t, hw, node_pivot, (lo_hw, hi), pieces if np.any(pieces > 1) else None)
@@ -304,7 +324,41 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     plan.collapsed = collapses(base, merged)
     plan.between_anchors = between
     plan.added_anchors = added_anchors(base)
+    plan.spread = [(int(k), float(np.linalg.norm(t.positions[k] - drawn_at[k]))) for k in moved if k < len(drawn_at)]
     return plan
+
+
+def _moved(t: NetTarget, drawn_at: np.ndarray) -> float:
+    """How far the planner's spread has moved a drawn node so far (mm; the first nodes of
+    ``t`` are the drawn ones)."""
+    return float(np.max(np.linalg.norm(t.positions[: len(drawn_at)] - drawn_at, axis=1), initial=0.0))
+
+
+def _spread(t: NetTarget, hw: NodeHardware, budget: float, shortest: float, longest: float, floor: np.ndarray,
+            fixed: np.ndarray | None = None) -> tuple[NetTarget, np.ndarray, list[str], np.ndarray]:
+    """Up to three rounds of :func:`rodcad.design.net.spread.spread_tight` and :func:`size_hubs`:
+    the nodes moved until every node's rods fit the family's largest hub and every rod is at
+    least ``shortest`` between its hubs as sized, within ``budget`` (mm) in all. Returns (target,
+    node pivot radii, problems left, nodes moved)."""
+    from rodcad.design.net.sizing import size_hubs
+    from rodcad.design.net.spread import spread_tight
+
+    start = t.positions[: len(floor)].copy()
+    moved = np.zeros(0, dtype=np.int64)
+    node_pivot, problems = size_hubs(t, hw, shortest, longest, floor)
+    for _ in range(3):
+        if not problems:
+            break
+        ends = node_pivot[t.edges].sum(axis=1)
+        short = t.edge_lengths - ends < shortest * (1 - 1e-9)
+        least = np.where(short, shortest * (1 + 1e-6) + ends, 0.0)
+        left = budget - float(np.max(np.linalg.norm(t.positions[: len(start)] - start, axis=1), initial=0.0))
+        wide, also = spread_tight(t, hw, left, fixed=fixed, least_length=least)
+        if not also.size:
+            break
+        t, moved = wide, np.union1d(moved, also)
+        node_pivot, problems = size_hubs(t, hw, shortest, longest, floor)
+    return t, node_pivot, problems, moved
 
 
 def resized(plan: NetPlan, node_pivot: np.ndarray) -> NetPlan:
@@ -313,7 +367,7 @@ def resized(plan: NetPlan, node_pivot: np.ndarray) -> NetPlan:
     masses following."""
     new = _plan(plan.target, plan.hardware, np.asarray(node_pivot, float), plan.length_range, plan.pieces)
     new = dataclasses.replace(new, merged=plan.merged, collapsed=plan.collapsed, between_anchors=plan.between_anchors,
-                              added_anchors=plan.added_anchors, node_cone=plan.node_cone)
+                              added_anchors=plan.added_anchors, spread=plan.spread, node_cone=plan.node_cone)
     return replan(new, new.pivots) if plan.node_cone is not None else new
 
 

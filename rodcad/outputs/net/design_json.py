@@ -44,6 +44,7 @@ def planner_json(plan) -> dict[str, Any]:
         "split_edges": [{"edge": int(e), "rods": int(split[e]), "joints": "ball"} for e in np.flatnonzero(split > 1)],
         "joints": [int(k) for k in (t.joints if t.joints is not None else [])],
         "merged_nodes": [[int(x) for x in g] for g in plan.merged],
+        "spread_nodes": [{"node": int(k), "moved_mm": float(mm)} for k, mm in plan.spread],
         "collapsed_edges": [{"node": c.node, "drawn_nodes": list(c.drawn), "at": list(c.point),
                              "moved_mm": c.moved_mm, "into_anchor": c.anchored} for c in plan.collapsed],
         "rods_between_anchors_left_out": int(plan.between_anchors),

@@ -56,6 +56,14 @@ def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
     if pl.get("merged_nodes"):
         out.append(f"- {len(pl['merged_nodes'])} group(s) of drawn nodes too close for any hub were merged into one "
                    f"hub: {pl['merged_nodes'][:6]}; the fit counts each drawn node.")
+    spread = pl.get("spread_nodes") or []
+    if spread:
+        worst = max(spread, key=lambda x: x["moved_mm"])
+        out.append(f"- {len(spread)} drawn node(s) moved a little so that the family's largest hub holds rods drawn "
+                   "to meet closer than its sockets allow, or so that a rod drawn too short between its hubs reaches "
+                   f"the shortest printed: nodes {_list([x['node'] for x in spread], 12)}, up to "
+                   f"{worst['moved_mm']:.3g} mm (node {worst['node']}); the fit measures each against where it was "
+                   "drawn.")
     col = pl.get("collapsed_edges") or []
     if col:
         drawn = sum(len(c["drawn_nodes"]) for c in col)
@@ -305,7 +313,8 @@ def planner_summary(plan) -> str:
     split = len(t.joints) if t.joints is not None else 0
     k = plan.rod_pieces
     spliced = int(np.count_nonzero(k > 1))
-    if not (collapsed or added or split or plan.merged or plan.between_anchors or spliced):
+    spread = list(plan.spread)
+    if not (collapsed or added or split or plan.merged or plan.between_anchors or spliced or spread):
         return ""
     what = []
     if collapsed:
@@ -314,6 +323,11 @@ def planner_summary(plan) -> str:
                     f"drawn node moved up to {worst:.3g} mm ({100 * worst / t.size:.3g} % of its size)")
     if plan.merged:
         what.append(f"{len(plan.merged)} group(s) of nearly coincident nodes merged")
+    if spread:
+        worst = max(mm for _, mm in spread)
+        what.append(f"{len(spread)} node(s) moved up to {worst:.3g} mm ({100 * worst / t.size:.3g} % of its size) so "
+                    "that the largest hub holds rods drawn to meet too close, or a rod drawn too short reaches "
+                    "the shortest printed")
     if split:
         what.append(f"{split} two-rod joint(s) on long edges")
     if spliced:

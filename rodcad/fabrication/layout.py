@@ -370,28 +370,19 @@ def lattice_image_map(bounds: tuple[Sequence[float], Sequence[float]], center: S
     def compute() -> np.ndarray:
         if any(2 * o != round(2 * o) for o in offset):
             raise ValueError(f"lattice offsets must be 0 or half a step, not {tuple(offset)}")
-        points = lattice_sites(bounds, center, pitch, offset, kind)
         flips = np.asarray(_flips(symmetry), dtype=np.int64)
-        if not len(points):
+        indexed = _LATTICE_GRIDS.get(key[:-1], lambda: _lattice_grid(bounds, center, pitch, offset, kind))
+        if indexed is None:
             return np.zeros((len(flips), 0), dtype=np.int64)
-        rel = points - np.asarray(center, dtype=float)
-        a2x, a2y = (pitch / 2, pitch * math.sqrt(3) / 2) if kind == "hex" else (0.0, pitch)
-        jj = np.rint(2 * rel[:, 1] / a2y).astype(np.int64)  # doubled indices: 2 (j + oy), ...
-        kk = np.rint(2 * rel[:, 2] / pitch).astype(np.int64)
-        ii = np.rint(2 * (rel[:, 0] - jj / 2 * a2x) / pitch).astype(np.int64)
-        idx = np.stack([ii, jj, kk], axis=1)
-        lo = idx.min(axis=0)
-        shape = idx.max(axis=0) - lo + 1
-        grid = np.full(tuple(shape), -1, dtype=np.int64)
-        grid[tuple((idx - lo).T)] = np.arange(len(idx))
-        out = np.full((len(flips), len(idx)), -1, dtype=np.int64)
+        ii, jj, kk, lo, shape, grid = indexed
+        out = np.full((len(flips), len(ii)), -1, dtype=np.int64)
         for n, (fx, fy, fz) in enumerate(flips):
             if kind == "hex":  # x - cx = ii p / 2 + jj p / 4, flipped: ii' = fx ii + jj (fx - fy) / 2
                 twice = 2 * fx * ii + jj * (fx - fy)
                 ok = twice % 2 == 0
                 fi = twice // 2
             else:
-                ok = np.ones(len(idx), dtype=bool)
+                ok = np.ones(len(ii), dtype=bool)
                 fi = fx * ii
             img = np.stack([fi, fy * jj, fz * kk], axis=1) - lo
             ok &= np.all((img >= 0) & (img < shape), axis=1)
@@ -403,6 +394,30 @@ def lattice_image_map(bounds: tuple[Sequence[float], Sequence[float]], center: S
 
 #: :func:`lattice_image_map` by its arguments.
 _LATTICE_MAPS = BoundedMemo(4096)
+
+
+def _lattice_grid(bounds, center, pitch: float, offset, kind: str):
+    """The doubled lattice indices (ii, jj, kk) of ``lattice_sites(...)``'s points, their least
+    index, the index box's shape and the grid of point numbers over it (-1 where none); None
+    for no points. Shared by the symmetries' image maps."""
+    points = lattice_sites(bounds, center, pitch, offset, kind)
+    if not len(points):
+        return None
+    rel = points - np.asarray(center, dtype=float)
+    a2x, a2y = (pitch / 2, pitch * math.sqrt(3) / 2) if kind == "hex" else (0.0, pitch)
+    jj = np.rint(2 * rel[:, 1] / a2y).astype(np.int64)  # doubled indices: 2 (j + oy), ...
+    kk = np.rint(2 * rel[:, 2] / pitch).astype(np.int64)
+    ii = np.rint(2 * (rel[:, 0] - jj / 2 * a2x) / pitch).astype(np.int64)
+    idx = np.stack([ii, jj, kk], axis=1)
+    lo = idx.min(axis=0)
+    shape = idx.max(axis=0) - lo + 1
+    grid = np.full(tuple(shape), -1, dtype=np.int64)
+    grid[tuple((idx - lo).T)] = np.arange(len(idx))
+    return ii, jj, kk, lo, shape, grid
+
+
+#: :func:`_lattice_grid` by its arguments (both symmetries' maps use one).
+_LATTICE_GRIDS = BoundedMemo(1024)
 
 
 def symmetric_subset(points: np.ndarray, feasible: np.ndarray, center: Sequence[float], symmetry: str,
@@ -527,19 +542,24 @@ def sphere_layouts(clearance: Clearance, bounds: tuple[Sequence[float], Sequence
             solid = clearance(pts) >= need
             room = np.flatnonzero(solid)
             clear = regions(pts[room]) >= need if len(room) else np.zeros((0, 0), dtype=bool)
-            for j, subset in enumerate(subsets):
-                if len(pts) <= most[j]:
-                    continue
-                feasible = solid.copy()
-                if len(subset) and len(room):
-                    feasible[room] = clear[:, subset].all(axis=1)
-                if feasible.sum() <= most[j]:
-                    continue
-                for sym in symmetries:
-                    near = lattice_image_map(inner, center, pitch, offset, kind, sym)
-                    keep = symmetric_subset(pts, feasible, center, sym, near=near)
-                    if keep.sum() > most[j]:
-                        best[j] = SphereLayout(radius, pts[keep], sym, kind, void)
+            # (J, n): the sites each subset may use
+            feasible = np.repeat(solid[None, :], len(subsets), axis=0)
+            if len(room):
+                for j, subset in enumerate(subsets):
+                    if len(subset):
+                        feasible[j, room] = clear[:, subset].all(axis=1)
+            # only a subset with more feasible sites than its best so far can gain
+            want = np.flatnonzero(feasible.sum(axis=1) > np.asarray(most))
+            if not want.size:
+                continue
+            F = feasible[want]
+            for sym in symmetries:  # (for each subset, the symmetries in the same order as sphere_layout)
+                near = lattice_image_map(inner, center, pitch, offset, kind, sym)
+                images = (near >= 0)[None] & F[:, np.maximum(near, 0)]
+                keep = F & images.all(axis=1)
+                for j, kj in zip(want, keep):
+                    if kj.sum() > most[j]:
+                        best[j] = SphereLayout(radius, pts[kj], sym, kind, void)
                         most[j] = best[j].count
     return best
 

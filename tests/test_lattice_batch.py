@@ -3,8 +3,9 @@
 clearance and each socket's distance once, only the choice of sites per option. Checked
 against the one-option path :func:`place_cavities` itself falls back on
 (:func:`lattice_layouts`, built on :func:`sphere_layout`): the same radii, the same sites to
-the bit, for options of no sockets, one orbit, several and all; a skipped radius is not
-laid; a 'silo' void is refused by the batched layout (it needs a rim check per set)."""
+the bit, for options of no sockets, one orbit, several and all, and of two socket radii; a
+skipped radius is not laid; a 'silo' void is refused by the batched layout (it needs a rim
+check per set)."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ def rod_options():
     c = lay.centers
     order = np.argsort(np.abs(c[:, 0] - c[:, 0].mean()), kind="stable")
     options = [(np.zeros((0, 3)), 0.0), (c[np.sort(order[:2])], lay.radius),
-               (c[np.sort(order[:4])], lay.radius), (c, lay.radius), (c[np.sort(order[-2:])], lay.radius)]
+               (c[np.sort(order[:4])], lay.radius), (c, lay.radius), (c[np.sort(order[-2:])], lay.radius),
+               (c[np.sort(order[:2])], 0.7 * lay.radius)]  # (a second ball kind: the same sites, smaller)
     return rod, options
 
 

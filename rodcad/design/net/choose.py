@@ -87,14 +87,17 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
         if check.ok or weak == tried:
             break
         tried = weak
-        try:
-            plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak)
-        except DesignLimit:  # (larger hubs at their ends leave another rod too short: spliced between theirs)
+        plan = None
+        # (larger hubs at their ends leave another rod too short: spliced between theirs; nodes
+        # moved within the tolerance only where neither holds them)
+        for how in ({"spread": False}, {"splice_whole": True, "spread": False}, {"splice_whole": True}):
             try:
-                plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak,
-                                splice_whole=True)
-            except DesignLimit:
+                plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak, **how)
                 break
+            except DesignLimit:
+                continue
+        if plan is None:
+            break
         other = last = design(plan)
         if _rank(other) > _rank(check):
             k = plan.rod_pieces

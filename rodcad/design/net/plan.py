@@ -223,7 +223,8 @@ def length_range(catalog) -> tuple[float, float]:
 
 
 def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang: bool = False,
-             g: float = 9.81, whole: frozenset[int] = frozenset(), splice_whole: bool = False) -> NetPlan:
+             g: float = 9.81, whole: frozenset[int] = frozenset(), splice_whole: bool = False,
+             spread: bool = True) -> NetPlan:
     """Hardware, lengths, mass bounds and hub masses for a net's target, the drawn net made
     buildable first (:mod:`rodcad.design.net.joints`, :mod:`rodcad.design.net.collapse`,
     :mod:`rodcad.design.net.sizing`): nodes nearly on top of each other merged into one hub,
@@ -246,6 +247,9 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         splice_whole: every straight edge of ``whole`` spliced (:mod:`rodcad.catalog.net.splice`)
             between the hubs its nodes get anyway, none between larger hubs (where larger hubs
             would leave another of their rods too short).
+        spread: where rods meet too close for the largest hub or are too short between their
+            hubs, move nodes within the tolerance (:mod:`rodcad.design.net.spread`) before
+            refusing; False refuses (for a caller with another way to try first).
 
     Raises:
         DesignLimit: what no hardware in the catalog can do (every such rod and node named,
@@ -253,7 +257,7 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     """
     from rodcad.design.fit import DEFAULT_TOLERANCE
     from rodcad.design.net.sizing import size_hubs
-    from rodcad.design.net.spread import SPREAD_SHARE, spread_tight
+    from rodcad.design.net.spread import SPREAD_SHARE
 
     hw: NodeHardware = catalog.node
     tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
@@ -266,8 +270,10 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
         t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
     t, between = _collapsed(t, hw, lo_hw, hi)
     drawn_at = t.positions
-    budget = SPREAD_SHARE * tol * t.size  # the most a node may move to spread rods (mm)
-    t, moved = spread_tight(t, hw, budget)
+    # the most a node may move to spread rods drawn too close or too short (mm): only where
+    # nothing else the planner does (rods in line, hubs of their own size) holds them
+    budget = SPREAD_SHARE * tol * t.size if spread else 0.0
+    moved = np.zeros(0, dtype=np.int64)
     base = t
     counts = np.full(base.m, max(int(t.refine_edges), 1))  # (net.refine of explicit edges)
     one, floor, spliced = _whole_floor(base, hw, hi, whole, splice_whole)

@@ -50,6 +50,8 @@ def test_rods_a_little_too_close_are_spread_by_the_least_move_and_the_fit_counts
     limit = hw.sized(hw.pivot_limits[1]).min_angle_deg
     short_by = 0.4
     t = _vee(limit - short_by)
+    with pytest.raises(DesignLimit, match="largest hub allows"):  # the last resort, not taken when asked not to
+        plan_net(t, cat, spread=False)
     plan = plan_net(t, cat)
     p = plan.target.positions
     assert _angle(p, 0, 1, 2) >= limit + MARGIN_DEG - 1e-6

@@ -1,7 +1,7 @@
 """Rods drawn a little too close for the largest hub, or a little too short for the shortest
 rod, are made buildable by moving nodes within the tolerance (issue 33,
 :mod:`rodcad.design.net.spread`), not refused; what needs more is still refused naming the
-hub that would hold it.
+hub that would hold it; and a net the solver cannot hang says what would.
 
 Truth: the angle between two rods and an edge's length from the node points themselves (not
 the planner's numbers), bounds on the least move from the geometry of a turning rod, the
@@ -102,3 +102,17 @@ def test_an_edge_a_little_short_is_lengthened_and_the_angles_kept(cat):
     need[2] = d0 + 5.0
     same, none = spread_tight(t, hw, 1.0, least_length=need)
     assert same is t and none.size == 0
+
+
+def test_a_net_the_solver_cannot_hang_says_why_the_masses_could_not(cat):
+    """Where the designed net has no equilibrium, the exit line keeps the statics' reason (the
+    nodes whose rods cannot hold them, and what would), not only the solver's."""
+    import dataclasses
+
+    check = design_drawn_net(_vee(60.0), cat, seed=0)
+    lost = dataclasses.replace(check.design.equilibrium, success=False, message="Iteration limit reached.")
+    failed = dataclasses.replace(check, design=dataclasses.replace(check.design, equilibrium=lost),
+                                 why="No masses at all balance this target: move node 0.")
+    line = failed.limit()
+    assert "found no equilibrium" in line and line.endswith("No masses at all balance this target: move node 0.")
+    assert dataclasses.replace(failed, why="").limit().endswith("(Iteration limit reached.)")

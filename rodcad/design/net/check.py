@@ -218,8 +218,9 @@ class NetCheck:
         pct = (f"hangs {100 * self.rel_size:.3g} % of its size off its target (tolerance "
                f"{100 * self.tolerance:.3g} %)")
         eq, st = self.equilibrium, self.design.statics
-        if not eq.success:
-            return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})"
+        if not eq.success:  # (and why the masses could not make the target one, where the statics say)
+            return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})" + (
+                f"; {self.why}" if self.why else "")
         if not eq.stable:
             return f"{pct}: the target is an equilibrium of the designed net, but not a stable one" + (
                 f": {self.why}" if self.why else "")

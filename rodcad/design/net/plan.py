@@ -64,8 +64,9 @@ class NetPlan:
         added_anchors: anchor points added midway between two drawn anchors, (node, (a, b)),
             where two rods to them met tighter than the largest hub allows
             (:func:`rodcad.design.net.collapse.join_anchor_pairs`).
-        spread: nodes moved a little so that the family's largest hub holds rods drawn to meet
-            too close, (node, mm moved) (:mod:`rodcad.design.net.spread`).
+        spread: drawn nodes moved a little so that the family's largest hub holds rods drawn
+            to meet too close, or a rod drawn too short reaches the shortest printed, (node, mm
+            moved) (:mod:`rodcad.design.net.spread`; the planner's last resort).
         pieces: (m,) the printed pieces each rod is spliced from (:mod:`rodcad.catalog.net.splice`;
             1: one piece), or None: every rod one piece.
         node_cone: (n,) each hub's socket cone (deg) within the catalog's ``cone_range``

@@ -1,15 +1,19 @@
-"""Rods that meet closer than the catalog's largest hub allows, spread by moving nodes a little.
+"""Rods drawn a little too close for the catalog's largest hub, or a little too short between
+their hubs, made buildable by moving nodes a little: the planner's last resort.
 
 At a node whose two rods meet at an angle under the largest hub's least angle (its sockets
 would not keep their wall, or the rods' bodies would touch), no hub of the family holds them
-as drawn. Where that angle is short by a little, moving the node and its neighbours by a small
-fraction of the net's size opens it: :func:`spread_tight` finds the least such move (the sum
-of the nodes' squared displacements, anchors fixed) that leaves every two rods at every node
-it touches at least :data:`MARGIN_DEG` over that least angle, and takes it when no node moves
-more than :data:`SPREAD_SHARE` of the design's tolerance x the net's size. The fit then
-measures each moved node against the point drawn for it, so the move counts against the
-design, never hidden from it. A node that needs more is left as drawn and refused with the
-hub that would hold it (:func:`rodcad.design.net.sizing.size_hubs`).
+as drawn; a rod shorter than the shortest printed between the hubs its nodes need is not
+printed. Where the angle or the length is short by a little, moving the nodes around by a
+small fraction of the net's size fixes it: :func:`spread_tight` finds the least such move
+(the sum of the nodes' squared displacements, anchors and the given nodes fixed) that leaves
+every two rods at every node it touches at least :data:`MARGIN_DEG` over that least angle
+and every such edge as long as it must be, and takes it when no node moves more than the
+budget the planner gives (:data:`SPREAD_SHARE` of the design's tolerance x the net's size in
+all, :func:`rodcad.design.net.plan.plan_net`). The fit then measures each moved node against
+the point drawn for it, so the move counts against the design, never hidden from it. A node
+that needs more is left as drawn and refused with the hub that would hold it
+(:func:`rodcad.design.net.sizing.size_hubs`).
 """
 
 from __future__ import annotations

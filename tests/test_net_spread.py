@@ -116,3 +116,16 @@ def test_a_net_the_solver_cannot_hang_says_why_the_masses_could_not(cat):
     line = failed.limit()
     assert "found no equilibrium" in line and line.endswith("No masses at all balance this target: move node 0.")
     assert dataclasses.replace(failed, why="").limit().endswith("(Iteration limit reached.)")
+
+
+def test_the_spread_is_bounded(cat, monkeypatch):
+    """More tight nodes than the spread moves at once: the net is left as drawn, not searched
+    without bound."""
+    import rodcad.design.net.spread as spread
+
+    hw = cat.node
+    t = _vee(hw.sized(hw.pivot_limits[1]).min_angle_deg - 0.4)
+    assert spread_tight(t, hw, 10.0)[1].size  # three free nodes: spread
+    monkeypatch.setattr(spread, "MAX_MOVED", 2)
+    out, moved = spread_tight(t, hw, 10.0)
+    assert out is t and moved.size == 0

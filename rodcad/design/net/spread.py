@@ -27,7 +27,7 @@ from rodcad.catalog.net.node import NodeHardware
 from rodcad.design.net.sizing import least_angles
 from rodcad.design.net.target import NetTarget
 
-__all__ = ["MARGIN_DEG", "SPREAD_SHARE", "spread_tight"]
+__all__ = ["MARGIN_DEG", "MAX_MOVED", "SPREAD_SHARE", "spread_tight"]
 
 #: Each node may move at most this share of the tolerance x the net's size (the rest of the
 #: tolerance is the design's).
@@ -39,6 +39,11 @@ MARGIN_DEG = 0.05
 
 #: Pairs of rods nearer than this over the limit (deg) are watched while nodes move.
 WATCH_DEG = 15.0
+
+#: At most this many nodes are moved at once (the least move is found with finite-difference
+#: gradients of the constraints: its time grows with their square); a net with more tight
+#: nodes than this is left as drawn (and refused with the hardware that would hold it).
+MAX_MOVED = 60
 
 
 def spread_tight(t: NetTarget, hw: NodeHardware, budget: float, *, fixed: np.ndarray | None = None,
@@ -85,7 +90,7 @@ def spread_tight(t: NetTarget, hw: NodeHardware, budget: float, *, fixed: np.nda
     for k in tight:
         near |= nbrs[int(k)]
     free = np.array(sorted(k for k in near if not stay[k]), dtype=np.int64)
-    if not free.size:
+    if not free.size or free.size > MAX_MOVED:
         return t, none
     watch = set(free.tolist())
     for k in free:

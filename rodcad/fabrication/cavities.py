@@ -22,7 +22,6 @@ from rodcad.fabrication.layout import (
     ball_offset,
     max_ball_layout,
     silo_top_points,
-    sphere_layout,
     sphere_layouts,
     memo_key,
     symmetric_images,
@@ -306,45 +305,31 @@ def place_cavities(rod: RodType, volume: float, sockets: np.ndarray, socket_r: f
     return best
 
 
-def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float,
-                    skip: Callable[[float], bool] = lambda radius: False, *,
+def lattice_layouts(rod: RodType, sockets: np.ndarray, socket_r: float, *,
                     socket_h: float | tuple[float, ...] | None = None) -> Iterator[tuple[float, SphereLayout]]:
     """The symmetric lattice cavity layouts beside these ball sockets (roofs ``socket_h``
     above their centres; default their radius), largest radius first (the fallback of
-    :func:`place_cavities`: it reaches the catalog's m_min); radii for which
-    ``skip(radius)`` is true are passed over."""
-    solid = type_solid(rod)
-    com = mass_properties(solid).center
-    clr = solid_clearance(rod)
-    wall = rod.material.min_wall
-
-    def clearance_for(need: float) -> Callable[[np.ndarray], np.ndarray]:
-        """The clearance beside the sockets where the solid leaves ``need`` (the cavities'
-        test), the solid's alone elsewhere (too little either way)."""
-        def clearance(p: np.ndarray) -> np.ndarray:
-            c = np.array(clr(p))
-            if len(sockets):
-                room = np.flatnonzero(c >= need)
-                c[room] = np.minimum(c[room], silo_distance(p[room], sockets, socket_r, socket_h))
-            return c
-
-        return clearance
-
-    info = mass_info(rod)
-    radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)
-    for rd in radii:
-        if not skip(rd):
-            yield rd, sphere_layout(clearance_for(rd + wall), clr.bounds, com, rd, wall, void="capped")
+    :func:`place_cavities`: it reaches the catalog's m_min): :func:`lattice_layouts_many` of
+    the one option, so that the tables of reachable masses lay exactly these."""
+    for rd, (lay,) in lattice_layouts_many(rod, [(sockets, socket_r, socket_h)]):
+        yield rd, lay
 
 
-def lattice_layouts_many(rod: RodType, options: Sequence[tuple[np.ndarray, float]],
+def lattice_layouts_many(rod: RodType, options: Sequence[tuple],
                          skip: Callable[[int, float], bool] = lambda j, radius: False
                          ) -> Iterator[tuple[float, list[SphereLayout | None]]]:
-    """:func:`lattice_layouts` of several ball options at once (``options``: (socket centres,
-    socket radius) each, roofs at their radius): per cavity radius, largest first, one
-    layout per option (None where ``skip(j, radius)``), each the one
-    ``lattice_layouts(rod, *options[j])`` gives. ``skip`` is asked once every option's
-    layout of the larger radii is known."""
+    """The symmetric lattice cavity layouts of several ball options of a rod at once: per
+    cavity radius, largest first, one layout per option (None where ``skip(j, radius)``), the
+    most cavities :func:`sphere_layout` fits where the solid leaves a wall and the option's
+    sockets are a wall away (:func:`sphere_layouts`: the lattices, the solid's clearance and
+    each socket's distance taken once for all the options).
+
+    Args:
+        rod: the rod type.
+        options: (socket centres, socket radius) or (centres, radius, roofs) each; the roofs
+            ``height`` above the centres, one for all or one per socket (default the radius).
+        skip: asked once every option's layouts of the larger radii are known.
+    """
     solid = type_solid(rod)
     com = mass_properties(solid).center
     clr = solid_clearance(rod)
@@ -352,14 +337,16 @@ def lattice_layouts_many(rod: RodType, options: Sequence[tuple[np.ndarray, float
     # every distinct socket once (options share them); per option, the indices of its own
     keys: dict[tuple[float, ...], int] = {}
     subsets: list[np.ndarray] = []
-    for socks, rs in options:
+    for socks, rs, *roof in options:
         socks = np.asarray(socks, dtype=float).reshape(-1, 3)
-        subsets.append(np.array([keys.setdefault((*map(float, p), float(rs)), len(keys)) for p in socks],
-                                dtype=np.int64))
-    table = np.array(list(keys), dtype=float).reshape(-1, 4)
+        h = roof[0] if roof and roof[0] is not None else rs
+        heights = np.broadcast_to(np.asarray(h, dtype=float), (len(socks),))
+        subsets.append(np.array([keys.setdefault((*map(float, p), float(rs), float(hp)), len(keys))
+                                 for p, hp in zip(socks, heights)], dtype=np.int64))
+    table = np.array(list(keys), dtype=float).reshape(-1, 5)
 
     def regions(p: np.ndarray) -> np.ndarray:
-        return silo_distances(p, table[:, :3], table[:, 3])
+        return silo_distances(p, table[:, :3], table[:, 3], table[:, 4])
 
     info = mass_info(rod)
     radii = sorted(set(cavity_radii(rod)) | ({info.cavity_radius} if info.cavity_radius > 0 else set()), reverse=True)

@@ -336,8 +336,8 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
 
 
 def _moved(t: NetTarget, drawn_at: np.ndarray) -> float:
-    """How far the planner's spread has moved a drawn node so far (mm; the first nodes of
-    ``t`` are the drawn ones)."""
+    """The farthest any of the first ``len(drawn_at)`` nodes of ``t`` is from its point in
+    ``drawn_at`` (mm): how far the spread has moved a node so far."""
     return float(np.max(np.linalg.norm(t.positions[: len(drawn_at)] - drawn_at, axis=1), initial=0.0))
 
 
@@ -350,7 +350,7 @@ def _spread(t: NetTarget, hw: NodeHardware, budget: float, shortest: float, long
     from rodcad.design.net.sizing import size_hubs
     from rodcad.design.net.spread import spread_tight
 
-    start = t.positions[: len(floor)].copy()
+    start = t.positions.copy()
     moved = np.zeros(0, dtype=np.int64)
     node_pivot, problems = size_hubs(t, hw, shortest, longest, floor)
     for _ in range(3):
@@ -359,8 +359,7 @@ def _spread(t: NetTarget, hw: NodeHardware, budget: float, shortest: float, long
         ends = node_pivot[t.edges].sum(axis=1)
         short = t.edge_lengths - ends < shortest * (1 - 1e-9)
         least = np.where(short, shortest * (1 + 1e-6) + ends, 0.0)
-        left = budget - float(np.max(np.linalg.norm(t.positions[: len(start)] - start, axis=1), initial=0.0))
-        wide, also = spread_tight(t, hw, left, fixed=fixed, least_length=least)
+        wide, also = spread_tight(t, hw, budget - _moved(t, start), fixed=fixed, least_length=least)
         if not also.size:
             break
         t, moved = wide, np.union1d(moved, also)

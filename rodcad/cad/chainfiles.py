@@ -28,7 +28,8 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     face on Z = 0, see :data:`rodcad.cad.export.PRINT_ROTATION`). Rods that share
     a solid are written and checked once, then copied. Checks: the STEP
     re-imports as one valid solid of the same volume (1e-6), the STL is
-    watertight and encloses the B-rep's volume within 0.1 %.
+    watertight and encloses the B-rep's volume within 0.1 %. Each rod keeps its STL's mesh
+    (:attr:`FabricatedRod.mesh`, rod frame) for the print files.
 
     Returns:
         The paths written (STEP, STL per rod).
@@ -36,12 +37,13 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     Raises:
         FabricationError: a check failed.
     """
-    from rodcad.cad.export import export_step, export_stl, transformed
+    from rodcad.cad.export import export_step, transformed
+    from rodcad.cad.mesh import mesh_solid, write_stl
 
     rods_dir = Path(outdir) / "rods"
     rods_dir.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
-    first: dict[int, tuple[Path, Path]] = {}
+    first: dict[int, tuple[Path, Path, Any]] = {}
     for r in fab.parts:
         step = rods_dir / f"{r.file_stem}.step"
         stl = rods_dir / f"{r.file_stem}.stl"
@@ -49,12 +51,14 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
         if src is None:
             on_bed = transformed(r.solid, r.print_matrix)
             export_step(on_bed, step, r.file_stem)
-            export_stl(on_bed, stl)
+            mesh = mesh_solid(on_bed)
+            write_stl(mesh, stl, name=on_bed.label or "rodcad")
             check_files(step, stl, r.plastic_volume)
-            first[id(r.solid)] = (step, stl)
+            first[id(r.solid)] = (step, stl, mesh.moved(np.linalg.inv(r.print_matrix)))
         else:
             shutil.copyfile(src[0], step)
             shutil.copyfile(src[1], stl)
+        r.mesh = first[id(r.solid)][2]  # the print files place this mesh, not a second one
         written += [step, stl]
     return written
 

@@ -137,6 +137,9 @@ class FabricatedRod:
             compensation (:func:`rodcad.cad.solids.build_rod`).
         hole_sizes: each pin hole's diameter where the joint hardware's differs from the
             hinge's own (mm; None: the hinge's own).
+        mesh: the closed mesh its STL was written from, in the rod frame (None until
+            :func:`rodcad.cad.chainfiles.write_rod_files` wrote it): the print files place it
+            instead of meshing the solid again.
     """
 
     index: int
@@ -174,6 +177,7 @@ class FabricatedRod:
     socket_height: float | tuple[float, ...] = 0.0
     holes: Holes = NO_SHIFT
     hole_sizes: Sizes = OWN_SIZES
+    mesh: Any = field(default=None, repr=False, compare=False)
 
 
 @dataclass

@@ -8,6 +8,10 @@ hanging rods are from the target.
 
 from __future__ import annotations
 
+import hashlib
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -113,16 +117,36 @@ def fit_curvatures(curve, points, *, max_curvature: float = np.inf) -> np.ndarra
     return out
 
 
+#: What :func:`_kept` keeps: (what, the array's shape and bytes' digest) -> result, the oldest
+#: dropped first past :data:`KEPT_CURVES`.
+_KEPT: dict[tuple[str, tuple[int, ...], bytes], Any] = {}
+#: How many results :func:`_kept` keeps (a plan measures a few target curves many times).
+KEPT_CURVES = 16
+
+
+def _kept(what: str, points: np.ndarray, make: Callable[[np.ndarray], Any]) -> Any:
+    """``make(points)``, kept by the points' values: a planner measures hundreds of chains
+    against one target curve, whose dense copy and KD-tree are then made once."""
+    points = np.ascontiguousarray(points, dtype=float)
+    key = (what, points.shape, hashlib.blake2b(points.tobytes(), digest_size=16).digest())
+    found = _KEPT.get(key)
+    if found is None:
+        found = _KEPT[key] = make(points)
+        while len(_KEPT) > KEPT_CURVES:
+            _KEPT.pop(next(iter(_KEPT)))
+    return found
+
+
 def curve_distance(curve, chain) -> float:
     """Hausdorff distance between a target curve (any polyline) and a chain polyline (mm):
     how far the hanging chain is from the curve, everywhere along both."""
-    curve = np.asarray(curve, dtype=float)
-    return polyline_distance(resample(curve, max(4000, 20 * len(curve))), np.asarray(chain, dtype=float))
+    dense = _kept("dense", np.asarray(curve, dtype=float), lambda c: resample(c, max(4000, 20 * len(c))))
+    return polyline_distance(dense, np.asarray(chain, dtype=float))
 
 
 def polyline_distance(curve: np.ndarray, chain: np.ndarray) -> float:
     """Symmetric (Hausdorff) distance between the dense curve and the chain polyline."""
     dense_chain = resample(chain, max(2000, 40 * len(chain)))
     d1 = cKDTree(dense_chain).query(curve)[0].max()
-    d2 = cKDTree(curve).query(dense_chain)[0].max()
+    d2 = _kept("tree", curve, cKDTree).query(dense_chain)[0].max()
     return float(max(d1, d2))

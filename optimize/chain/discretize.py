@@ -57,55 +57,72 @@ def find_corners(curve: np.ndarray, angle_deg: float = 25.0) -> list[int]:
 VERTEX_TOL = 1e-9
 
 
+#: Points of the polyline the chord walk looks at first for a joint (:func:`_walk`): a joint
+#: is usually found within them, and the next windows are searched only where it is not.
+WALK_WINDOW = 64
+
+
 def _walk(curve: np.ndarray, s: np.ndarray, start_s: float, lengths) -> tuple[np.ndarray, float]:
     """Chord walk along the polyline from arc length start_s; returns joints and end arc length."""
-    pts = [np.interp(start_s, s, curve[:, 0]), np.interp(start_s, s, curve[:, 1])]
-    p = np.array(pts)
+    cx, cy = curve[:, 0], curve[:, 1]
+    px, py = float(np.interp(start_s, s, cx)), float(np.interp(start_s, s, cy))
     i = int(np.searchsorted(s, start_s, side="right")) - 1
-    out = [p]
+    out = [(px, py)]
     cur_s = start_s
+    n = len(curve)
+    on_curve = True  # (px, py) lies on the polyline at arc length cur_s
     for l in lengths:
         # first polyline point beyond cur_s at distance >= l from p; a vertex at distance l
         # up to round-off is the joint itself (a polyline whose segments are multiples of the
         # rod length keeps its vertices as joints on every CPU, whatever the last digits)
         tol = VERTEX_TOL * l
-        # the first such point lies at least l further along the curve; look within a window
-        # of a few rod lengths first (the same point: the first one), then beyond
-        end = int(np.searchsorted(s, cur_s + 4 * l + tol, side="right")) + 1
-        dist = np.hypot(*(curve[i + 1:end] - p).T)
-        j = np.flatnonzero(dist >= l - tol)
-        if j.size == 0 and end < len(curve):
-            dist = np.hypot(*(curve[i + 1:] - p).T)
-            j = np.flatnonzero(dist >= l - tol)
-        if j.size and abs(dist[j[0]] - l) <= tol:
-            j = int(j[0]) + i + 1
-            p = curve[j].copy()
+        # while p is on the curve, no point less than l - tol further along it is that far
+        # from p (a chord is no longer than its arc): the search starts there, in windows
+        # that grow (the first point found is the first one, as in one search of them all)
+        lo = i + 1
+        if on_curve:
+            lo = max(lo, int(np.searchsorted(s, cur_s + l - 2 * tol, side="left")))
+        j = -1
+        for k in range(3):
+            hi = (lo + WALK_WINDOW if k == 0 else
+                  int(np.searchsorted(s, cur_s + 4 * l + tol, side="right")) + 1 if k == 1 else n)
+            if hi <= lo:
+                continue
+            dist = np.hypot(cx[lo:hi] - px, cy[lo:hi] - py)
+            far = np.flatnonzero(dist >= l - tol)
+            if far.size:
+                j = int(far[0]) + lo
+                d = float(dist[far[0]])
+                break
+            lo = max(lo, hi)
+        if j >= 0 and abs(d - l) <= tol:
+            px, py = float(cx[j]), float(cy[j])
             cur_s = s[j]
-            i = min(j, len(curve) - 2)
-            out.append(p)
+            i = min(j, n - 2)
+            out.append((px, py))
             continue
-        if j.size == 0:  # past the end of the curve: carry on straight toward its end
-            direction = curve[-1] - p
-            norm = np.hypot(*direction)
-            direction = direction / norm if norm > 0 else np.array([1.0, 0.0])
-            p = p + l * direction
-            out.append(p)
+        if j < 0:  # past the end of the curve: carry on straight toward its end
+            dx, dy = float(cx[-1]) - px, float(cy[-1]) - py
+            norm = math.hypot(dx, dy)
+            dx, dy = (dx / norm, dy / norm) if norm > 0 else (1.0, 0.0)
+            px, py = px + l * dx, py + l * dy
+            out.append((px, py))
             cur_s = s[-1] + 1.0
-            i = len(curve) - 2
+            i = n - 2
+            on_curve = False
             continue
-        j = int(j[0]) + i + 1
-        a, b = curve[j - 1], curve[j]
+        ax, ay, bx, by = float(cx[j - 1]), float(cy[j - 1]), float(cx[j]), float(cy[j])
         # solve |a + t (b - a) - p| = l on the segment
-        u = b - a
-        w = a - p
-        qa, qb, qc = u @ u, 2 * u @ w, w @ w - l * l
+        ux, uy = bx - ax, by - ay
+        wx, wy = ax - px, ay - py
+        qa, qb, qc = ux * ux + uy * uy, 2 * (ux * wx + uy * wy), wx * wx + wy * wy - l * l
         disc = max(qb * qb - 4 * qa * qc, 0.0)
-        t = (-qb + np.sqrt(disc)) / (2 * qa)
+        t = (-qb + math.sqrt(disc)) / (2 * qa)
         t = min(max(t, 0.0), 1.0)
-        p = a + t * u
+        px, py = ax + t * ux, ay + t * uy
         cur_s = s[j - 1] + t * (s[j] - s[j - 1])
         i = j - 1
-        out.append(p)
+        out.append((px, py))
     return np.array(out), cur_s
 
 

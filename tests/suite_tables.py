@@ -1,4 +1,5 @@
-"""The reachable-mass tables the suite's CAD builds need, shipped as a seed file (issue 34).
+"""The reachable-mass tables the suite's CAD builds need, and the joint limits its plans ask
+for, shipped as a seed file (issue 34).
 
 A CAD build first computes, for each distinct rod type it prints to order, the masses its
 cavities and balls can reach (:func:`rodcad.fabrication.intervals.compute_table`, 1-3 s of
@@ -9,7 +10,10 @@ found by a key of the rod's geometry, material, balls, seed and the fabrication 
 versions, so a changed rod, catalog or algorithm version misses and computes as before (the
 suite is slower, never wrong); the computation itself stays tested where it is the subject
 (tests/test_fabricate.py, tests/test_seed_cache.py, tests/test_buildable.py on their own
-caches or with seeds off).
+caches or with seeds off). The joint limits are keyed by both rods' geometry and
+:data:`rodcad.catalog.jointlimits.JOINT_LIMITS_VERSION`; tests/test_seed_cache.py checks that
+the seed holds the limits a design of the suite asks for and that they are what the outlines
+give today (a changed computation that keeps its version fails there).
 
 Regenerate after changing what a CAD test builds or the fabrication code's versions:
 
@@ -30,8 +34,11 @@ __all__ = ["KINDS", "SEED", "collect", "writing"]
 #: The seed file.
 SEED = Path(__file__).resolve().parent / "data" / "suite-tables.cache.json"
 
-#: The cache kinds it holds: the tables of reachable masses, and their one-row alternates.
-KINDS = ("fabint", "fabrow")
+#: The cache kinds it holds: the tables of reachable masses, their one-row alternates, and the
+#: joint limits the planner finds from the rods' outlines
+#: (:func:`rodcad.catalog.jointlimits.kept_joint_limits`: 20-100 ms a pair, a fifth of the
+#: time of the suite's chain plans).
+KINDS = ("fabint", "fabrow", "jointlimits")
 
 
 def writing() -> bool:

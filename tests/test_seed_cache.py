@@ -148,3 +148,38 @@ def test_precompute_writes_a_seed_that_later_runs_read(seeds: Path, tmp_path: Pa
     table = data["entries"]["fabint"][fabricate.intervals_key(rod, 0)]
     assert fabricate.achievable_intervals(rod) == [tuple(i) for i in table["intervals"]]
     assert not seeds.exists()
+
+
+def test_the_suite_seed_holds_the_joint_limits_a_plan_asks_for_as_the_outlines_give_them(monkeypatch):
+    """tests/data/suite-tables.cache.json ships the joint limits the suite's plans ask for
+    (tests/suite_tables.py): those the semicircle's plan asks are there, and each is what
+    :func:`joint_limits` computes today (a changed computation that does not raise
+    JOINT_LIMITS_VERSION fails here instead of planning the suite on old limits)."""
+    import suite_tables
+
+    from rodcad import pipeline
+    from rodcad.catalog import jointlimits
+    from rodcad.design import laying
+    from rodcad.design.loader import load_design
+
+    if suite_tables.writing():
+        pytest.skip("the seed is being written")
+    asked = []
+
+    def kept(left, right):
+        asked.append((left, right))
+        return jointlimits.joint_limits(left, right)
+
+    monkeypatch.setattr(laying, "kept_joint_limits", kept)
+    pipeline.build(load_design(Path(__file__).resolve().parents[1] / "examples" / "semicircle.yaml"), cad=False)
+    assert asked
+    hint = "stale: regenerate with RODCAD_SUITE_TABLES=write python -m pytest -q (tests/suite_tables.py)"
+    for left, right in dict.fromkeys(asked):
+        key = cache_mod.make_key(jointlimits.CACHE_KIND, jointlimits.JOINT_LIMITS_VERSION, repr(left), repr(right))
+        seeded = cache_mod._seed_get(jointlimits.CACHE_KIND, key)
+        assert seeded is not None, hint
+        fresh = jointlimits.joint_limits(left, right)
+        for got, want in zip((seeded["lo"], seeded["hi"]), fresh):  # to the bisection's bracket
+            assert (got is None) == (want is None) and (want is None or got == pytest.approx(
+                want, abs=2 * jointlimits.BISECT_DEG)), hint
+

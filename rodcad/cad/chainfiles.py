@@ -16,10 +16,10 @@ from rodcad.cad.frame import pin_solid
 from rodcad.cad.rods import ChainFabrication
 from rodcad.colors import mass_colors
 
-__all__ = ["chain_parts", "write_assembly", "write_rod_files"]
+__all__ = ["RodFiles", "chain_parts", "start_rod_files", "write_assembly", "write_rod_files"]
 
 
-def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
+def write_rod_files(fab: ChainFabrication, outdir: Path, *, jobs: int | None = 1) -> list[Path]:
     """Write outdir/rods/NN_TYPE.step and .stl for every chain position (one NN-MM_piece
     file for the rods of a fused piece, :attr:`ChainFabrication.parts`).
 
@@ -29,7 +29,8 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     a solid are written and checked once, then copied. Checks: the STEP
     re-imports as one valid solid of the same volume (1e-6), the STL is
     watertight and encloses the B-rep's volume within 0.1 %. Each rod keeps its STL's mesh
-    (:attr:`FabricatedRod.mesh`, rod frame) for the print files.
+    (:attr:`FabricatedRod.mesh`, rod frame) for the print files. ``jobs``: as
+    :func:`start_rod_files`.
 
     Returns:
         The paths written (STEP, STL per rod).
@@ -37,30 +38,102 @@ def write_rod_files(fab: ChainFabrication, outdir: Path) -> list[Path]:
     Raises:
         FabricationError: a check failed.
     """
-    from rodcad.cad.export import export_step, transformed
+    with start_rod_files([(fab, Path(outdir))], jobs=jobs) as files:
+        return files.finish()[0]
+
+
+def _write_rod(args: tuple[Any, str, str, str, float]) -> tuple[np.ndarray, np.ndarray, float]:
+    """One distinct rod's STEP and STL written and checked (:func:`write_rod_files`), in a worker
+    or here: (solid on the bed, or its :class:`rodcad.cad.solids.PortableSolid`; STEP path; STL
+    path; file stem; plastic volume) -> its mesh (vertices, triangles, deflection) on the bed."""
+    from rodcad.cad.export import export_step
     from rodcad.cad.mesh import mesh_solid, write_stl
 
-    rods_dir = Path(outdir) / "rods"
-    rods_dir.mkdir(parents=True, exist_ok=True)
-    written: list[Path] = []
-    first: dict[int, tuple[Path, Path, Any]] = {}
-    for r in fab.parts:
-        step = rods_dir / f"{r.file_stem}.step"
-        stl = rods_dir / f"{r.file_stem}.stl"
-        src = first.get(id(r.solid))
-        if src is None:
-            on_bed = transformed(r.solid, r.print_matrix)
-            export_step(on_bed, step, r.file_stem)
-            mesh = mesh_solid(on_bed)
-            write_stl(mesh, stl, name=on_bed.label or "rodcad")
-            check_files(step, stl, r.plastic_volume)
-            first[id(r.solid)] = (step, stl, mesh.moved(np.linalg.inv(r.print_matrix)))
-        else:
-            shutil.copyfile(src[0], step)
-            shutil.copyfile(src[1], stl)
-        r.mesh = first[id(r.solid)][2]  # the print files place this mesh, not a second one
-        written += [step, stl]
-    return written
+    solid, step, stl, stem, volume = args
+    on_bed = solid.restore() if hasattr(solid, "restore") else solid
+    export_step(on_bed, Path(step), stem)
+    mesh = mesh_solid(on_bed)
+    write_stl(mesh, Path(stl), name=on_bed.label or "rodcad")
+    check_files(Path(step), Path(stl), volume)
+    return mesh.vertices, mesh.triangles, mesh.deflection
+
+
+class RodFiles:
+    """The rods' files of :func:`start_rod_files`, being written; :meth:`finish` waits for them.
+    A context manager: leaving it before :meth:`finish` stops the workers."""
+
+    def __init__(self, chains: Sequence[tuple[ChainFabrication, Path]], jobs: int | None) -> None:
+        from rodcad.cad.export import transformed
+        from rodcad.cad.solids import PortableSolid
+        from rodcad.parallel import default_jobs, worker_pool
+
+        self.chains = [(fab, Path(outdir) / "rods") for fab, outdir in chains]
+        self.first: dict[int, tuple[Path, Path, Any]] = {}  # id(solid) -> (STEP, STL, its rod)
+        for fab, rods_dir in self.chains:
+            rods_dir.mkdir(parents=True, exist_ok=True)
+            for r in fab.parts:
+                if id(r.solid) not in self.first:
+                    self.first[id(r.solid)] = (rods_dir / f"{r.file_stem}.step", rods_dir / f"{r.file_stem}.stl", r)
+        work = list(self.first.values())
+        jobs = min(default_jobs() if jobs is None else jobs, len(work))
+        self.pool = worker_pool(jobs) if jobs > 1 else None
+        self.futures = None
+        if self.pool is not None:
+            self.futures = [self.pool.submit(_write_rod, (PortableSolid(transformed(r.solid, r.print_matrix)),
+                                                          str(step), str(stl), r.file_stem, r.plastic_volume))
+                            for step, stl, r in work]
+
+    def finish(self) -> list[list[Path]]:
+        """Wait for the files, copy them to the rods that share a solid and give each rod its
+        mesh; the paths written per chain (STEP, STL per rod).
+
+        Raises:
+            FabricationError: a check failed.
+        """
+        from rodcad.cad.export import transformed
+        from rodcad.cad.mesh import TriangleMesh
+
+        meshes: dict[int, Any] = {}
+        for k, (key, (step, stl, r)) in enumerate(self.first.items()):
+            if self.futures is not None:
+                v, t, defl = self.futures[k].result()
+            else:
+                v, t, defl = _write_rod((transformed(r.solid, r.print_matrix), str(step), str(stl), r.file_stem,
+                                         r.plastic_volume))
+            meshes[key] = TriangleMesh(v, t, defl).moved(np.linalg.inv(r.print_matrix))
+        self.close()
+        written: list[list[Path]] = []
+        for fab, rods_dir in self.chains:
+            paths: list[Path] = []
+            for r in fab.parts:
+                step, stl = rods_dir / f"{r.file_stem}.step", rods_dir / f"{r.file_stem}.stl"
+                src = self.first[id(r.solid)]
+                if src[0] != step:
+                    shutil.copyfile(src[0], step)
+                    shutil.copyfile(src[1], stl)
+                r.mesh = meshes[id(r.solid)]  # the print files place this mesh, not a second one
+                paths += [step, stl]
+            written.append(paths)
+        return written
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
+            self.pool = None
+
+    def __enter__(self) -> RodFiles:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def start_rod_files(chains: Sequence[tuple[ChainFabrication, Path]], *, jobs: int | None = None) -> RodFiles:
+    """Begin writing the rods' files of every (fabrication, folder) as :func:`write_rod_files`
+    does: each distinct solid's in a worker process of its own (``jobs``: at most this many;
+    None: the CPUs; 1: here, when :meth:`RodFiles.finish` is called), so that the caller writes
+    its other files meanwhile. Use it as a context manager and call :meth:`RodFiles.finish`."""
+    return RodFiles(chains, jobs)
 
 
 def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",

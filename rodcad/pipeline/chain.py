@@ -21,6 +21,8 @@ Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 
 from __future__ import annotations
 
+import contextlib
+
 import dataclasses
 import time
 from collections.abc import Sequence
@@ -385,15 +387,15 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     Returns:
         The data written to design.json.
     """
-    with staged(outdir, progress) as (tmp, progress):
+    with staged(outdir, progress) as (tmp, progress), contextlib.ExitStack() as stack:
         if result.fabrication is not None:
-            from rodcad.cad.chainfiles import write_assembly, write_rod_files
+            from rodcad.cad.chainfiles import start_rod_files, write_assembly
             from rodcad.cad.export import AssemblyPart, export_step, export_stl
             from rodcad.cad.printfile import write_print_files
             from rodcad.cad.rods import check_files
 
-            with progress.step("writing and checking rods/*.step, rods/*.stl"):
-                write_rod_files(result.fabrication, tmp)
+            # the rods' files are written in worker processes while this one writes the rest
+            rod_files = stack.enter_context(start_rod_files([(result.fabrication, tmp)]))
             extra = []
             if result.fixture is not None:
                 with progress.step("writing and checking fixture.step, fixture.stl"):
@@ -407,12 +409,15 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                                name=result.design.name, extra=extra,
                                pin_diameters=None if hw is None else [None if o is None else o.pin_diameter
                                                                       for o in hw.options])
-            with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
-                write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,
-                                  profile=print_profile(result.design.catalog))
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
             plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             write_design(tmp, data, report_markdown(result, data))
             write_chain_view(result, data, tmp)  # assembly.glb, view.html
+        if result.fabrication is not None:
+            with progress.step("writing and checking rods/*.step, rods/*.stl"):
+                rod_files.finish()
+            with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
+                write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,
+                                  profile=print_profile(result.design.catalog))
     return data

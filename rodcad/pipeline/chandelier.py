@@ -166,14 +166,14 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
     (:func:`rodcad.pipeline.chain.write_outputs`), whose return it shares."""
     with staged(outdir, progress) as (tmp, progress):
         if b.frame is not None:
-            from rodcad.cad.chainfiles import write_rod_files
+            from rodcad.cad.chainfiles import start_rod_files
             from rodcad.cad.chandelier import chandelier_nodes
             from rodcad.cad.export import export_assembly, export_step, export_stl
             from rodcad.cad.printfile import write_print_files
 
-            with progress.step("writing and checking the rods' STEP/STL files"):
-                for ch, fab in zip(b.result.chains, b.fabrications):
-                    write_rod_files(fab, tmp / ch.name)
+            with progress.step("writing and checking the rods' STEP/STL files"), \
+                    start_rod_files([(fab, tmp / ch.name) for ch, fab in zip(b.result.chains, b.fabrications)]) as files:
+                files.finish()  # every chain's distinct rods in worker processes at once
             with progress.step("writing each chain's print.3mf (PrusaSlicer project) and rods/*.3mf"):
                 for ch, fab in zip(b.result.chains, b.fabrications):
                     write_print_files(fab.rods, tmp / ch.name, printer=b.design.catalog.printer,

@@ -62,7 +62,8 @@ class RodFiles:
     """The rods' files of :func:`start_rod_files`, being written; :meth:`finish` waits for them.
     A context manager: leaving it before :meth:`finish` stops the workers."""
 
-    def __init__(self, chains: Sequence[tuple[ChainFabrication, Path]], jobs: int | None) -> None:
+    def __init__(self, chains: Sequence[tuple[ChainFabrication, Path]], jobs: int | None,
+                 extra: Sequence[tuple[Any, Path, Path, str, float]] = ()) -> None:
         from rodcad.cad.export import transformed
         from rodcad.cad.solids import PortableSolid
         from rodcad.parallel import default_jobs, worker_pool
@@ -74,14 +75,14 @@ class RodFiles:
             for r in fab.parts:
                 if id(r.solid) not in self.first:
                     self.first[id(r.solid)] = (rods_dir / f"{r.file_stem}.step", rods_dir / f"{r.file_stem}.stl", r)
-        work = list(self.first.values())
-        jobs = min(default_jobs() if jobs is None else jobs, len(work))
+        self.tasks = [(transformed(r.solid, r.print_matrix), str(step), str(stl), r.file_stem, r.plastic_volume)
+                      for step, stl, r in self.first.values()]
+        self.tasks += [(solid, str(step), str(stl), name, float(volume)) for solid, step, stl, name, volume in extra]
+        jobs = min(default_jobs() if jobs is None else jobs, len(self.tasks))
         self.pool = worker_pool(jobs) if jobs > 1 else None
         self.futures = None
         if self.pool is not None:
-            self.futures = [self.pool.submit(_write_rod, (PortableSolid(transformed(r.solid, r.print_matrix)),
-                                                          str(step), str(stl), r.file_stem, r.plastic_volume))
-                            for step, stl, r in work]
+            self.futures = [self.pool.submit(_write_rod, (PortableSolid(t[0]), *t[1:])) for t in self.tasks]
 
     def finish(self) -> list[list[Path]]:
         """Wait for the files, copy them to the rods that share a solid and give each rod its
@@ -90,17 +91,12 @@ class RodFiles:
         Raises:
             FabricationError: a check failed.
         """
-        from rodcad.cad.export import transformed
         from rodcad.cad.mesh import TriangleMesh
 
-        meshes: dict[int, Any] = {}
-        for k, (key, (step, stl, r)) in enumerate(self.first.items()):
-            if self.futures is not None:
-                v, t, defl = self.futures[k].result()
-            else:
-                v, t, defl = _write_rod((transformed(r.solid, r.print_matrix), str(step), str(stl), r.file_stem,
-                                         r.plastic_volume))
-            meshes[key] = TriangleMesh(v, t, defl).moved(np.linalg.inv(r.print_matrix))
+        done = ([f.result() for f in self.futures] if self.futures is not None else
+                [_write_rod(t) for t in self.tasks])
+        meshes = {key: TriangleMesh(v, t, defl).moved(np.linalg.inv(r.print_matrix))
+                  for (key, (_, _, r)), (v, t, defl) in zip(self.first.items(), done)}
         self.close()
         written: list[list[Path]] = []
         for fab, rods_dir in self.chains:
@@ -128,12 +124,15 @@ class RodFiles:
         self.close()
 
 
-def start_rod_files(chains: Sequence[tuple[ChainFabrication, Path]], *, jobs: int | None = None) -> RodFiles:
+def start_rod_files(chains: Sequence[tuple[ChainFabrication, Path]], *, jobs: int | None = None,
+                    extra: Sequence[tuple[Any, Path, Path, str, float]] = ()) -> RodFiles:
     """Begin writing the rods' files of every (fabrication, folder) as :func:`write_rod_files`
     does: each distinct solid's in a worker process of its own (``jobs``: at most this many;
     None: the CPUs; 1: here, when :meth:`RodFiles.finish` is called), so that the caller writes
-    its other files meanwhile. Use it as a context manager and call :meth:`RodFiles.finish`."""
-    return RodFiles(chains, jobs)
+    its other files meanwhile. ``extra``: other solids written and checked the same way, as
+    they are placed: (solid, STEP path, STL path, name, volume) (a chain's anchor fixture).
+    Use it as a context manager and call :meth:`RodFiles.finish`."""
+    return RodFiles(chains, jobs, extra)
 
 
 def write_assembly(fab: ChainFabrication, points: np.ndarray, path: Path, *, name: str = "chain",

@@ -390,19 +390,16 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
     with staged(outdir, progress) as (tmp, progress), contextlib.ExitStack() as stack:
         if result.fabrication is not None:
             from rodcad.cad.chainfiles import start_rod_files, write_assembly
-            from rodcad.cad.export import AssemblyPart, export_step, export_stl
+            from rodcad.cad.export import AssemblyPart
             from rodcad.cad.printfile import write_print_files
-            from rodcad.cad.rods import check_files
 
-            # the rods' files are written in worker processes while this one writes the rest
-            rod_files = stack.enter_context(start_rod_files([(result.fabrication, tmp)]))
-            extra = []
-            if result.fixture is not None:
-                with progress.step("writing and checking fixture.step, fixture.stl"):
-                    export_step(result.fixture, tmp / "fixture.step", name="fixture")
-                    export_stl(result.fixture, tmp / "fixture.stl")
-                    check_files(tmp / "fixture.step", tmp / "fixture.stl", result.fixture.volume)
-                extra = [AssemblyPart("fixture", result.fixture, np.eye(4), (0.55, 0.55, 0.6))]
+            # the rods' and the fixture's files are written in worker processes while this one
+            # writes the rest
+            fixture = result.fixture
+            rod_files = stack.enter_context(start_rod_files(
+                [(result.fabrication, tmp)], extra=[] if fixture is None else
+                [(fixture, tmp / "fixture.step", tmp / "fixture.stl", "fixture", fixture.volume)]))
+            extra = [] if fixture is None else [AssemblyPart("fixture", fixture, np.eye(4), (0.55, 0.55, 0.6))]
             with progress.step("writing assembly.step"):
                 hw = result.hardware
                 write_assembly(result.fabrication, result.equilibrium.points, tmp / "assembly.step",
@@ -415,7 +412,8 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             write_design(tmp, data, report_markdown(result, data))
             write_chain_view(result, data, tmp)  # assembly.glb, view.html
         if result.fabrication is not None:
-            with progress.step("writing and checking rods/*.step, rods/*.stl"):
+            with progress.step("writing and checking rods/*.step, rods/*.stl" +
+                               (", fixture.step, fixture.stl" if fixture is not None else "")):
                 rod_files.finish()
             with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
                 write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,

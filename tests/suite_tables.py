@@ -11,7 +11,7 @@ versions, so a changed rod, catalog or algorithm version misses and computes as 
 suite is slower, never wrong); the computation itself stays tested where it is the subject
 (tests/test_fabricate.py, tests/test_seed_cache.py, tests/test_buildable.py on their own
 caches or with seeds off). The joint limits are keyed by both rods' geometry and
-:data:`rodcad.catalog.jointlimits.JOINT_LIMITS_VERSION`; tests/test_seed_cache.py checks that
+:data:`rodcad.catalog.keptlimits.JOINT_LIMITS_VERSION`; tests/test_seed_cache.py checks that
 the seed holds the limits a design of the suite asks for and that they are what the outlines
 give today (a changed computation that keeps its version fails there).
 
@@ -36,7 +36,7 @@ SEED = Path(__file__).resolve().parent / "data" / "suite-tables.cache.json"
 
 #: The cache kinds it holds: the tables of reachable masses, their one-row alternates, and the
 #: joint limits the planner finds from the rods' outlines
-#: (:func:`rodcad.catalog.jointlimits.kept_joint_limits`: 20-100 ms a pair, a fifth of the
+#: (:func:`rodcad.catalog.keptlimits.kept_joint_limits`: 20-100 ms a pair, a fifth of the
 #: time of the suite's chain plans).
 KINDS = ("fabint", "fabrow", "jointlimits")
 

@@ -158,7 +158,7 @@ def test_the_suite_seed_holds_the_joint_limits_a_plan_asks_for_as_the_outlines_g
     import suite_tables
 
     from rodcad import pipeline
-    from rodcad.catalog import jointlimits
+    from rodcad.catalog import jointlimits, keptlimits
     from rodcad.design import laying
     from rodcad.design.loader import load_design
 
@@ -175,8 +175,7 @@ def test_the_suite_seed_holds_the_joint_limits_a_plan_asks_for_as_the_outlines_g
     assert asked
     hint = "stale: regenerate with RODCAD_SUITE_TABLES=write python -m pytest -q (tests/suite_tables.py)"
     for left, right in dict.fromkeys(asked):
-        key = cache_mod.make_key(jointlimits.CACHE_KIND, jointlimits.JOINT_LIMITS_VERSION, repr(left), repr(right))
-        seeded = cache_mod._seed_get(jointlimits.CACHE_KIND, key)
+        seeded = cache_mod._seed_get(keptlimits.CACHE_KIND, keptlimits.limits_key(left, right))
         assert seeded is not None, hint
         fresh = jointlimits.joint_limits(left, right)
         for got, want in zip((seeded["lo"], seeded["hi"]), fresh):  # to the bisection's bracket

@@ -149,7 +149,7 @@ def check_scales(ctx: Any, scales: tuple[float, float], length: tuple[float, flo
     a minimum wall, the longest straight rod takes the thickest body, it fits the printer,
     and stops at the ends of the stop range still stop at their bend between the thinnest
     and the thickest rods (end geometry, rodcad.catalog.jointlimits)."""
-    from rodcad.catalog.jointlimits import kept_joint_limits as joint_limits
+    from rodcad.catalog.keptlimits import kept_joint_limits as joint_limits
 
     fmt = format_number
     w, hg = material.min_wall, base.hinge
@@ -207,7 +207,7 @@ def check_stops(ctx: Any, stops: tuple[float, float], length: tuple[float, float
 
 def check_stop(ctx: Any, rel: str, s: float, length: tuple[float, float], curv: tuple[float, float],
                 h: float, t: float, hinge: Hinge, material: Material, first: EndShape, second: EndShape) -> bool:
-    from rodcad.catalog.jointlimits import kept_joint_limits as joint_limits
+    from rodcad.catalog.keptlimits import kept_joint_limits as joint_limits
 
     fmt = format_number
     for lv in length:

@@ -35,14 +35,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
-from rodcad.catalog.cache import DiskCache, make_key
 from rodcad.catalog.model import RodGeometry
 
-__all__ = ["JOINT_LIMITS_VERSION", "EndOutline", "joint_limits", "kept_joint_limits"]
+__all__ = ["EndOutline", "joint_limits"]
 
 #: Points closer than this to the other outline's boundary do not count as inside (mm).
 INSIDE_TOL = 1e-9
@@ -558,41 +556,3 @@ def joint_limits(left: RodGeometry, right: RodGeometry, *, bound: float = 180.0)
     lo, hi = _contact(pair, start, -1.0, bound), _contact(pair, start, 1.0, bound)
     return (None if lo is None else lo + SAFETY_DEG, None if hi is None else hi - SAFETY_DEG)
 
-
-#: The version of :func:`joint_limits` in the keys of its disk cache
-#: (:func:`kept_joint_limits`): raise it with any change that moves a limit (the samples, the
-#: membership tests, the march, the bisection, :data:`SAFETY_DEG`), so that limits kept on
-#: disk or shipped in a seed file are computed again. tests/test_seed_cache.py compares
-#: the suite's seeded limits with a fresh computation.
-JOINT_LIMITS_VERSION = 1
-
-#: The disk cache's kind for them.
-CACHE_KIND = "jointlimits"
-
-
-@lru_cache(maxsize=4096)
-def kept_joint_limits(left: RodGeometry, right: RodGeometry) -> tuple[float | None, float | None]:
-    """:func:`joint_limits`, kept in this process and in the disk cache
-    (:class:`rodcad.catalog.cache.DiskCache`, its seed files too): a planner asks for the
-    same pairs again and again, and a design built again (edited, or by another process)
-    asks for the ones it asked before. Keyed by both geometries' reprs (every field to the
-    last digit) and :data:`JOINT_LIMITS_VERSION`; a pair that overlaps at every bend is
-    kept as that and raises as :func:`joint_limits` does.
-
-    Raises:
-        ValueError: the rods overlap at every angle tried as a start.
-    """
-    cache = DiskCache()
-    key = make_key(CACHE_KIND, JOINT_LIMITS_VERSION, repr(left), repr(right))
-    hit = cache.get(CACHE_KIND, key)
-    if isinstance(hit, dict) and "error" in hit:
-        raise ValueError(hit["error"])
-    if isinstance(hit, dict) and "lo" in hit and "hi" in hit:
-        return hit["lo"], hit["hi"]
-    try:
-        lo, hi = joint_limits(left, right)
-    except ValueError as exc:
-        cache.put(CACHE_KIND, key, {"error": str(exc)})
-        raise
-    cache.put(CACHE_KIND, key, {"lo": lo, "hi": hi})
-    return lo, hi

@@ -20,7 +20,7 @@ from functools import lru_cache
 import numpy as np
 
 from optimize import InverseProblem
-from rodcad.catalog.jointlimits import kept_joint_limits
+from rodcad.catalog.keptlimits import kept_joint_limits
 from rodcad.catalog.model import Catalog, Family, RodGeometry, RodType
 from rodcad.catalog.printed import MassTable, rod_numbers
 from rodcad.catalog.scaling import mass_span, scale_for_mass
@@ -42,7 +42,7 @@ class PrintedFamily:
 
 def _limits(left: RodGeometry, right: RodGeometry) -> tuple[float, float]:
     """Joint limits (deg) of two rods, +-inf where nothing stops (kept in this process and
-    on disk: :func:`rodcad.catalog.jointlimits.kept_joint_limits`)."""
+    on disk: :func:`rodcad.catalog.keptlimits.kept_joint_limits`)."""
     lo, hi = kept_joint_limits(left, right)
     return (-math.inf if lo is None else lo, math.inf if hi is None else hi)
 

@@ -120,15 +120,16 @@ def finish_figure(fig, ax, lc, anchors: np.ndarray, title: str, paths) -> None:
 def fit_title(fig, ax, title: str) -> None:
     """Set the axes' title and lay the figure out so that the title lies inside the canvas:
     lines too long for the room on either side of the axes' centre are wrapped at spaces
-    (the layout is redone and the figure drawn after each wrap, as the title's place is
-    settled only at drawing)."""
+    (the layout is redone after each wrap). The title's width and its place across the
+    canvas are known once the layout has placed the axes; drawing the figure only moves it
+    up or down, so it is not drawn here (the previews of the examples and of ten drawn
+    shapes, and titles wrapped on 2D and 3D axes, came out byte-identical without it)."""
     import textwrap
 
     lines = title.splitlines()
     text = ax.set_title(title)
     for _ in range(6):
         fig.tight_layout()
-        fig.draw_without_rendering()
         box = text.get_window_extent(fig.canvas.get_renderer())
         if box.x0 >= 0 and box.x1 <= fig.bbox.width:
             return

@@ -22,7 +22,6 @@ Numbers cross into :mod:`optimize` as plain arrays (mm, g, radians).
 from __future__ import annotations
 
 import contextlib
-
 import dataclasses
 import time
 from collections.abc import Sequence

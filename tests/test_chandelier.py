@@ -315,3 +315,33 @@ def test_lug_holes_take_each_chain_s_anchor_hardware_and_its_compensation(tmp_pa
                     q[2] = lug.width / 2 - lug.cheek / 2
                 w = m @ q
                 assert frame.is_inside(Vector(*w[:3])) == inside, (lug.name, radius, ang)
+
+
+def test_a_chandelier_built_with_cad_writes_its_frame_and_rods_checked(build_design):
+    """`rodcad build` of a small chandelier with CAD: the frame's STEP re-imports as one valid
+    solid and its STL is watertight with the solid's volume (written and checked beside every
+    chain's rods, :func:`rodcad.cad.chainfiles.start_rod_files`), and every chain has its rods'
+    files and print.3mf."""
+    import trimesh
+
+    from rodcad.cad.export import import_step
+    from rodcad.cad.mesh import DEFLECTION
+    from rodcad.cad.solids import is_valid_solid
+
+    text = ("design: 1\nname: small-chandelier\ncatalog: pla-pinned\nchandelier:\n  pattern: ring\n  count: 3\n"
+            "  radius: 60\n  height: 0\n  gap: 20\n  target:\n    form: catenary\n    length: 100\n"
+            "  frame: {width: 16, thickness: 5}\nconstraints:\n  lengths: [20]\nmethod: refine\nseed: 0\n"
+            "tolerance: 0.02\n")
+    out, data = build_design(text, "small-chandelier")
+    frame = import_step(out / "frame.step")
+    assert is_valid_solid(frame)
+    mesh = trimesh.load(str(out / "frame.stl"), force="mesh")
+    assert mesh.is_watertight
+    assert abs(mesh.volume - frame.volume) <= DEFLECTION * frame.area  # the STL's deflection x the area
+    chains = sorted(p for p in out.iterdir() if p.is_dir())
+    assert len(chains) == 3
+    for chain in chains:
+        assert (chain / "print.3mf").is_file()
+        rods = chain / "rods"
+        assert sorted(p.stem for p in rods.glob("*.step")) == sorted(p.stem for p in rods.glob("*.stl"))
+        assert list(rods.glob("*.step"))

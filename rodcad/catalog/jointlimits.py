@@ -555,4 +555,3 @@ def joint_limits(left: RodGeometry, right: RodGeometry, *, bound: float = 180.0)
         raise ValueError("the two rods overlap at every bend angle")
     lo, hi = _contact(pair, start, -1.0, bound), _contact(pair, start, 1.0, bound)
     return (None if lo is None else lo + SAFETY_DEG, None if hi is None else hi - SAFETY_DEG)
-

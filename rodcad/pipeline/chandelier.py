@@ -168,20 +168,21 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
         if b.frame is not None:
             from rodcad.cad.chainfiles import start_rod_files
             from rodcad.cad.chandelier import chandelier_nodes
-            from rodcad.cad.export import export_assembly, export_step, export_stl
+            from rodcad.cad.export import export_assembly
             from rodcad.cad.printfile import write_print_files
 
-            with progress.step("writing and checking the rods' STEP/STL files"), \
-                    start_rod_files([(fab, tmp / ch.name) for ch, fab in zip(b.result.chains, b.fabrications)]) as files:
-                files.finish()  # every chain's distinct rods in worker processes at once
+            frame = b.frame[0]
+            # every chain's distinct rods and the frame, written and checked in worker processes at once
+            with progress.step("writing and checking the rods' STEP/STL files, frame.step and frame.stl"), \
+                    start_rod_files([(fab, tmp / ch.name) for ch, fab in zip(b.result.chains, b.fabrications)],
+                                    extra=[(frame, tmp / "frame.step", tmp / "frame.stl", "frame",
+                                            frame.volume)]) as files:
+                files.finish()
             with progress.step("writing each chain's print.3mf (PrusaSlicer project) and rods/*.3mf"):
                 for ch, fab in zip(b.result.chains, b.fabrications):
                     write_print_files(fab.rods, tmp / ch.name, printer=b.design.catalog.printer,
                                       profile=print_profile(b.design.catalog))
-            with progress.step("writing frame.step, frame.stl and assembly.step"):
-                frame = b.frame[0]
-                export_step(frame, tmp / "frame.step", name="frame")
-                export_stl(frame, tmp / "frame.stl")
+            with progress.step("writing assembly.step"):
                 nodes = chandelier_nodes(frame, b.result.chains, b.design.catalog, frame_plan=b.frame_plan,
                                          rod_solid=lambda ci, i: b.fabrications[ci].rods[i].solid,
                                          pin_diameters=[None if r.hardware is None else

@@ -8,6 +8,7 @@ import dataclasses
 import hashlib
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -93,13 +94,16 @@ def resolve_catalog(name_or_path: str | Path, base_dir: str | Path | None = None
     raise InputError([Problem(text, 0, 0, "", f"no such catalog file or shipped catalog{hint}")])
 
 
-#: Catalogs loaded in this process, by (file, name shown in messages, the text's hash): a
-#: catalog is immutable and its expansion (every family's cross-field checks) takes a few
-#: tenths of a second, so a process that loads one file again (a chandelier's chains, the
-#: Python API, the tests) gets the same object; a changed file is a new key.
-_LOADED: dict[tuple[str, str, str], Catalog] = {}
-#: How many of them are kept (the oldest dropped first).
-LOADED_KEPT = 8
+@lru_cache(maxsize=8)
+def _expanded(path: Path, display: str, digest: str) -> Catalog:
+    """The catalog file checked and expanded (``display``: its name in messages), kept for
+    this process by its path as given, that name and ``digest``, the hash of its text (a
+    changed file is another key): a catalog is immutable and its expansion (every family's
+    cross-field checks) takes a few tenths of a second, so a process that loads one file
+    again (a chandelier's chains, the Python API, the tests) gets the same object."""
+    del digest
+    doc = check_document(load_yaml(path, display), catalog_spec(), filename=display, defer=True)
+    return _build(doc, path)
 
 
 def load_catalog(name_or_path: str | Path, base_dir: str | Path | None = None) -> Catalog:
@@ -126,17 +130,10 @@ def load_catalog(name_or_path: str | Path, base_dir: str | Path | None = None) -
     path = resolve_catalog(name_or_path, base_dir)
     display = str(name_or_path) if Path(name_or_path) == path else str(path)
     try:
-        key = (str(path.resolve()), display, hashlib.sha256(path.read_bytes()).hexdigest())
-    except OSError:
-        key = None
-    catalog = _LOADED.get(key) if key is not None else None
-    if catalog is None:
-        doc = check_document(load_yaml(path, display), catalog_spec(), filename=display, defer=True)
-        catalog = _build(doc, path)
-        if key is not None:
-            _LOADED[key] = catalog
-            while len(_LOADED) > LOADED_KEPT:
-                _LOADED.pop(next(iter(_LOADED)))
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:  # load_yaml reports it
+        digest = ""
+    catalog = _expanded(path, display, digest) if digest else _expanded.__wrapped__(path, display, digest)
     seed = path.with_name(f"{path.stem}.cache.json")
     if seed.is_file():
         register_seed(seed)

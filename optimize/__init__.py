@@ -21,7 +21,7 @@ from optimize.distance import ShapeDistance, shape_distance
 from optimize.net.design import NetDesign, design_net, shape_jacobian
 from optimize.net.modes import NetModes, net_modes
 from optimize.net.solve import NET_MESSAGES, NetResult, more_starts, pivots_by_node, pivots_from_nodes, solve_net
-from optimize.net.statics import NetMassDesign, NetStatics, design_net_masses, net_statics
+from optimize.net.statics import NetMassDesign, NetStatics, design_net_masses, net_statics, node_mass_needs
 
 __all__ = [
     "EquilibriumResult",
@@ -48,6 +48,7 @@ __all__ = [
     "find_equilibria",
     "net_modes",
     "net_statics",
+    "node_mass_needs",
     "pivots_by_node",
     "pivots_from_nodes",
     "friction_band",

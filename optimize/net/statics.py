@@ -37,7 +37,7 @@ from optimize.boxqp import box_qp
 from optimize.net.deriv import evaluate
 from optimize.net.model import Net
 
-__all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "statics_of"]
+__all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "node_mass_needs", "statics_of"]
 
 #: The central masses keep this share of the linear program's margin from the bounds.
 CENTRAL_SLACK = 1e-3
@@ -48,6 +48,12 @@ CENTRAL_SLACK = 1e-3
 #: presolve the interior point too ran 70 s into them where without it it found the optimum
 #: in 2.8 s; smaller nets keep the simplex they were designed with.
 LP_SIMPLEX_RODS = 300
+
+#: :func:`node_mass_needs`: weights balance the forces where the least absolute imbalance (over
+#: the force scale) is at most this a row...
+WEIGHT_EXACT = 1e-9
+#: ...and where they do not, they are worth adding if they leave at most this share of it.
+WEIGHT_GAIN = 0.5
 
 #: Where the linear program fails and the balance fixes the tensions and masses, its least
 #: squares solution is exact when its residual (over the force scale) is at most this.
@@ -364,11 +370,106 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
                    beyond, needs, info)
 
 
+def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, extra, *, node_masses=None,
+                    com=None, allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None,
+                    rotations=None, sag=None) -> tuple[np.ndarray, bool] | None:
+    """The least weight to add at the nodes (at each node's point, at most ``extra[k]``) for
+    masses within their bounds to balance the nodes' forces at the target, keeping half the
+    margin from the bounds (and from zero tension) that such weights allow at most; where no
+    weights within ``extra`` balance it, the weights of the nearest balance (least absolute
+    imbalance), if they leave at most :data:`WEIGHT_GAIN` of the imbalance without them.
+
+    Node weights are the loads that shape a hanging net; a net whose node hardware weighs
+    unevenly (a large hub among small ones) may balance with no rod masses, yet balance once
+    the light nodes weigh more. Linear programs: the largest margin ``t`` with any weights
+    within ``extra`` (as :func:`design_net_masses`), then the least total weight (each relative
+    to its ``extra``) that keeps ``t / 2``. The hubs' moments are left aside (their sockets are
+    turned for them afterwards, as with ``forces_only``).
+
+    Args:
+        extra: (n,) the most weight node ``k`` may take (g; 0: none).
+        sag: (n,) bool, nodes whose height follows their load (a joint between two rods placed
+            at its sag, which moves with its rods' tensions): their vertical balance is left
+            free; None: none.
+        the rest: as :func:`design_net_masses`.
+
+    Returns:
+        ((n,) the weights (g), whether they balance exactly), or None where none is needed or
+        weights within ``extra`` do not bring the balance nearer by that much.
+    """
+    m = np.asarray(edges).shape[0]
+    net, state = Net.from_args(target_positions, edges, lengths, np.ones(m), anchored, node_masses=node_masses,
+                               com=com, g=g, node_com=node_com, pivots=pivots, node_rotations0=rotations)
+    bounds = _bounds(mass_bounds, m)
+    st = statics_of(net, state)
+    force = st.rows[:, 1] < 3
+    extra = np.asarray(extra, float)
+    free = np.flatnonzero((extra > 0) & ~net.anchored)
+    if not free.size:
+        return None
+    m_ref, F, row = _scales(net, st, bounds)
+    row = row[force]
+    rows = st.rows[force]
+    # a node's weight w_k (scaled by its extra) pulls its z row down: A_w w = -g extra_k z
+    zrow = np.flatnonzero(rows[:, 1] == 2)
+    where = {int(n): int(r) for n, r in zip(rows[zrow, 0], zrow)}
+    rk = np.array([where[int(k)] for k in free])
+    nw = free.size
+    Aw = sp.csr_matrix((-net.g * extra[free] * row[rk], (rk, np.arange(nw))), shape=(rows.shape[0], nw))
+    sagging = [where[int(k)] for k in np.flatnonzero(np.zeros(net.n, bool) if sag is None else sag) if int(k) in where]
+    keep = np.setdiff1d(np.arange(rows.shape[0]), sagging)  # (a sagging node's vertical row: free)
+    R = sp.diags(row)
+    A = sp.hstack([R @ st.A_T[force] * F, R @ st.A_m[force] * m_ref, Aw]).tocsr()[keep]
+    b = (row * st.b[force])[keep]
+    lo_m, hi_m = bounds[:, 0] / m_ref, bounds[:, 1] / m_ref
+    lo_T = -np.inf if allow_compression else 0.0
+    box = [(lo_T, None)] * m + list(zip(lo_m, hi_m)) + [(0.0, 1.0)] * nw
+
+    def imbalance(cols: int) -> tuple[float, np.ndarray]:
+        k = A.shape[0]
+        Ak = sp.hstack([A[:, :cols], sp.identity(k), -sp.identity(k)]).tocsr()
+        c = np.concatenate([np.zeros(cols), np.ones(2 * k)])
+        lp = linprog(c, A_eq=Ak, b_eq=b, bounds=box[:cols] + [(0.0, None)] * (2 * k), **_lp_method(m))
+        return (float(lp.fun), lp.x[:cols]) if lp.status == 0 else (np.inf, np.zeros(cols))
+
+    out = np.zeros(net.n)
+    near, x = imbalance(2 * m + nw)
+    if near > WEIGHT_EXACT * A.shape[0]:  # (no weights balance it: the nearest, where they help)
+        if not near <= WEIGHT_GAIN * imbalance(2 * m)[0]:
+            return None
+        out[free] = np.clip(x[2 * m:], 0.0, 1.0) * extra[free]
+        return out, False
+    width = np.maximum(hi_m - lo_m, 1e-12 * hi_m)
+    I = sp.identity(m, format="csr")
+    Z = sp.csr_matrix((m, m))
+    Zw = sp.csr_matrix((m, nw))
+    wcol = sp.csr_matrix(width[:, None])
+    rows_ub = [sp.hstack([Z, -I, Zw, wcol]), sp.hstack([Z, I, Zw, wcol])]
+    b_ub = [-lo_m, hi_m]
+    if not allow_compression:
+        rows_ub.append(sp.hstack([-I, Z, Zw, sp.csr_matrix(np.ones((m, 1)))]))
+        b_ub.append(np.zeros(m))
+    A_ub = sp.vstack(rows_ub).tocsr()
+    A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr()
+    bnds = [(None, None)] * (2 * m) + [(0.0, 1.0)] * nw + [(0.0, 0.5)]
+    c = np.zeros(2 * m + nw + 1)
+    c[-1] = -1.0
+    lp = linprog(c, A_ub=A_ub, b_ub=np.concatenate(b_ub), A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
+    if lp.status == 0:
+        bnds[-1] = (0.5 * float(lp.x[-1]), 0.5)
+        c = np.zeros(2 * m + nw + 1)
+        c[2 * m:2 * m + nw] = 1.0
+        lp = linprog(c, A_ub=A_ub, b_ub=np.concatenate(b_ub), A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
+    if lp.status == 0:
+        x = lp.x
+    out[free] = np.clip(x[2 * m:2 * m + nw], 0.0, 1.0) * extra[free]
+    return (out, True) if np.any(out > 0) else None
+
+
 def _why(A, b, m, lo_m, hi_m, width, allow_compression):
     """The least total excursion beyond the mass bounds (and into compression) that balances
     the target exactly: (beyond per rod, relative to its width; rods that must push)."""
     # unknowns: T (m), masses (m), p >= 0 over hi, r >= 0 under lo, k >= 0 compression
-    nv = 5 * m
     c = np.concatenate([np.zeros(2 * m), np.ones(2 * m), np.full(m, 0.0 if allow_compression else 1.0)])
     I = sp.identity(m, format="csr")
     Z = sp.csr_matrix((m, m))

@@ -18,7 +18,9 @@ the hubs whose sockets' spacing keeps the net from balancing are made larger
 (:func:`rodcad.design.net.spacing.grow_tight_hubs`) and hubs of two rods that balance only
 upside down lighter (:mod:`rodcad.design.net.inverted`); and rods that the hubs' turned sockets
 lengthen or shorten out of the catalog's lengths by a little have their hubs resized to bring
-them back (:func:`in_window`).
+them back (:func:`in_window`). Where the net still misses its tolerance because its hubs, sized
+for their rods, weigh too unevenly for the rods' masses to make up, the light ones are made larger
+to weigh what the balance asks (:mod:`rodcad.design.net.weights`) and the last steps run again.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
 from rodcad.design.net.cones import widen_cones
 from rodcad.design.net.inverted import lighten_inverted
 from rodcad.design.net.spacing import grow_tight_hubs
+from rodcad.design.net.weights import weigh_hubs
 from rodcad.design.net.plan import plan_net
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
@@ -72,7 +75,7 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
     check = design(plan)
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
-        return _hardware_fitted(check, design)
+        return _hardware_fitted(check, design, g)
     if on_surface:
         other = design(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g))
         if _rank(other) > _rank(check):
@@ -109,7 +112,7 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
                                f"those edges are one rod each{spliced}, between hubs of the family made larger to take "
                                "what the rod cannot.")
             check = other
-    check = _hardware_fitted(check, design)
+    check = _hardware_fitted(check, design, g)
     if not check.ok:
         why = slack_joints(check, None if last is check else last)
         if why:
@@ -118,12 +121,25 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
     return check
 
 
-def _hardware_fitted(check: NetCheck, design) -> NetCheck:
+def _hardware_fitted(check: NetCheck, design, g: float) -> NetCheck:
     """The last steps of :func:`design_drawn_net`: hubs grown where their sockets' spacing keeps the
     net from balancing, hubs of two rods that balance upside down made lighter, cones widened (or
-    hubs grown) where rods turn too far, hubs resized where rods leave the printed lengths;
-    ``design`` designs a plan with the design's settings."""
-    check = lighten_inverted(grow_tight_hubs(check, design, _rank), design, _rank)
+    hubs grown) where rods turn too far, hubs resized where rods leave the printed lengths; where
+    the net still misses, light hubs made heavier (larger) where the hubs' weights keep it from
+    balancing, and the steps after the spacing's again. ``design`` designs a plan with the
+    design's settings."""
+    first = _fitted(grow_tight_hubs(check, design, _rank), design)
+    if first.ok:
+        return first
+    weighed = weigh_hubs(first, design, _rank, g)  # (last: a net the steps above design is kept as they left it)
+    if weighed is first:
+        return first
+    again = _fitted(weighed, design)
+    return again if _rank(again) > _rank(first) else first
+
+
+def _fitted(check: NetCheck, design) -> NetCheck:
+    check = lighten_inverted(check, design, _rank)
     return in_window(widen_cones(check, design), design)
 
 

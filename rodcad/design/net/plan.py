@@ -27,8 +27,8 @@ from rodcad.design.net.joints import hang_joints, merge_close, pieces, split_lon
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["NetPlan", "POINT_WIDTH", "SPLICE_MARGIN", "fill_lengths", "length_range", "mass_segments", "plan_net",
-           "replan", "resized", "rod_bounds", "rod_numbers"]
+__all__ = ["NetPlan", "POINT_WIDTH", "SPLICE_MARGIN", "fill_lengths", "length_range", "mass_segments",
+           "node_directions", "plan_net", "replan", "resized", "rod_bounds", "rod_numbers"]
 
 #: A spliced rod's pieces are each at most this share of the longest rod the catalog prints:
 #: the margin :func:`_first_count` keeps for rods in line (the sockets turned lengthen rods).
@@ -486,7 +486,7 @@ def _plan(t: NetTarget, hw: NodeHardware, node_pivot: np.ndarray, window: tuple[
     return plan
 
 
-def _directions(t: NetTarget, pivots: np.ndarray) -> list[np.ndarray]:
+def node_directions(t: NetTarget, pivots: np.ndarray) -> list[np.ndarray]:
     """Per node, (k, 3) unit directions of its rods' pivots from it."""
     dirs: list[list[np.ndarray]] = [[] for _ in range(t.n)]
     for e, (i, j) in enumerate(t.edges):
@@ -517,7 +517,7 @@ def _hung(t: NetTarget, base: NetTarget, src: np.ndarray, counts: np.ndarray, hw
             bounds[e] += hw.rod_numbers(float(full[q]), int(pieces[q])).mass_range
         bounds[e] += (len(rods) - 1) * per_joint
     node_masses = np.zeros(base.n)
-    dirs = _directions(base, pivots)
+    dirs = node_directions(base, pivots)
     for k in range(base.n):
         node_masses[k] = hw.sized(rp[k]).hub_mass(dirs[k])[0]
     st = design_net_masses(base.positions, base.edges, lengths, bounds, base.anchored, node_masses=node_masses,
@@ -556,7 +556,7 @@ def replan(plan: NetPlan, pivots: np.ndarray) -> NetPlan:
     rods = plan.numbers(lengths)
     node_com = np.zeros((t.n, 3))
     node_masses = plan.node_masses.copy()
-    for k, dk in enumerate(_directions(t, pivots)):
+    for k, dk in enumerate(node_directions(t, pivots)):
         node_masses[k], node_com[k] = plan.hub(k).hub_mass(dk)
     bounds = rod_bounds(plan, lengths, rods)
     return dataclasses.replace(plan, pivots=pivots, lengths=lengths, rods=rods, bounds=bounds,

@@ -103,8 +103,12 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
     if ab:
         summary.append(["as built (the solids' masses)", f"{mm(ab['error'].get('max_mm'))} "
                                                          f"({pct(ab['error'].get('max_rel_size'))})"])
-    if hub:
-        summary.append(["hubs", f"{node_d:g} mm printed spheres with ball sockets"])
+    if hub:  # (each node's own size of the hub family)
+        sizes = sorted({round(float((nd.get("hub") or {}).get("diameter") or node_d), 2) for nd in nodes
+                        if nd.get("rods", 1)})
+        span = (f"{sizes[0]:g} mm" if len(sizes) == 1 else
+                f"{sizes[0]:g}-{sizes[-1]:g} mm ({len(sizes)} sizes)")
+        summary.append(["hubs", f"{span} printed spheres with ball sockets"])
     bom = data.get("bill_of_materials") or {}
     total = sum(masses) + sum(float(nd.get("mass") or 0.0) for nd in nodes)
     summary.append(["net mass", f"{total:.1f} g" + (f"; filament {bom['filament_g']:.1f} g" if "filament_g" in bom

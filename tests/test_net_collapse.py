@@ -119,3 +119,21 @@ def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(t
     assert line == [f"planner: drawn {len(x)} nodes, {d.net.m} edges; built {t.n} nodes, {t.m} rods: 10 drawn nodes "
                     f"collapsed into 5 hub(s), a drawn node moved up to 14 mm ({100 * 14.0 / t.size:.3g} % of its "
                     "size); 2 anchor point(s) added (report.md)"], line
+
+
+def test_a_net_its_collapse_leaves_nothing_of_says_how_many_edges_were_short(tmp_path, capsys):
+    # one free node on four rods to anchors, one rod 24 mm node to node: two of the smallest hubs
+    # leave 16 mm, under the 20 mm rod; collapsed into its anchor, every rod left joins two anchors
+    path = tmp_path / "tiny.yaml"
+    path.write_text("""design: 1
+name: tiny
+net:
+  nodes: [[0, 0, 0], [50, 0, 0], [25, -30, 0], [25, 13.5, 0], [25, 0, -20]]
+  edges: [[0, 4], [1, 4], [2, 4], [3, 4]]
+  anchored: [0, 1, 2, 3]
+""")
+    code = main(["build", str(path), "--no-cad", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 1 and "Traceback" not in err
+    assert "1 of the 4 drawn edge(s) are shorter than the shortest rod" in err and "leave nothing to hang" in err
+    assert not (tmp_path / "out").exists()

@@ -41,9 +41,10 @@ from rodcad.errors import DesignLimit
 __all__ = ["RETRIES", "WINDOW_REACH", "WINDOW_ROUNDS", "design_drawn_net", "in_window", "slack_joints", "weak_edges"]
 
 #: Rounds of drawn edges made one rod where their joints cannot hang: each round adds the edges
-#: whose joints the last round's design could not hang either (bounded: each round designs the
-#: net again).
-RETRIES = 3
+#: whose joints the last round's design could not hang either, and the rounds stop where none is
+#: added (bounded: each round designs the net again). A joint made to hang by another edge's rod
+#: may come off it in the next design: drawn meshes took four and five rounds.
+RETRIES = 6
 
 #: Rods that leave the catalog's lengths by at most this (mm), with the hubs' sockets turned, are
 #: brought back by resizing their hubs (:func:`in_window`; farther is the plan's to say)...

@@ -386,11 +386,13 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
 
     between = 0
     least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
+    drawn, first = t, None
     for _ in range(MAX_ROUNDS):
         rp, _ = size_hubs(t, hw, shortest, longest)
         short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
-        if hw.is_hub:  # (a thin triangle whose rods meet tighter than the largest hub allows)
-            short = np.union1d(short, tight_triangles(t, least))
+        thin = tight_triangles(t, least) if hw.is_hub else np.zeros(0, int)  # (rods meeting tighter than
+        first = (short.size, np.setdiff1d(thin, short).size) if first is None else first  # the largest hub allows)
+        short = np.union1d(short, thin)
         if not short.size:
             pairs = anchor_pairs(t, least) if hw.is_hub else []
             if not pairs:
@@ -400,9 +402,14 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
         t, dropped = collapse_short(t, short)
         between += dropped
         if t.m == 0 or t.anchored_mask.all():
-            raise DesignLimit("every drawn edge is shorter than the shortest rod between the smallest hubs "
-                              f"({shortest:g} mm pivot to pivot): collapsed, nothing is left to hang; draw the net "
-                              "larger, or with fewer cells")
+            what = [f"{first[0]} of the {drawn.m} drawn edge(s) are shorter than the shortest rod between the "
+                    f"smallest hubs their nodes allow ({shortest:g} mm pivot to pivot; the shortest drawn "
+                    f"{float(drawn.edge_lengths.min()):.3g} mm node to node)"] if first[0] else []
+            if first[1]:
+                what.append(f"{first[1]} close a triangle whose rods meet tighter than the largest hub allows "
+                            f"({least:.3g} deg)")
+            raise DesignLimit(" and ".join(what) + ": collapsed into one hub each, they leave nothing to hang (every "
+                              "rod left would join two anchors); draw the net larger, or with fewer cells")
     return t, between
 
 

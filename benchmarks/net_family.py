@@ -347,6 +347,7 @@ def table(outs: list[Outcome]) -> str:
 CATEGORIES = (
     ("rods meet closer than", "tight angles: a hub larger than the family's largest would hold them"),
     ("would be shorter than", "edges shorter than the shortest rod between the smallest hubs"),
+    ("leave nothing to hang", "edges too short for any rod, collapsed into hubs until nothing was left to hang"),
     ("cannot hang on the target", "two-rod joints that cannot hang within the tolerance (a longer rod or a "
                                   "rigid splice would)"),
     ("push (compression)", "rods that push at the design (compression: true, or more anchors)"),

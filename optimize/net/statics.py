@@ -381,10 +381,12 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
 
     Node weights are the loads that shape a hanging net; a net whose node hardware weighs
     unevenly (a large hub among small ones) may balance with no rod masses, yet balance once
-    the light nodes weigh more. Linear programs: the largest margin ``t`` with any weights
-    within ``extra`` (as :func:`design_net_masses`), then the least total weight (each relative
-    to its ``extra``) that keeps ``t / 2``. The hubs' moments are left aside (their sockets are
-    turned for them afterwards, as with ``forces_only``).
+    the light nodes weigh more. Linear programs: the least absolute imbalance with weights within
+    ``extra`` (none: they balance it; else the same without weights, to compare); where they
+    balance it, the largest margin ``t`` with any such weights (as :func:`design_net_masses`),
+    then the least total weight (each relative to its ``extra``) that keeps ``t / 2``. The hubs'
+    moments are left aside (their sockets are turned for them afterwards, as with
+    ``forces_only``).
 
     Args:
         extra: (n,) the most weight node ``k`` may take (g; 0: none).

@@ -21,16 +21,13 @@ import numpy as np
 
 from rodcad.errors import DesignLimit
 
-__all__ = ["SIZE_DECIMALS", "WEIGH_ROUNDS", "weigh_hubs", "weighed_pivots"]
+__all__ = ["WEIGH_ROUNDS", "weigh_hubs", "weighed_pivots"]
 
 #: Rounds of hubs weighed and the net designed again, at most.
 WEIGH_ROUNDS = 2
 
 #: A hub grows where the weight it needs is at least this share of its own.
 WEIGH_LEAST = 0.01
-
-#: Decimals (mm) a weighed hub's pivot radius is rounded to.
-SIZE_DECIMALS = 2
 
 
 def _mass(plan, k: int, dirs: np.ndarray, rp: float) -> float:
@@ -93,8 +90,7 @@ def weighed_pivots(planned, g: float) -> np.ndarray | None:
         for _ in range(40):
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if _mass(planned, int(k), dirs[k], mid) < want else (lo, mid)
-        # (to a hundredth of a mm: hubs the balance asks alike of come out one size, one part)
-        out[k] = float(np.clip(round(hi, SIZE_DECIMALS), rp[k], cap[k]))
+        out[k] = hi
     # two grown hubs at the ends of one rod: each takes its share of the room between them
     short = (t.edge_lengths - out[t.edges].sum(axis=1)) / planned.rod_pieces < planned.length_range[0] - 1e-9
     for e in np.flatnonzero(short):

@@ -298,15 +298,8 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     nv = 2 * m + 1
     c = np.zeros(nv)
     c[-1] = -1.0
-    I = sp.identity(m, format="csr")
-    Z = sp.csr_matrix((m, m))
-    wcol = sp.csr_matrix(width[:, None])
-    rows_ub = [sp.hstack([Z, -I, wcol]), sp.hstack([Z, I, wcol])]
-    b_ub = [-lo_m, hi_m]
-    if not allow_compression:
-        rows_ub.append(sp.hstack([-I, Z, sp.csr_matrix(np.ones((m, 1)))]))
-        b_ub.append(np.zeros(m))
-    lp_args = dict(A_ub=sp.vstack(rows_ub).tocsr(), b_ub=np.concatenate(b_ub),
+    A_ub, b_ub = _margin_rows(m, 0, lo_m, hi_m, width, allow_compression)
+    lp_args = dict(A_ub=A_ub, b_ub=b_ub,
                    A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
                    bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], **_lp_method(m))
     lp = linprog(c, **lp_args)
@@ -442,30 +435,36 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
         out[free] = np.clip(x[2 * m:], 0.0, 1.0) * extra[free]
         return out, False
     width = np.maximum(hi_m - lo_m, 1e-12 * hi_m)
-    I = sp.identity(m, format="csr")
-    Z = sp.csr_matrix((m, m))
-    Zw = sp.csr_matrix((m, nw))
-    wcol = sp.csr_matrix(width[:, None])
-    rows_ub = [sp.hstack([Z, -I, Zw, wcol]), sp.hstack([Z, I, Zw, wcol])]
-    b_ub = [-lo_m, hi_m]
-    if not allow_compression:
-        rows_ub.append(sp.hstack([-I, Z, Zw, sp.csr_matrix(np.ones((m, 1)))]))
-        b_ub.append(np.zeros(m))
-    A_ub = sp.vstack(rows_ub).tocsr()
+    A_ub, b_ub = _margin_rows(m, nw, lo_m, hi_m, width, allow_compression)
     A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr()
     bnds = [(None, None)] * (2 * m) + [(0.0, 1.0)] * nw + [(0.0, 0.5)]
     c = np.zeros(2 * m + nw + 1)
     c[-1] = -1.0
-    lp = linprog(c, A_ub=A_ub, b_ub=np.concatenate(b_ub), A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
+    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
     if lp.status == 0:
         bnds[-1] = (0.5 * float(lp.x[-1]), 0.5)
         c = np.zeros(2 * m + nw + 1)
         c[2 * m:2 * m + nw] = 1.0
-        lp = linprog(c, A_ub=A_ub, b_ub=np.concatenate(b_ub), A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
+        lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
     if lp.status == 0:
         x = lp.x
     out[free] = np.clip(x[2 * m:2 * m + nw], 0.0, 1.0) * extra[free]
     return (out, True) if np.any(out > 0) else None
+
+
+def _margin_rows(m: int, nw: int, lo_m, hi_m, width, allow_compression: bool) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The margin linear program's inequalities over (T, m, ``nw`` more unknowns, t): every mass
+    ``t`` widths inside its bounds, and every tension at least ``t`` (unless rods may push)."""
+    I = sp.identity(m, format="csr")
+    Z = sp.csr_matrix((m, m))
+    more = [sp.csr_matrix((m, nw))] if nw else []
+    wcol = sp.csr_matrix(width[:, None])
+    rows_ub = [sp.hstack([Z, -I, *more, wcol]), sp.hstack([Z, I, *more, wcol])]
+    b_ub = [-lo_m, hi_m]
+    if not allow_compression:
+        rows_ub.append(sp.hstack([-I, Z, *more, sp.csr_matrix(np.ones((m, 1)))]))
+        b_ub.append(np.zeros(m))
+    return sp.vstack(rows_ub).tocsr(), np.concatenate(b_ub)
 
 
 def _why(A, b, m, lo_m, hi_m, width, allow_compression):

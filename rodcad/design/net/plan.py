@@ -94,13 +94,15 @@ class NetPlan:
     pieces: np.ndarray | None = None
     node_cone: np.ndarray | None = None
 
-    def hub(self, k: int) -> NodeHardware:
-        """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`) and
-        its sockets' cone (:attr:`node_cone`)."""
+    def hub(self, k: int, pivot_radius: float | None = None) -> NodeHardware:
+        """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`, or
+        ``pivot_radius``: the size it would be) and its sockets' cone (:attr:`node_cone`)."""
         hw = self.hardware
         if not hw.is_hub:
             return hw
-        if self.node_pivot is not None:
+        if pivot_radius is not None:
+            hw = hw.sized(float(pivot_radius))
+        elif self.node_pivot is not None:
             hw = hw.sized(float(self.node_pivot[k]))
         return hw if self.node_cone is None else hw.coned(float(self.node_cone[k]))
 

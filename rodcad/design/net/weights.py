@@ -31,20 +31,16 @@ WEIGH_LEAST = 0.01
 
 
 def _mass(plan, k: int, dirs: np.ndarray, rp: float) -> float:
-    hw = plan.hardware.sized(rp)
-    if plan.node_cone is not None:
-        hw = hw.coned(float(plan.node_cone[k]))
-    return hw.hub_mass(dirs)[0]
+    return plan.hub(k, rp).hub_mass(dirs)[0]
 
 
-def _room(plan) -> np.ndarray:
-    """(n,) the largest pivot radius each node's hub may take with its neighbours' as planned:
-    every rod left at least the catalog's shortest per piece, within the family."""
+def _room(plan, spare: np.ndarray) -> np.ndarray:
+    """(n,) the largest pivot radius each node's hub may take with its neighbours' as planned,
+    within the family: each rod's two pivot radii at most its ``spare`` (node to node, less the
+    catalog's shortest rod per piece)."""
     t = plan.target
     rp = plan.node_pivot
-    lo = plan.length_range[0]
     cap = np.full(t.n, float(plan.hardware.pivot_limits[1]))
-    spare = t.edge_lengths - lo * plan.rod_pieces  # (node to node, less the shortest rod(s))
     for c in (0, 1):
         np.minimum.at(cap, t.edges[:, c], spare - rp[t.edges[:, 1 - c]])
     return np.maximum(cap, rp)
@@ -67,7 +63,8 @@ def weighed_pivots(planned, g: float) -> np.ndarray | None:
     t = planned.target
     rp = planned.node_pivot
     free = ~t.anchored_mask & ~t.joint_mask & (planned.degree >= 2)
-    cap = _room(planned)
+    spare = t.edge_lengths - planned.length_range[0] * planned.rod_pieces
+    cap = _room(planned, spare)
     dirs = node_directions(t, planned.pivots)
     extra = np.zeros(t.n)
     for k in np.flatnonzero(free & (cap > rp + 1e-9)):
@@ -95,8 +92,7 @@ def weighed_pivots(planned, g: float) -> np.ndarray | None:
     short = (t.edge_lengths - out[t.edges].sum(axis=1)) / planned.rod_pieces < planned.length_range[0] - 1e-9
     for e in np.flatnonzero(short):
         a, b = t.edges[e]
-        room = t.edge_lengths[e] - planned.length_range[0] * planned.rod_pieces[e]
-        over = out[a] + out[b] - room
+        over = out[a] + out[b] - spare[e]
         ga, gb = out[a] - rp[a], out[b] - rp[b]
         if ga + gb > 0:
             out[a] -= over * ga / (ga + gb)

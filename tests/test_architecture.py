@@ -16,6 +16,7 @@ exists.
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -41,8 +42,10 @@ def _modules() -> dict[str, Path]:
 MODULES = _modules()
 
 
+@functools.lru_cache(maxsize=None)
 def _imports(name: str, path: Path) -> list[tuple[str, list[str], int]]:
-    """(imported module, names imported from it, line) for every import in the file."""
+    """(imported module, names imported from it, line) for every import in the file (read
+    once per session: several tests walk every module)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     is_pkg = path.name == "__init__.py"
     out = []

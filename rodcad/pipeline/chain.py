@@ -48,7 +48,7 @@ from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
 from rodcad.outputs.view import write_chain_view
-from rodcad.parallel import kept_workers
+from rodcad.parallel import kept_workers, worker_pool
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
@@ -387,8 +387,16 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
         The data written to design.json.
     """
     with staged(outdir, progress) as (tmp, progress), contextlib.ExitStack() as stack:
+        preview = None
         if result.fabrication is not None:
             from rodcad.cad.chainfiles import start_rod_files, write_assembly
+
+            # the preview is drawn in a worker of its own beside the rest (matplotlib's import and
+            # drawing, 1.5-2.5 s, are then off this process's path); from a copy of the result
+            # without its solids, which cannot be pickled
+            preview = stack.enter_context(worker_pool(1)).submit(
+                plot_chain, dataclasses.replace(result, fabrication=None, fixture=None),
+                tmp / "preview.png", tmp / "preview.svg")
             from rodcad.cad.export import AssemblyPart
             from rodcad.cad.printfile import write_print_files
 
@@ -407,7 +415,8 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                                                                       for o in hw.options])
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
-            plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
+            if preview is None:
+                plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
             write_design(tmp, data, report_markdown(result, data))
             write_chain_view(result, data, tmp)  # assembly.glb, view.html
         if result.fabrication is not None:
@@ -417,4 +426,5 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
                 write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,
                                   profile=print_profile(result.design.catalog))
+            preview.result()
     return data

@@ -108,10 +108,10 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
             spliced = (f" ({int(np.count_nonzero(k > 1))} of them, longer than one rod between the family's largest "
                        f"hubs, spliced rigidly from {int(k.max())} printed pieces on steel dowel pins)"
                        if np.any(k > 1) else "")
-            other.chose(f"The two-rod joints on drawn edge(s) {sorted(weak)[:8]} could not hang on the target "
-                               f"within the tolerance (the net hung {100 * check.rel_size:.3g} % of its size off it): "
-                               f"those edges are one rod each{spliced}, between hubs of the family made larger to take "
-                               "what the rod cannot.")
+            # (what kept the try with the joints from hanging: off the tolerance, or on it but unstable)
+            other.chose(f"The two-rod joints on drawn edge(s) {sorted(weak)[:8]} could not hang on the target: "
+                               f"with them the net {check.limit()}; those edges are one rod each{spliced}, between "
+                               "hubs of the family made larger to take what the rod cannot.")
             check = other
     check = _hardware_fitted(check, design, g)
     if not check.ok:

@@ -86,8 +86,9 @@ def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
                    + ". The frame holds the net there too.")
     if pl.get("spliced_rods"):
         sp = pl["spliced_rods"]
-        out.append(f"- {len(sp)} drawn edge(s) whose two-rod joints could not hang within the tolerance, and longer "
-                   "than one rod between the family's largest hubs, are each one rigid rod spliced from printed pieces "
+        out.append(f"- {len(sp)} drawn edge(s) whose two-rod joints could not hang on the target (the planner's "
+                   "choices above say why), and longer than one rod between the family's largest hubs, are each one "
+                   "rigid rod spliced from printed pieces "
                    "on steel dowel pins (rods " + ", ".join(f"{s['rod']} in {s['pieces']}" for s in sp[:8])
                    + (", ..." if len(sp) > 8 else "") + " pieces).")
     if pl.get("rods_between_anchors_left_out"):

@@ -139,10 +139,16 @@ def test_published_schema_matches_the_validator_and_accepts_the_examples():
         jsonschema.validate(yaml.safe_load(GOOD.replace("design: 1", "design: 1\nmethd: x")), schema)
 
 
-def test_cli_bad_input_exits_2_with_no_traceback(tmp_path):
+#: The installed ``rodcad`` command's entry point (pyproject's [project.scripts]), as its script runs it.
+COMMAND = [sys.executable, "-c", "import sys; from rodcad.cli import console_main; sys.argv[0] = 'rodcad'; "
+           "sys.exit(console_main())"]
+
+
+@pytest.mark.parametrize("entry", [[sys.executable, "-m", "rodcad.cli"], COMMAND], ids=["module", "command"])
+def test_cli_bad_input_exits_2_with_no_traceback(tmp_path, entry):
     bad = tmp_path / "bad.yaml"
     bad.write_text(GOOD.replace("sag: 60", "sag: 60, colour: red"))
-    proc = subprocess.run([sys.executable, "-m", "rodcad.cli", "build", str(bad), "-o", str(tmp_path / "out")],
+    proc = subprocess.run([*entry, "build", str(bad), "-o", str(tmp_path / "out")],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
@@ -163,3 +169,13 @@ def test_a_name_too_long_for_a_folder_is_refused():
     got = problems(f"design: 1\nname: {'a' * 5000}\ncatalog: pla-pinned\nanchors: [[0, 0], [200, 0]]\n"
                    "target: {form: catenary, length: 300}\n")
     assert got == ["d.yaml:2:7: name: 5000 characters long; keep it under 101"]
+
+
+def test_the_command_ends_with_its_exit_code_and_everything_it_printed():
+    """The installed command ends without unloading its modules (rodcad.cli.console_main): what
+    it printed to a pipe arrives whole (the design schema, about 20 kB), then its exit code."""
+    proc = subprocess.run([*COMMAND, "schema", "design"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["title"]
+    proc = subprocess.run([*COMMAND, "build", "no-such-design.yaml"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2 and "no such design file" in proc.stderr

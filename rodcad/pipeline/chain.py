@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import pickle
 import time
 from collections.abc import Sequence
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -48,7 +50,7 @@ from rodcad.outputs.design_json import design_json, print_profile
 from rodcad.outputs.preview import plot_chain
 from rodcad.outputs.report import report_markdown
 from rodcad.outputs.view import write_chain_view
-from rodcad.parallel import kept_workers, worker_pool
+from rodcad.parallel import default_jobs, kept_workers, worker_pool
 from rodcad.pipeline.folder import staged, write_design
 from rodcad.progress import Progress
 from rodcad.results import AsBuilt, BuildResult
@@ -391,12 +393,13 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
         if result.fabrication is not None:
             from rodcad.cad.chainfiles import start_rod_files, write_assembly
 
-            # the preview is drawn in a worker of its own beside the rest (matplotlib's import and
-            # drawing, 1.5-2.5 s, are then off this process's path); from a copy of the result
-            # without its solids, which cannot be pickled
-            preview = stack.enter_context(worker_pool(1)).submit(
-                plot_chain, dataclasses.replace(result, fabrication=None, fixture=None),
-                tmp / "preview.png", tmp / "preview.svg")
+            if default_jobs() > 1:
+                # the preview is drawn in a worker of its own beside the rest (matplotlib's import
+                # and drawing, 1.5-2.5 s, are then off this process's path); from a copy of the
+                # result without its solids, which cannot be pickled
+                preview = stack.enter_context(worker_pool(1)).submit(
+                    plot_chain, dataclasses.replace(result, fabrication=None, fixture=None),
+                    tmp / "preview.png", tmp / "preview.svg")
             from rodcad.cad.export import AssemblyPart
             from rodcad.cad.printfile import write_print_files
 
@@ -426,5 +429,9 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             with progress.step("writing print.3mf (PrusaSlicer project with its pauses) and rods/*.3mf"):
                 write_print_files(result.fabrication.parts, tmp, printer=result.design.catalog.printer,
                                   profile=print_profile(result.design.catalog))
-            preview.result()
+        if preview is not None:
+            try:
+                preview.result()
+            except (pickle.PicklingError, TypeError, BrokenProcessPool):  # a result it cannot take: here
+                plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
     return data

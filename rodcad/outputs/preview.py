@@ -79,6 +79,10 @@ def plot_chain(r, *paths: Path) -> None:
 #: Line width (pt) per mm of a rod's body height in the previews (6 pt for a 16 mm section).
 WIDTH_PER_MM = 0.375
 
+#: How far below the axes the legend starts (pt): the x tick labels and the x label (10 pt each,
+#: with their pads) and a gap.
+LEGEND_DROP_PT = 36.0
+
 
 def draw_rods(ax, points: np.ndarray, curvature, masses, heights=None) -> tuple[object, list[np.ndarray]]:
     """Each rod as it is printed (its chord, or the arc of its curved body), coloured by mass,
@@ -102,14 +106,25 @@ def finish_figure(fig, ax, lc, anchors: np.ndarray, title: str, paths) -> None:
     path and closed."""
     import matplotlib.pyplot as plt
 
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
     ax.plot(*np.asarray(anchors).T, "ks", ms=9, zorder=6, label="anchors")
-    fig.colorbar(lc, ax=ax, label="rod mass (g)", shrink=0.8)
     ax.set_aspect("equal")
+    # the colour bar as tall as the axes as drawn (equal axes are shorter than their slot: a bar
+    # sized to the slot reached down over the legend's right-hand column)
+    bar = make_axes_locatable(ax).append_axes("right", size="3%", pad=0.15)
+    fig.colorbar(lc, cax=bar, label="rod mass (g)")
     ax.autoscale_view()
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
-    # below the axes, not over the drawing (loc="best" laid it over the heart's tip)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=8, frameon=False)
+    # below the axes and their x label, not over the drawing (loc="best" laid it over the heart's
+    # tip): a fixed distance in points, the tick labels' and the label's height whatever the axes'
+    # (a tenth of the axes' height laid the legend's first row over "x (mm)" on a wide chain)
+    from matplotlib.transforms import offset_copy
+
+    below = offset_copy(ax.transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below, ncol=2, fontsize=8,
+              frameon=False)
     ax.grid(True, lw=0.3, alpha=0.5)
     fit_title(fig, ax, title)
     for path in paths:

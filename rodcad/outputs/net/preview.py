@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rodcad.outputs.preview import LEGEND_DROP_PT
+
 __all__ = ["plot_net"]
 
 
@@ -59,7 +61,11 @@ def plot_net(check, title: str, *paths: Path) -> None:
         ax.grid(alpha=0.3)
     axes[0].set_title("from above")
     axes[1].set_title("from the side (looking along +y)")
-    axes[1].legend(loc="best", fontsize=8)
+    # below the side view, under its x label (loc="best" laid it over the lampshade's rods)
+    from matplotlib.transforms import offset_copy
+
+    axes[1].legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3, fontsize=8, frameon=False,
+                   bbox_transform=offset_copy(axes[1].transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points"))
     sm = matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(sm, ax=axes, shrink=0.8, label="rod mass (g)")
     fig.suptitle(title)

@@ -244,12 +244,19 @@ def test_exit_codes_of_net_builds(tmp_path, capsys):
     far.write_text("design: 1\nname: far\nnet:\n  surface: {z: '0.001 * (x - 150)**2', x: [0, 300], y: [0, 200], "
                    "u: 2, v: 2}\n  anchored: boundary\n")
     code, out = _build(tmp_path, far, "far")
-    # its long edges are cut into rods in line (no longer refused for the rod window); the joints on
-    # the trough's flat edges have too little pull to hang near them, and those edges are spliced rods
+    # its long edges are cut into rods in line (no longer refused for the rod window). The joints on
+    # the trough's flat edges have too little pull to hold the target: with them it is a saddle of
+    # the net (two curvatures of about -0.68 of the force scale per length). Either the solver leaves
+    # the saddle for a stable shape within the tolerance, or it reports the saddle and those edges
+    # become spliced rods: which one hangs on ARPACK's shift-invert converging on the two close
+    # negative curvatures, and that went either way from run to run on round-off (RESULTS, tenth
+    # session). Both are designs within the tolerance, stable, hanging from the split edges.
     assert code == 0 and out.exists()
     data = json.loads((out / "design.json").read_text())
-    assert data["planner"]["spliced_rods"] and data["net"]["meets_tolerance"]
-    assert "longer than the 60 mm" not in capsys.readouterr().err
+    assert data["planner"]["split_edges"] and data["net"]["meets_tolerance"] and data["net"]["stable"]
+    said = capsys.readouterr()
+    assert ", stable," in said.out
+    assert "longer than the 60 mm" not in said.err
 
 
 #: A small hub net (3 hubs, 2 rods holding steel balls).

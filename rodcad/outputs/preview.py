@@ -9,7 +9,7 @@ import numpy as np
 from optimize.chain.curves import centerline, curve_distance
 from rodcad.outputs.printed import draw_bands
 
-__all__ = ['draw_rods', 'finish_figure', 'fit_title', 'plot_chain']
+__all__ = ['draw_rods', 'finish_figure', 'fit_title', 'legend_below', 'plot_chain']
 
 
 def plot_chain(r, *paths: Path) -> None:
@@ -84,6 +84,18 @@ WIDTH_PER_MM = 0.375
 LEGEND_DROP_PT = 36.0
 
 
+def legend_below(fig, ax, ncol: int) -> None:
+    """The axes' legend below them and their x label, not over the drawing (loc="best" laid it
+    over the heart's tip and the lampshade's rods): a fixed distance in points, the tick labels'
+    and the label's height whatever the axes' (a tenth of the axes' height laid the legend's
+    first row over "x (mm)" on a wide chain)."""
+    from matplotlib.transforms import offset_copy
+
+    below = offset_copy(ax.transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below, ncol=ncol, fontsize=8,
+              frameon=False)
+
+
 def draw_rods(ax, points: np.ndarray, curvature, masses, heights=None) -> tuple[object, list[np.ndarray]]:
     """Each rod as it is printed (its chord, or the arc of its curved body), coloured by mass,
     its line width proportional to its body's height (``heights``, mm; None: 6 pt each),
@@ -117,14 +129,7 @@ def finish_figure(fig, ax, lc, anchors: np.ndarray, title: str, paths) -> None:
     ax.autoscale_view()
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
-    # below the axes and their x label, not over the drawing (loc="best" laid it over the heart's
-    # tip): a fixed distance in points, the tick labels' and the label's height whatever the axes'
-    # (a tenth of the axes' height laid the legend's first row over "x (mm)" on a wide chain)
-    from matplotlib.transforms import offset_copy
-
-    below = offset_copy(ax.transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below, ncol=2, fontsize=8,
-              frameon=False)
+    legend_below(fig, ax, ncol=2)
     ax.grid(True, lw=0.3, alpha=0.5)
     fit_title(fig, ax, title)
     for path in paths:

@@ -389,6 +389,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
         The data written to design.json.
     """
     with staged(outdir, progress) as (tmp, progress), contextlib.ExitStack() as stack:
+        pictures = (tmp / "preview.png", tmp / "preview.svg")
         preview = None
         if result.fabrication is not None:
             from rodcad.cad.chainfiles import start_rod_files, write_assembly
@@ -398,8 +399,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
                 # and drawing, 1.5-2.5 s, are then off this process's path); from a copy of the
                 # result without its solids, which cannot be pickled
                 preview = stack.enter_context(worker_pool(1)).submit(
-                    plot_chain, dataclasses.replace(result, fabrication=None, fixture=None),
-                    tmp / "preview.png", tmp / "preview.svg")
+                    plot_chain, dataclasses.replace(result, fabrication=None, fixture=None), *pictures)
             from rodcad.cad.export import AssemblyPart
             from rodcad.cad.printfile import write_print_files
 
@@ -419,7 +419,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
         with progress.step("writing design.json, report.md, preview.png/.svg"):
             data = design_json(result)
             if preview is None:
-                plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
+                plot_chain(result, *pictures)
             write_design(tmp, data, report_markdown(result, data))
             write_chain_view(result, data, tmp)  # assembly.glb, view.html
         if result.fabrication is not None:
@@ -433,5 +433,5 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             try:
                 preview.result()
             except (pickle.PicklingError, TypeError, BrokenProcessPool):  # a result it cannot take: here
-                plot_chain(result, tmp / "preview.png", tmp / "preview.svg")
+                plot_chain(result, *pictures)
     return data

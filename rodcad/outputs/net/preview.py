@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodcad.outputs.preview import LEGEND_DROP_PT
+from rodcad.outputs.preview import legend_below
 
 __all__ = ["plot_net"]
 
@@ -61,11 +61,7 @@ def plot_net(check, title: str, *paths: Path) -> None:
         ax.grid(alpha=0.3)
     axes[0].set_title("from above")
     axes[1].set_title("from the side (looking along +y)")
-    # below the side view, under its x label (loc="best" laid it over the lampshade's rods)
-    from matplotlib.transforms import offset_copy
-
-    axes[1].legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3, fontsize=8, frameon=False,
-                   bbox_transform=offset_copy(axes[1].transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points"))
+    legend_below(fig, axes[1], ncol=3)
     sm = matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(sm, ax=axes, shrink=0.8, label="rod mass (g)")
     fig.suptitle(title)

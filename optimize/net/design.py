@@ -137,7 +137,8 @@ def _error(res: NetResult, target: np.ndarray) -> float:
 def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
                allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None, rotations=None,
                n_starts: int = 8, seed: int = 0, refine: bool = True, tol: float = 1e-6,
-               max_refine: int = 10, callback=None, statics: NetMassDesign | None = None) -> NetDesign:
+               max_refine: int = 10, callback=None, statics: NetMassDesign | None = None,
+               leave_unstable: bool = False) -> NetDesign:
     """Masses for a net to hang in its target, and the exact solver's check of them.
 
     Args:
@@ -158,6 +159,10 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
         statics: the statics' design of these same arguments
             (:func:`optimize.net.statics.design_net_masses`) when the caller has it already
             (e.g. from a first call with ``n_starts=1``), or None: designed here.
+        leave_unstable: the check's descent from the target (:func:`optimize.solve_net`'s):
+            False (the design's question: is the target a stable equilibrium of these
+            masses?) stops at the equilibrium near the target, stable or not; True follows an
+            unstable one down to where the net would fall.
 
     Returns:
         NetDesign.
@@ -178,7 +183,7 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
                                   max_refine, kw, callback)
         refined = bool(info.get("refine_improved"))
     check = solve_net(target, edges, lengths, masses, anchored, node_rotations0=rotations, n_starts=n_starts,
-                      seed=seed, callback=callback, **kw)
+                      seed=seed, callback=callback, leave_unstable=leave_unstable, **kw)
     error = _error(check, target)
     on_target = bool(check.success and check.stable and error <= tol * size)
     if on_target:

@@ -183,23 +183,62 @@ def is_stable(net: Net, state: NetState, ev: NetEval, lam: np.ndarray) -> bool:
     return False
 
 
+#: Up to this many unknowns the direction of most negative curvature comes from a dense
+#: symmetric eigensolver (LAPACK's, exact and the same on every run); above, from ARPACK's
+#: shift-invert. ARPACK far from the spectrum cannot always separate close negative
+#: curvatures (a saddle with two of -0.68 and -0.68): it then stops without converging, and
+#: whether it did went either way on round-off.
+DENSE_EIG_NVAR = 1000
+
+
 def _negative_direction(net: Net, state: NetState, ev: NetEval, lam: np.ndarray):
-    """The unit direction of most negative curvature of H + rho J'J (None if none)."""
+    """A unit direction of negative curvature of K = H + rho J'J (None if none): the most
+    negative one (a dense eigensolver up to :data:`DENSE_EIG_NVAR` unknowns, ARPACK above), or
+    where ARPACK does not converge, one read from an LDL^T of K (:func:`_pivot_direction`)."""
     from scipy.sparse.linalg import eigsh
 
     hess = hessian(net, state, ev, lam)
     gauge = gauge_rows(net, state, ev)
     s_h = _force_scale(net, lam) / net.mean_length
     K = newton_matrix(net, hess, ev, gauge, 0.0, RHO, s_h)
+    if K.shape[0] <= DENSE_EIG_NVAR:
+        from scipy.linalg import eigh
+
+        vals, vecs = eigh(K.toarray(), subset_by_index=[0, 0])
+        return vecs[:, 0] if vals[0] < 0 else None
     bound = float(abs(K).sum(axis=1).max())
     try:
         v0 = np.random.default_rng(0).standard_normal(K.shape[0])  # (ARPACK's own start is random)
         vals, vecs = eigsh(K, k=1, sigma=-2 * bound, which="LM", maxiter=2000, v0=v0)
-    except Exception:  # noqa: BLE001 - ARPACK's failures are many; no direction then
-        return None
+    except Exception:  # noqa: BLE001 - ARPACK's failures are many: the factorization's direction then
+        return _pivot_direction(K)
     if vals[0] >= 0:
         return None
     return vecs[:, 0]
+
+
+def _pivot_direction(K: sp.spmatrix):
+    """A unit direction v with v'Kv < 0 from a symmetric LDL^T of K (P K P' = L D L'): for the
+    most negative pivot d_k, v = P' L'^-1 e_k gives v'Kv = d_k. None where the factorization
+    pivots off the diagonal or no pivot is negative."""
+    from scipy.sparse.linalg import spsolve_triangular
+
+    try:
+        lu = spd_lu(K)
+    except RuntimeError:
+        return None
+    d = lu.U.diagonal()
+    if not np.array_equal(lu.perm_r, lu.perm_c) or not np.all(np.isfinite(d)) or d.min() >= 0:
+        return None
+    L = sp.csr_matrix(lu.L)
+    scale = np.empty_like(d)
+    scale[lu.perm_c] = np.abs(K.diagonal())  # (K's diagonal in the factor's order)
+    k = int(np.argmin(d / np.maximum(scale, 1e-300)))
+    e = np.zeros(K.shape[0])
+    e[k] = 1.0
+    w = spsolve_triangular(L.T.tocsr(), e, lower=False, unit_diagonal=True)
+    v = w[lu.perm_c]
+    return v / np.linalg.norm(v)
 
 
 @dataclass

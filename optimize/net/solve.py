@@ -219,13 +219,20 @@ PERTURBED_ITER = 100
 PERTURBED_PATIENCE = 40
 
 
-def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200, perturbed: bool = False):
+#: Unstable equilibria a descent leaves along negative curvature before it reports one as it is.
+MAX_ESCAPES = 3
+
+
+def _solve_from(net: Net, start: NetState, max_iter: int, max_restore: int = 200, perturbed: bool = False,
+                leave_unstable: bool = True):
     """(Outcome or None, restoration iterations) from one start; a perturbed start of the
-    multi-start stops where it stops making progress (:data:`PERTURBED_PATIENCE`)."""
+    multi-start stops where it stops making progress (:data:`PERTURBED_PATIENCE`);
+    ``leave_unstable`` (:func:`solve_net`)."""
     state, ev, ok, nres = restore(net, start, max_iter=max_restore)
     if not ok:
         return None, nres
-    out = descend(net, state, max_iter=max_iter, patience=PERTURBED_PATIENCE if perturbed else None)
+    out = descend(net, state, max_iter=max_iter, patience=PERTURBED_PATIENCE if perturbed else None,
+                  max_escapes=MAX_ESCAPES if leave_unstable else 0)
     out.nrestore = nres
     return out, nres
 
@@ -371,7 +378,8 @@ def _invariants(net: Net, res: NetResult) -> np.ndarray:
 
 def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None, g: float = 9.81,
               n_starts: int = 1, seed: int | None = 0, node_com=None, pivots=None, node_rotations0=None,
-              start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7, callback=None) -> NetResult:
+              start_scale: float = 0.5, max_iter: int = 200, tol: float = 1e-7, callback=None,
+              leave_unstable: bool = True) -> NetResult:
     """Stable static equilibrium of a net of rigid rods hung from anchored nodes.
 
     Args:
@@ -404,6 +412,12 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
         tol: two equilibria are the same when no node differs by more than ``tol`` times
             the net's size (the largest extent of its start).
         callback: called with a line of text before each start of the multi-start, or None.
+        leave_unstable: True: an unstable equilibrium the descent reaches is left along the
+            most negative curvature for a stable one (where the net falls to), up to
+            :data:`MAX_ESCAPES` times. False: the descent from the given start stops at the
+            first equilibrium it reaches, stable or not (``stable`` says): a design check asks
+            whether its target is a stable equilibrium, not where the net would fall from it.
+            The multi-start's perturbed starts always leave unstable equilibria.
 
     Returns:
         NetResult: the equilibrium reached from the given start (the designed state, when
@@ -417,11 +431,11 @@ def solve_net(node_positions0, edges, lengths, masses, anchored, *, node_masses=
     """
     net, start = Net.from_args(node_positions0, edges, lengths, masses, anchored, node_masses=node_masses, com=com,
                                g=g, node_com=node_com, pivots=pivots, node_rotations0=node_rotations0)
-    out, nres = _solve_from(net, start, max_iter)
+    out, nres = _solve_from(net, start, max_iter, leave_unstable=leave_unstable)
     if out is None or out.status != 0:
         # the given start could not be made feasible, or the descent from it stalled (a
         # flat start with rods longer than its spacing): from the hanging cable-net shape
-        sag, nres2 = _solve_from(net, net_sag_guess(net, start), max_iter)
+        sag, nres2 = _solve_from(net, net_sag_guess(net, start), max_iter, leave_unstable=leave_unstable)
         nres += nres2
         if sag is not None and (out is None or sag.status == 0):
             out = sag

@@ -279,7 +279,7 @@ def _wider_cone(hw, turn: float) -> str:
 
 
 def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance: float | None = None,
-                    n_starts: int | None = None, note=None) -> NetCheck:
+                    n_starts: int | None = None, note=None, fall: bool = False) -> NetCheck:
     """Masses for the planned net, its exact equilibrium and its fit.
 
     Args:
@@ -289,6 +289,10 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         tolerance: largest acceptable error over the net's size (None: 1 %).
         n_starts: the multi-start's starts (None: :func:`net_starts`).
         note: called with a line of text at each stage of the design (progress), or None.
+        fall: False: the check asks whether the target is a stable equilibrium of the designed
+            net (an unstable one is reported as such, for the planner to mend); True: where the
+            net falls to from an unstable target (:func:`optimize.solve_net`'s
+            ``leave_unstable``), judged against the tolerance like any other shape.
     """
     # one BLAS thread: the design's dense steps are small and its vector operations many (an
     # iterative least squares' norms); on a busy 2-core machine OpenBLAS's spinning threads made
@@ -300,11 +304,11 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
             note(f"{text} ({time.perf_counter() - t0:.1f} s)")
 
     with threadpool_limits(limits=1, user_api="blas"):
-        return _design_plan(plan, g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=stage)
+        return _design_plan(plan, g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=stage, fall=fall)
 
 
 def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None, n_starts: int | None,
-                 note) -> NetCheck:
+                 note, fall: bool) -> NetCheck:
     t0 = time.perf_counter()
     planned = plan
     n_starts = net_starts(plan.target.n) if n_starts is None else int(n_starts)
@@ -337,13 +341,14 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     if not residual > ORIENT_USEFUL:  # (NaN for point nodes: probe)
         note("the masses designed and the net solved from the target")
         probe = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=1, refine=False,
-                           callback=note, **kw)
+                           callback=note, leave_unstable=fall, **kw)
         refine = not (probe.equilibrium.success and probe.equilibrium.stable and probe.rel_error <= REFINE_ABOVE)
     note("the masses designed" + (", refined through the solver" if refine else "")
          + (f", the net solved with a multi-start of {n_starts} start(s)" if n_starts > 1 else
             ", the net solved from the target"))
     design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
-                        refine=refine, callback=note, statics=probe.statics if probe is not None else None, **kw)
+                        refine=refine, callback=note, statics=probe.statics if probe is not None else None,
+                        leave_unstable=fall, **kw)
     recheck = False
     if plan.bent:
         final = plan.rod_com(design.masses)
@@ -355,7 +360,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
             eq0 = design.equilibrium
             res = solve_net(t.positions, t.edges, plan.lengths, design.masses, t.anchored, node_masses=plan.node_masses,
                             node_com=plan.node_com, pivots=plan.pivots, com=final, g=g, n_starts=n_starts, seed=seed,
-                            node_rotations0=eq0.rotations if eq0.success else None)
+                            node_rotations0=eq0.rotations if eq0.success else None, leave_unstable=fall)
             design = dataclasses.replace(design, equilibrium=res)
             plan = dataclasses.replace(plan, com=final)
             recheck = True

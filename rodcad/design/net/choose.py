@@ -114,12 +114,29 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
                                "hubs of the family made larger to take what the rod cannot.")
             check = other
     check = _hardware_fitted(check, design, g)
+    check = _fallen(check, design)
     if not check.ok:
         why = slack_joints(check, None if last is check else last)
         if why:
             check.why = why + (" " + check.why if check.why else "")
             check.notes.append(why)
     return check
+
+
+def _fallen(check: NetCheck, design) -> NetCheck:
+    """``check``, or where its target is an unstable equilibrium of the designed net that no
+    hardware mended, the stable shape the net falls to from it, if that ranks better (within
+    the tolerance, say): the net would hang there, not on the target."""
+    eq = check.equilibrium
+    if check.ok or not eq.success or eq.stable or check.planned is None:
+        return check
+    fallen = design(check.planned, fall=True)
+    if _rank(fallen) <= _rank(check):
+        return check
+    fallen.carry(check).chose(f"The target is an equilibrium of the designed net, but not a stable one: the net "
+                              f"falls from it to a stable shape {100 * fallen.rel_size:.2g} % of its size off the "
+                              "target, which is what it is judged by.")
+    return fallen
 
 
 def _hardware_fitted(check: NetCheck, design, g: float) -> NetCheck:

@@ -51,6 +51,11 @@ RHO = 1e6
 #: Relative KKT residual the descent aims at, and the one that counts as converged.
 TARGET = 1e-14
 CONVERGED = 1e-10
+#: A descent that has needed a proximal weight (negative curvature) and not halved its KKT
+#: residual in CREEP iterations, below CREEP_KKT, leaves along the most negative curvature as
+#: from an unstable equilibrium: the proximal steps along a curvature that flat are too short.
+CREEP = 6
+CREEP_KKT = 1e-5
 
 
 def _force_scale(net: Net, lam: np.ndarray | None) -> float:
@@ -358,6 +363,20 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
                     continue
             status = 0
             break
+        if mu > 0 and stall >= CREEP and kkt <= CREEP_KKT and escapes < max_escapes:
+            # creeping by a proximal step along negative curvature too flat to leave in a step
+            # (a hub balanced upside down whose centre of mass lies a hair off its spin axis)
+            v = _negative_direction(net, state, ev, lam)
+            moved = _escape(net, state, ev, v) if v is not None else None
+            if moved is not None:
+                escapes += 1
+                state, ev = moved
+                lam = multipliers(net, ev)
+                kkt, r = kkt_residual(net, ev, lam)
+                mu, stall, first = 0.0, 0, 1.0
+                best = (kkt, it)
+                continue
+            stall = 0  # (no way down found: on for another CREEP iterations before asking again)
         if patience is not None and it - best[1] >= patience:
             status = 3
             break

@@ -100,6 +100,8 @@ class NetCheck:
         solved_with: the arguments the equilibrium was solved with (:func:`optimize.solve_net`'s,
             less its multi-start's), for :func:`with_multistart`.
         others_at: where in ``notes`` the multi-start's other shapes are told.
+        falls_to: where the target is an unstable equilibrium of the designed net, how far off
+            it (over its size) the stable shape lies that the net falls to from it, or None.
     """
 
     plan: NetPlan
@@ -118,6 +120,7 @@ class NetCheck:
     choices: list[str] = field(default_factory=list)
     solved_with: dict | None = field(default=None, repr=False)
     others_at: int | None = field(default=None, repr=False)
+    falls_to: float | None = None
 
     def chose(self, text: str) -> None:
         """A choice the planner made around this design (its joints hung, edges made one rod,
@@ -222,7 +225,9 @@ class NetCheck:
             return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})" + (
                 f"; {self.why}" if self.why else "")
         if not eq.stable:
-            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one" + (
+            falls = ("" if self.falls_to is None else
+                     f" (from it the net falls to a stable shape {100 * self.falls_to:.3g} % of its size off it)")
+            return f"{pct}: the target is an equilibrium of the designed net, but not a stable one{falls}" + (
                 f": {self.why}" if self.why else "")
         if not self.meets_tolerance and self.why:
             return f"{pct}: {self.why}"

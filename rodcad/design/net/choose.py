@@ -76,7 +76,7 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
     check = design(plan)
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
-        return _hardware_fitted(check, design, g)
+        return _fallen(_hardware_fitted(check, design, g), design)
     if on_surface:
         other = design(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g))
         if _rank(other) > _rank(check):
@@ -125,18 +125,22 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
 
 def _fallen(check: NetCheck, design) -> NetCheck:
     """``check``, or where its target is an unstable equilibrium of the designed net that no
-    hardware mended, the stable shape the net falls to from it, if that ranks better (within
-    the tolerance, say): the net would hang there, not on the target."""
+    hardware mended, the stable shape the net falls to from it where that is within the
+    tolerance (the net hangs there, not on the target); else ``check`` told how far it falls."""
     eq = check.equilibrium
     if check.ok or not eq.success or eq.stable or check.planned is None:
         return check
     fallen = design(check.planned, fall=True)
-    if _rank(fallen) <= _rank(check):
+    low = fallen.equilibrium
+    if not (low.success and low.stable):
         return check
-    fallen.carry(check).chose(f"The target is an equilibrium of the designed net, but not a stable one: the net "
-                              f"falls from it to a stable shape {100 * fallen.rel_size:.2g} % of its size off the "
-                              "target, which is what it is judged by.")
-    return fallen
+    if fallen.ok:
+        fallen.carry(check).chose(f"The target is an equilibrium of the designed net, but not a stable one: the net "
+                                  f"falls from it to a stable shape {100 * fallen.rel_size:.3g} % of its size off the "
+                                  "target, within the tolerance: that shape is the design's.")
+        return fallen
+    check.falls_to = fallen.rel_size
+    return check
 
 
 def _hardware_fitted(check: NetCheck, design, g: float) -> NetCheck:

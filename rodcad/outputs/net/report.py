@@ -110,10 +110,11 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     bom = data["bill_of_materials"]
     lines = [f"# {title}", ""]
     verdict = "meets" if check.ok else "misses"
+    fit = (f"the simulated net hangs **{check.error_mm:.3g} mm** ({100 * check.rel_size:.3g} % of its {t.size:.4g} mm "
+           f"size) from its target at worst (tolerance {100 * check.tolerance:.3g} %)." if check.ok else
+           f"the simulated net {check.limit()}.")
     lines += [f"A net of {t.m} rods and {t.n} nodes ({t.anchored.size} anchored), generated from "
-              f"'{t.kind}'. It {verdict} its tolerance: the simulated net hangs **{check.error_mm:.3g} mm** "
-              f"({100 * check.rel_size:.3g} % of its {t.size:.4g} mm size) from its target at worst "
-              f"(tolerance {100 * check.tolerance:.3g} %).", "",
+              f"'{t.kind}'. It {verdict} its tolerance: {fit}", "",
               "![from above and from the side](preview.png)", "", view_line(), "", "## Fit and equilibrium", ""]
     lines += [f"- Statics at the target: {check.design.statics.message}",
               f"- Exact equilibrium of the designed net from the target: "

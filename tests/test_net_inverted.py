@@ -82,3 +82,25 @@ def test_the_planner_makes_such_hubs_the_smallest_and_the_chain_hangs_where_mujo
     err, moved = settle_from_other_masses(check, seed=0, turn_rods=True)
     assert moved > 10 * TOL * check.plan.target.size  # (a start away from the equilibrium)
     assert err / check.plan.target.size < TOL
+
+
+def test_where_no_hardware_mends_the_upside_down_hubs_the_net_is_judged_where_it_falls(chain, monkeypatch):
+    """With the hubs left as planned (no lighter ones: the planner's mend taken away), the target
+    is an unstable equilibrium of the designed net: the check follows the net down to the stable
+    shape it falls to, which lies within the tolerance and is the design's, and says so. MuJoCo
+    rests there from a start away from it."""
+    import rodcad.design.net.choose as choose
+
+    monkeypatch.setattr(choose, "lighten_inverted", lambda check, design, rank: check)
+    cat = load_catalog("pla-parametric")
+    check = design_drawn_net(chain, cat, seed=0)
+    eq = check.equilibrium
+    assert check.ok and eq.stable and eq.escapes >= 1
+    assert 1e-4 < check.rel_size <= check.tolerance  # (off the target: the hubs hang the other way up)
+    assert check.planned.node_pivot[[1, 7]].tolist() == [7.5, 7.5]  # (the nominal hubs)
+    assert any("falls from it to a stable shape" in n for n in check.notes)
+    for k in (1, 7):  # fallen over: hanging below their axes
+        assert _com_below_axis(check.plan, k, eq.positions[k], eq.rotations[k]) > 0
+    err, moved = settle_from_other_masses(check, seed=0, turn_rods=True)
+    assert moved > 10 * TOL * check.plan.target.size
+    assert err / check.plan.target.size < TOL

@@ -116,3 +116,4 @@ def test_the_fall_from_a_flat_saddle_is_followed_to_a_rest_mujoco_keeps(arch):
     # (MuJoCo's soft constraints rest ~1e-8 of the size off; a thousandth of the size is far tighter than
     # the fold it would show if the rest were not stable)
     assert np.max(np.linalg.norm(sim["positions"] - res.positions, axis=1)) < 1e-3 * plan.target.size
+

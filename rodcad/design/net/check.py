@@ -221,9 +221,13 @@ class NetCheck:
         pct = (f"hangs {100 * self.rel_size:.3g} % of its size off its target (tolerance "
                f"{100 * self.tolerance:.3g} %)")
         eq, st = self.equilibrium, self.design.statics
-        if not eq.success:  # (and why the masses could not make the target one, where the statics say)
-            return f"{pct}: the solver found no equilibrium of the designed net ({eq.message})" + (
-                f"; {self.why}" if self.why else "")
+        if not eq.success:
+            if self.why:  # (why the masses could not make the target one: what the user can change, first)
+                return (f"cannot rest on its target (tolerance {100 * self.tolerance:.3g} %): {self.why} With the "
+                        f"best fit's masses the net moves away from the target, and the solver did not find where "
+                        f"it comes to rest ({eq.message})")
+            return (f"could not be solved (tolerance {100 * self.tolerance:.3g} %): the solver found no equilibrium "
+                    f"of the designed net ({eq.message})")
         if not eq.stable:
             falls = ("" if self.falls_to is None else
                      f" (from it the net falls to a stable shape {100 * self.falls_to:.3g} % of its size off it)")

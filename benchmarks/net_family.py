@@ -353,6 +353,8 @@ CATEGORIES = (
     ("push (compression)", "rods that push at the design (compression: true, or more anchors)"),
     ("in its socket", "a rod turning further in its socket than the hub allows"),
     ("hangs", "the best fit off the tolerance"),
+    ("cannot rest on its target", "no masses balance the target, and the solver stopped before the net came to rest"),
+    ("could not be solved", "the solver found no equilibrium of the designed net"),
 )
 
 

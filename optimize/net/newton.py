@@ -207,9 +207,12 @@ def _negative_direction(net: Net, state: NetState, ev: NetEval, lam: np.ndarray)
     s_h = _force_scale(net, lam) / net.mean_length
     K = newton_matrix(net, hess, ev, gauge, 0.0, RHO, s_h)
     if K.shape[0] <= DENSE_EIG_NVAR:
-        from scipy.linalg import eigh
+        from scipy.linalg import LinAlgError, eigh
 
-        vals, vecs = eigh(K.toarray(), subset_by_index=[0, 0])
+        try:
+            vals, vecs = eigh(K.toarray(), subset_by_index=[0, 0])
+        except (LinAlgError, ValueError):  # (a non-finite K: no direction)
+            return None
         return vecs[:, 0] if vals[0] < 0 else None
     bound = float(abs(K).sum(axis=1).max())
     try:
@@ -241,8 +244,13 @@ def _pivot_direction(K: sp.spmatrix):
     k = int(np.argmin(d / np.maximum(scale, 1e-300)))
     e = np.zeros(K.shape[0])
     e[k] = 1.0
-    w = spsolve_triangular(L.T.tocsr(), e, lower=False, unit_diagonal=True)
+    try:
+        w = spsolve_triangular(L.T.tocsr(), e, lower=False, unit_diagonal=True)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
     v = w[lu.perm_c]
+    if not np.all(np.isfinite(v)):
+        return None
     return v / np.linalg.norm(v)
 
 
@@ -342,6 +350,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     kkt, r = kkt_residual(net, ev, lam)
     nfactor = 0
     escapes = 0
+    asked = 0  # creeps asked for a way down
     mu = 0.0
     status = 1
     it = 0
@@ -363,9 +372,10 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
                     continue
             status = 0
             break
-        if mu > 0 and stall >= CREEP and kkt <= CREEP_KKT and escapes < max_escapes:
+        if mu > 0 and stall >= CREEP and kkt <= CREEP_KKT and escapes < max_escapes and asked < max_escapes:
             # creeping by a proximal step along negative curvature too flat to leave in a step
             # (a hub balanced upside down whose centre of mass lies a hair off its spin axis)
+            asked += 1  # (each ask costs an eigensolve: as many as the escapes allowed, found or not)
             v = _negative_direction(net, state, ev, lam)
             moved = _escape(net, state, ev, v) if v is not None else None
             if moved is not None:

@@ -117,3 +117,21 @@ def test_the_fall_from_a_flat_saddle_is_followed_to_a_rest_mujoco_keeps(arch):
     # the fold it would show if the rest were not stable)
     assert np.max(np.linalg.norm(sim["positions"] - res.positions, axis=1)) < 1e-3 * plan.target.size
 
+
+
+def test_the_arch_build_says_where_it_falls_in_its_line_design_json_and_report(tmp_path, capsys):
+    import json
+
+    from rodcad.cli import main
+
+    path = tmp_path / "arch.yaml"
+    path.write_text("design: 1\nname: arch\nnet:\n  nodes: [[0, 0, 0], [40, 0, 35], [90, 0, 50], [140, 0, 35], "
+                    "[180, 0, 0]]\n  edges: [[0, 1], [1, 2], [2, 3], [3, 4]]\n  anchored: [0, 4]\n"
+                    "  compression: true\n")
+    assert main(["build", str(path), "--no-cad", "-q", "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err
+    assert "but not a stable one (from it the net falls to a stable shape" in err
+    best = tmp_path / "out.best-fit"
+    net = json.loads((best / "design.json").read_text())["net"]
+    assert not net["stable"] and net["falls_to_rel_size"] > 0.2
+    assert "falls to a stable shape" in (best / "report.md").read_text().splitlines()[2]

@@ -201,6 +201,8 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "error": {"max_mm": _f(check.error_mm), "max_rel_size": _f(check.rel_size),
                       "mean_node_mm": _f(float(np.mean(check.node_error)))},
             "stable": bool(eq.stable),
+            # (an unstable target: how far off it the stable shape lies that the net falls to)
+            "falls_to_rel_size": None if check.falls_to is None else _f(check.falls_to),
             "kkt_residual": _f(eq.kkt_residual),
             "success": bool(eq.success),
             "size": t.size,

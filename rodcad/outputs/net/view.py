@@ -98,7 +98,9 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
                ["off its target", f"{mm(err.get('max_mm'))} ({pct(err.get('max_rel_size'))} of its size)"],
                ["tolerance", f"{pct(net.get('tolerance'))}: {'met' if net.get('meets_tolerance') else 'MISSED'}"],
                ["equilibrium", f"{'stable' if net.get('stable') else 'NOT stable'}, KKT residual "
-                               f"{float(net.get('kkt_residual') or 0):.2g}"]]
+                               f"{float(net.get('kkt_residual') or 0):.2g}"
+                               + ("" if net.get("falls_to_rel_size") is None else
+                                  f"; it falls to a stable shape {pct(net['falls_to_rel_size'])} of its size off")]]
     ab = data.get("as_built")
     if ab:
         summary.append(["as built (the solids' masses)", f"{mm(ab['error'].get('max_mm'))} "

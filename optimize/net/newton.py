@@ -26,7 +26,11 @@ every iterate on the constraint manifold:
    same pivots; exact symmetries (a part hung from one vertical line of anchors turns
    about it, a node body spins about the line of its pivots) are held fixed by one unknown
    each (:func:`optimize.net.deriv.gauge_rows`). A KKT point that is not stable is left
-   along its most negative curvature, and the descent resumes.
+   along its most negative curvature (a dense eigensolver up to :data:`DENSE_EIG_NVAR`
+   unknowns, ARPACK above, an LDL^T pivot where ARPACK fails), and the descent resumes;
+   so is a descent that creeps by proximal steps along a curvature too flat to leave
+   (:data:`CREEP`). ``max_escapes=0`` reports the first KKT point as it is, stable or not
+   (a design check asks that of its target).
 
 Each iteration costs one or a few sparse factorizations of an ``nvar x nvar`` matrix with
 the net's sparsity (``nvar`` = 3 per free node, + 3 per free node body).

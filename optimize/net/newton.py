@@ -362,35 +362,25 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     best = (kkt, 0)  # (KKT residual, iteration) where it last fell to half the mark before
     first = 1.0  # the line search's first step: up from the last one accepted (see below)
     while it < max_iter:
+        down = None
         if kkt <= TARGET or (kkt <= CONVERGED and stall >= 2):
             if escapes < max_escapes and not is_stable(net, state, ev, lam):
-                v = _negative_direction(net, state, ev, lam)
-                moved = _escape(net, state, ev, v) if v is not None else None
-                if moved is not None:
-                    escapes += 1
-                    state, ev = moved
-                    lam = multipliers(net, ev)
-                    kkt, r = kkt_residual(net, ev, lam)
-                    mu, stall = 0.0, 0
-                    best = (kkt, it)  # (patience counts from the escape: a new descent)
-                    continue
-            status = 0
-            break
-        if mu > 0 and stall >= CREEP and kkt <= CREEP_KKT and escapes < max_escapes and asked < max_escapes:
+                down = _way_down(net, state, ev, lam)
+            if down is None:
+                status = 0
+                break
+        elif mu > 0 and stall >= CREEP and kkt <= CREEP_KKT and escapes < max_escapes and asked < max_escapes:
             # creeping by a proximal step along negative curvature too flat to leave in a step
             # (a hub balanced upside down whose centre of mass lies a hair off its spin axis)
             asked += 1  # (each ask costs an eigensolve: as many as the escapes allowed, found or not)
-            v = _negative_direction(net, state, ev, lam)
-            moved = _escape(net, state, ev, v) if v is not None else None
-            if moved is not None:
-                escapes += 1
-                state, ev = moved
-                lam = multipliers(net, ev)
-                kkt, r = kkt_residual(net, ev, lam)
-                mu, stall, first = 0.0, 0, 1.0
-                best = (kkt, it)
-                continue
-            stall = 0  # (no way down found: on for another CREEP iterations before asking again)
+            down = _way_down(net, state, ev, lam)
+            stall = 0  # (none found: on for another CREEP iterations before asking again)
+        if down is not None:
+            escapes += 1
+            state, ev, lam, kkt, r = down
+            mu, stall, first = 0.0, 0, 1.0
+            best = (kkt, it)  # (patience counts from the escape: a new descent)
+            continue
         if patience is not None and it - best[1] >= patience:
             status = 3
             break
@@ -453,6 +443,19 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
     if status == 1 and kkt <= CONVERGED:
         status = 0
     return Outcome(state, ev, lam, kkt, status, nit=it, nfactor=nfactor, escapes=escapes)
+
+
+def _way_down(net: Net, state: NetState, ev: NetEval, lam: np.ndarray):
+    """(state, ev, lam, kkt, r) a step down along the most negative curvature from ``state``
+    (:func:`_negative_direction`, :func:`_escape`), or None where there is none."""
+    v = _negative_direction(net, state, ev, lam)
+    moved = _escape(net, state, ev, v) if v is not None else None
+    if moved is None:
+        return None
+    state, ev = moved
+    lam = multipliers(net, ev)
+    kkt, r = kkt_residual(net, ev, lam)
+    return state, ev, lam, kkt, r
 
 
 def _capped(net: Net, dy: np.ndarray) -> np.ndarray:

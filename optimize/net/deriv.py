@@ -265,26 +265,10 @@ def gauge_rows(net: Net, state: NetState, ev: NetEval) -> np.ndarray:
     (any other hyperplane across the symmetry would do).
     """
     out: list[int] = []
-    n, e = net.n, net.edges
-    anch = net.anchored
-    free_edge = ~(anch[e[:, 0]] & anch[e[:, 1]])
-    inner = ~anch[e[:, 0]] & ~anch[e[:, 1]]
-    adj = sp.coo_matrix((np.ones(int(inner.sum())), (e[inner, 0], e[inner, 1])), shape=(n, n))
-    ncomp, label = connected_components(adj, directed=False)
     size = net.mean_length
-    for comp in range(ncomp):
-        nodes = np.flatnonzero((label == comp) & ~anch)
-        if nodes.size == 0:
-            continue
-        pts = []  # the anchor pivots this part hangs from
-        for k in (0, 1):
-            hit = free_edge & anch[e[:, k]] & (label[e[:, 1 - k]] == comp) & ~anch[e[:, 1 - k]]
-            pts.append(ev.P[hit, k])
-        pts = np.concatenate(pts)
-        if pts.size == 0 or np.max(np.abs(pts[:, :2] - pts[0, :2])) > 1e-9 * size:
-            continue
+    for nodes, p0 in _turning_parts(net, ev):
         xi = np.zeros(net.nvar)
-        gen = np.cross([0.0, 0.0, 1.0], state.x[nodes] - pts[0])
+        gen = np.cross([0.0, 0.0, 1.0], state.x[nodes] - p0)
         xi[net.pos_idx[nodes][:, None] + np.arange(3)] = gen
         body_nodes = nodes[net.rot_idx[nodes] >= 0]
         xi[net.rot_idx[body_nodes] + 2] = size  # a turn about z, scaled to a length
@@ -303,26 +287,67 @@ def gauge_rows(net: Net, state: NetState, ev: NetEval) -> np.ndarray:
     return np.array(sorted(set(out)), dtype=int)
 
 
+def _turning_parts(net: Net, ev: NetEval) -> list:
+    """The parts of the net (free nodes joined by rods) that hang from anchor pivots on one
+    vertical line: (their nodes, the first of those pivots). Anchors neither move nor turn, so
+    the parts are found once per net (kept on it)."""
+    if net.turning_parts is not None:
+        return net.turning_parts
+    out = []
+    n, e = net.n, net.edges
+    anch = net.anchored
+    free_edge = ~(anch[e[:, 0]] & anch[e[:, 1]])
+    inner = ~anch[e[:, 0]] & ~anch[e[:, 1]]
+    adj = sp.coo_matrix((np.ones(int(inner.sum())), (e[inner, 0], e[inner, 1])), shape=(n, n))
+    ncomp, label = connected_components(adj, directed=False)
+    for comp in range(ncomp):
+        nodes = np.flatnonzero((label == comp) & ~anch)
+        if nodes.size == 0:
+            continue
+        pts = []  # the anchor pivots this part hangs from
+        for k in (0, 1):
+            hit = free_edge & anch[e[:, k]] & (label[e[:, 1 - k]] == comp) & ~anch[e[:, 1 - k]]
+            pts.append(ev.P[hit, k])
+        pts = np.concatenate(pts)
+        if pts.size == 0 or np.max(np.abs(pts[:, :2] - pts[0, :2])) > 1e-9 * net.mean_length:
+            continue
+        out.append((nodes, pts[0].copy()))
+    net.turning_parts = out
+    return out
+
+
 def _spinning_bodies(net: Net, state: NetState, ev: NetEval, size: float) -> list:
     """The free node bodies whose pivots (and centre of mass) lie on one line or at one
-    point, ascending: (node, its first point, the axes it spins about (k, 3)).
+    point, ascending: (node, its first point, the axes it spins about (k, 3)), world frame.
+
+    Which bodies spin, and about what axes in their own frames, does not change as they turn:
+    it is found once per net (:func:`_body_spins`, kept on it) and turned by each body's
+    orientation here."""
+    return [(node, state.R[node] @ p0, axes @ state.R[node].T) for node, p0, axes in _body_spins(net, size)]
+
+
+def _body_spins(net: Net, size: float) -> list:
+    """:func:`_spinning_bodies` in the bodies' own frames (kept on the net).
 
     A body spins about the null space of the cross-product matrices of its points less its
     first; the singular value decompositions run batched, the bodies of one number of points
     at a time (a net of a thousand hubs: one call each for its 2-, 3- and 4-rod hubs)."""
+    if net.body_spins is not None:
+        return net.body_spins
     bodies = pattern(net).bodies
     if bodies.size == 0:
-        return []
+        net.body_spins = []
+        return net.body_spins
     e = net.edges
     is_body = np.zeros(net.n, dtype=bool)
     is_body[bodies] = True
     # each body's points: its rods' pivots at end 0 in rod order, at end 1, then its centre of mass
     node_of = np.concatenate([e[:, 0], e[:, 1]])
-    pts = np.concatenate([ev.a[:, 0], ev.a[:, 1]])
+    pts = np.concatenate([net.pivots[:, 0], net.pivots[:, 1]])
     keep = np.flatnonzero(is_body[node_of])
     heavy = bodies[net.node_masses[bodies] > 0]
     owner = np.concatenate([node_of[keep], heavy])
-    pts = np.concatenate([pts[keep], np.einsum("nab,nb->na", state.R[heavy], net.node_com[heavy])])
+    pts = np.concatenate([pts[keep], net.node_com[heavy]])
     order = np.argsort(owner, kind="stable")
     owner, pts = owner[order], pts[order]
     count = np.bincount(owner, minlength=net.n)
@@ -337,7 +362,8 @@ def _spinning_bodies(net: Net, state: NetState, ev: NetEval, size: float) -> lis
         rank = np.sum(sv > tol[:, None], axis=1)
         for q in np.flatnonzero(rank < 3):
             found[int(group[q])] = (P[q, 0], vt[q, rank[q]:])
-    return [(node, *found[node]) for node in sorted(found)]
+    net.body_spins = [(node, *found[node]) for node in sorted(found)]
+    return net.body_spins
 
 
 def rod_frames(net: Net, ev: NetEval) -> np.ndarray:

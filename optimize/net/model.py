@@ -146,6 +146,8 @@ class Net:
         self.var_scale = np.ones(self.nvar)
         self.var_scale[3 * nf:] = self.mean_length ** 2
         self.pattern = None  # the sparsity patterns, built by optimize.net.deriv on first use
+        self.turning_parts = None  # parts hung from one vertical line of anchors (optimize.net.deriv)
+        self.body_spins = None  # node bodies that spin about the line of their pivots, own frames (same)
 
     @classmethod
     def from_args(cls, node_positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None,

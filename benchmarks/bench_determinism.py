@@ -20,14 +20,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from perturb import CHAIN_EXAMPLES as EXAMPLES  # noqa: E402
 from perturb import choice_differences, perturbed  # noqa: E402
 
 from rodcad import pipeline  # noqa: E402
 from rodcad.design.loader import load_design  # noqa: E402
-
-#: The chain examples (nets: tests/test_net_build.py; the chandelier: tests/test_chandelier.py).
-EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier")
-                  and "\nnet:" not in p.read_text())
 
 #: The joints may move by the perturbation amplified by the chord walk; masses by 1e-5.
 MOVE_TOL, MASS_TOL = 1e-8, 1e-5

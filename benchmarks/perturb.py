@@ -5,10 +5,16 @@ benchmarks/bench_determinism.py (every example, several seeds)."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["COUNTS", "choice_differences", "perturbed"]
+__all__ = ["CHAIN_EXAMPLES", "COUNTS", "choice_differences", "perturbed"]
+
+#: The chain examples (nets: tests/test_net_build.py; the chandelier: tests/test_chandelier.py;
+#: chain.yaml is for ``rodcad simulate``).
+CHAIN_EXAMPLES = sorted(p for p in (Path(__file__).resolve().parents[1] / "examples").glob("*.yaml")
+                        if p.stem not in ("chain", "chandelier") and "\nnet:" not in p.read_text())
 
 #: Keys whose numbers are counts or code, not measures (left as they are).
 COUNTS = ("sides", "samples", "rods", "count", "seed", "design", "y")  # y: an expression

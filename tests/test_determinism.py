@@ -19,15 +19,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from perturb import choice_differences, perturbed  # benchmarks/perturb.py (tests/conftest.py)
+from perturb import CHAIN_EXAMPLES as EXAMPLES  # benchmarks/perturb.py (tests/conftest.py)
+from perturb import choice_differences, perturbed
 
 from expected_exits import EXPECTED_EXIT, built_folder
 from rodcad import pipeline
 from rodcad.design.loader import load_design
-
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.yaml") if p.stem not in ("chain", "chandelier")
-                  and "\nnet:" not in p.read_text())  # nets: tests/test_net_build.py
 
 #: The examples the default run checks, one of each way a chain is made (the others are marked
 #: slow): joints on stops and an anchor fixture, rods printed to order hanging freely, a fixed

@@ -275,7 +275,7 @@ def gauge_rows(net: Net, state: NetState, ev: NetEval) -> np.ndarray:
         k = int(np.argmax(np.abs(xi)))
         if abs(xi[k]) > 1e-9 * size:
             out.append(k)
-    for node, p0, axes in _spinning_bodies(net, state, ev, size):  # bodies that spin about the line of their pivots
+    for node, p0, axes in _spinning_bodies(net, state):  # bodies that spin about the line of their pivots
         for axis in axes:
             # the body turns by 'axis' about p0: its node point moves by axis x (-p0)
             xi = np.zeros(net.nvar)
@@ -316,17 +316,17 @@ def _turning_parts(net: Net, ev: NetEval) -> list:
     return out
 
 
-def _spinning_bodies(net: Net, state: NetState, ev: NetEval, size: float) -> list:
+def _spinning_bodies(net: Net, state: NetState) -> list:
     """The free node bodies whose pivots (and centre of mass) lie on one line or at one
     point, ascending: (node, its first point, the axes it spins about (k, 3)), world frame.
 
     Which bodies spin, and about what axes in their own frames, does not change as they turn:
     it is found once per net (:func:`_body_spins`, kept on it) and turned by each body's
     orientation here."""
-    return [(node, state.R[node] @ p0, axes @ state.R[node].T) for node, p0, axes in _body_spins(net, size)]
+    return [(node, state.R[node] @ p0, axes @ state.R[node].T) for node, p0, axes in _body_spins(net)]
 
 
-def _body_spins(net: Net, size: float) -> list:
+def _body_spins(net: Net) -> list:
     """:func:`_spinning_bodies` in the bodies' own frames (kept on the net).
 
     A body spins about the null space of the cross-product matrices of its points less its
@@ -358,7 +358,7 @@ def _body_spins(net: Net, size: float) -> list:
         P = pts[first[group][:, None] + np.arange(c)]          # (nb, c, 3)
         rel = P - P[:, :1]
         _, sv, vt = np.linalg.svd(skew(rel).reshape(group.size, 3 * c, 3))
-        tol = 1e-9 * np.maximum(size, np.max(np.abs(rel), axis=(1, 2), initial=0.0))
+        tol = 1e-9 * np.maximum(net.mean_length, np.max(np.abs(rel), axis=(1, 2), initial=0.0))
         rank = np.sum(sv > tol[:, None], axis=1)
         for q in np.flatnonzero(rank < 3):
             found[int(group[q])] = (P[q, 0], vt[q, rank[q]:])

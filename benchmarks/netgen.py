@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-__all__ = ["NetSpec", "grid_net", "radial_net", "jitter", "random_grid", "random_masses"]
+__all__ = ["NetSpec", "grid_net", "plan_pivots", "radial_net", "jitter", "random_grid", "random_masses"]
 
 
 @dataclass
@@ -49,6 +49,18 @@ class NetSpec:
 
 def _lengths(positions: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return np.linalg.norm(positions[edges[:, 1]] - positions[edges[:, 0]], axis=1)
+
+
+def plan_pivots(spec: NetSpec, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Node bodies for ``spec``'s nodes: each rod's pivots ``radius`` out from its nodes along
+    the rod's direction in plan (horizontal). Returns ((m, 2, 3) pivots, (m,) the rods'
+    pivot-to-pivot lengths at the positions)."""
+    pos, e = spec.positions, spec.edges
+    d = pos[e[:, 1]] - pos[e[:, 0]]
+    d[:, 2] = 0
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    piv = np.stack([radius * d, -radius * d], axis=1)
+    return piv, np.linalg.norm(pos[e[:, 1]] + piv[:, 1] - pos[e[:, 0]] - piv[:, 0], axis=1)
 
 
 def grid_net(u: int, v: int, *, x=(0.0, 160.0), y=(0.0, 160.0), z=None, anchored="corners",

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from netgen import grid_net, jitter, radial_net, random_grid, random_masses
+from netgen import grid_net, jitter, plan_pivots, radial_net, random_grid, random_masses
 
 from optimize import more_starts, net_modes, solve_net
 from optimize.net.solve import pivots_by_node, pivots_from_nodes
@@ -222,14 +222,7 @@ def test_stability_agrees_with_the_dense_rank_revealing_check(seed, anchored):
 
 def _ring_net():
     spec = grid_net(3, 3, x=(0, 120), y=(0, 120), z=lambda x, y: 0.004 * ((x - 60) ** 2 + (y - 60) ** 2) - 30)
-    pos, e = spec.positions, spec.edges
-    piv = np.zeros((spec.m, 2, 3))
-    for k, (i, j) in enumerate(e):
-        d = pos[j] - pos[i]
-        d[2] = 0
-        d /= np.linalg.norm(d)
-        piv[k, 0], piv[k, 1] = 4.0 * d, -4.0 * d
-    lengths = np.linalg.norm(pos[e[:, 1]] + piv[:, 1] - pos[e[:, 0]] - piv[:, 0], axis=1)
+    piv, lengths = plan_pivots(spec, 4.0)
     rng = np.random.default_rng(0)
     kw = dict(node_masses=np.full(spec.n, 0.7), node_com=np.tile([0.0, 0.0, -1.0], (spec.n, 1)), pivots=piv,
               com=np.column_stack([lengths / 2, rng.uniform(-2, 2, spec.m), np.zeros(spec.m)]))

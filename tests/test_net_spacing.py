@@ -209,6 +209,29 @@ def test_a_hub_whose_rod_turns_too_far_gets_the_narrowest_wider_cone_and_the_net
     assert widen_cones(single, design) is single and len(tried) == 1
 
 
+def test_the_refinement_keeps_the_rods_within_the_widest_cone_each_hub_could_have(designed):
+    # what the design's refinement keeps each rod's turn within: its hub's cone widened as far
+    # as the catalog's range and the neighbours' lips allow (what widen_cones may give it)
+    from rodcad.design.net.cones import widest_swing_limits
+
+    plan = designed.plan
+    own, wide = plan.end_swing_limits, widest_swing_limits(plan)
+    assert np.all(wide >= own)
+    t = plan.target
+    for k in np.unique(t.edges):
+        at = t.node_ends()[int(k)]
+        hub = plan.hub(int(k))
+        dirs = np.array([plan.pivots[e, c] for e, c in at], float)
+        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+        cone = max(hub.widest_cone(dirs), hub.cone_deg)
+        assert hub.cone_limits[0] - 1e-9 <= cone <= hub.cone_limits[1] + 1e-9
+        for e, c in at:  # (straight rods: the cone's swing itself)
+            assert wide[e, c] == pytest.approx(hub.coned(cone).swing_deg, abs=1e-9)
+    assert np.any(wide > own + 1.0)  # (this grid's hubs have room to open their cones)
+    one = dataclasses.replace(plan, hardware=dataclasses.replace(plan.hardware, cone_range=None))
+    assert np.array_equal(widest_swing_limits(one), one.end_swing_limits)
+
+
 # --------------------------------------------------------------------------- lengths
 
 

@@ -24,6 +24,7 @@ from threadpoolctl import threadpool_limits
 from optimize import NetDesign, design_net, net_statics
 from rodcad.catalog.net.node import socket_centres
 from rodcad.design.fit import DEFAULT_TOLERANCE
+from rodcad.design.net.cones import widest_swing_limits
 from rodcad.design.net.hubs import buildable_bounds, orient_sockets
 from rodcad.design.net.plan import NetPlan, replan
 
@@ -339,10 +340,12 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     com_rounds = 0
     if plan.bent:
         plan, com_rounds = settle_com(plan, g=g)
+    fn, fp, fit_ends = fit_of(plan)
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-              allow_compression=t.any_may_push, g=g, com=plan.statics_com)
+              allow_compression=t.any_may_push, g=g, com=plan.statics_com, fit_nodes=fn, fit_points=fp,
+              fit_ends=fit_ends, swing_limits=widest_swing_limits(plan) if hub else None)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
-    # a step (a dense bounded least squares on hundreds of masses), so the statics' best fit
+    # a step (dense derivatives and a linear program on hundreds of masses), so the statics' best fit
     # stays; otherwise the statics' masses, solved once from the target, are refined through
     # the solver only where they hang measurably off (above REFINE_ABOVE of the size)
     refine = not (t.n > FULL_REFINE_NODES and residual > ORIENT_USEFUL)
@@ -382,13 +385,9 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     if eq.success:
         # against the net as drawn: a planner's joint against the drawn surface or edge, a
         # merged hub against each node drawn (rodcad.design.net.joints)
-        fn, fp = t.fit_pairs
         node_err = np.zeros(t.n)
         np.maximum.at(node_err, fn, np.linalg.norm(eq.positions[fn] - fp, axis=1))
-        shift = np.zeros((t.n, 3))
-        np.add.at(shift, fn, fp - t.positions[fn])
-        shift /= np.maximum(np.bincount(fn, minlength=t.n), 1)[:, None]
-        end_err = np.linalg.norm(eq.ends - plan.target_ends - shift[t.edges], axis=2)
+        end_err = np.linalg.norm(eq.ends - fit_ends, axis=2)
         err = float(max(node_err.max(), end_err.max()))
     else:
         node_err = np.full(t.n, np.inf)
@@ -442,6 +441,20 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
                     swing, time.perf_counter() - t0, notes, why, planned, solved_with=solved_with,
                     others_at=others_at)
+
+
+def fit_of(plan: NetPlan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What a net's fit measures against the net as drawn: (nodes, the points they are measured
+    against, (m, 2, 3) where the rods' pivots are measured against). A planner's joint against
+    the drawn surface or edge, a merged hub against each node drawn
+    (:attr:`rodcad.design.net.target.NetTarget.fit_pairs`); each rod's pivots where the plan puts
+    them, moved with their node's point."""
+    t = plan.target
+    fn, fp = t.fit_pairs
+    shift = np.zeros((t.n, 3))
+    np.add.at(shift, fn, fp - t.positions[fn])
+    shift /= np.maximum(np.bincount(fn, minlength=t.n), 1)[:, None]
+    return fn, fp, plan.target_ends + shift[t.edges]
 
 
 def _others(eq) -> str:

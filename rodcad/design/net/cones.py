@@ -23,9 +23,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from rodcad.catalog.net.bend import bent_swing_deg
 from rodcad.design.net.plan import NetPlan, replan
 
-__all__ = ["CONE_MARGIN", "CONE_ROUNDS", "widen_cones"]
+__all__ = ["CONE_MARGIN", "CONE_ROUNDS", "widen_cones", "widest_swing_limits"]
 
 #: A hub's cone is widened this much beyond what its rods' turns need (deg): the design made
 #: again with the lighter hub turns them a little differently.
@@ -33,6 +34,36 @@ CONE_MARGIN = 1.0
 
 #: Rounds of cones widened and the net designed again (each round designs the net once).
 CONE_ROUNDS = 3
+
+
+def widest_swing_limits(plan: NetPlan) -> np.ndarray:
+    """(m, 2) how far each rod of ``plan`` could turn in the socket at each of its ends with its
+    hub's widest cone (deg): the widest of the catalog's range that leaves every socket's lip
+    whole (:meth:`~rodcad.catalog.net.node.NodeHardware.widest_cone`, the most :func:`widen_cones`
+    may widen it to), less where a bent rod's end face comes nearer; the plan's own
+    (:attr:`~rodcad.design.net.plan.NetPlan.end_swing_limits`) where the catalog has one cone.
+    What the design's refinement keeps the rods' turns within: a turn beyond the planned cone
+    is this module's to widen it for."""
+    out = plan.end_swing_limits
+    hw = plan.hardware
+    if not hw.is_hub or hw.cone_limits[1] <= hw.cone_deg:
+        return out
+    arcs = plan.arcs
+    for k, at in enumerate(plan.target.node_ends()):
+        if not at:
+            continue
+        hub = plan.hub(k)
+        dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
+        dirs /= np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
+        wide = hub.widest_cone(dirs)
+        if wide <= hub.cone_deg:
+            continue
+        hub = hub.coned(wide)
+        swing = hub.swing_deg
+        for e, c in at:
+            a = arcs[e]
+            out[e, c] = max(out[e, c], swing if a is None else min(swing, bent_swing_deg(hub, a)))
+    return out
 
 
 def _swing_only(check) -> bool:

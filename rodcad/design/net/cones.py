@@ -5,9 +5,13 @@ A hub's sockets open outward in a cone (:mod:`rodcad.catalog.net.node`); a rod t
 socket until its neck touches the cone. The hubs' sockets are turned so that every hub balances
 at the target (:mod:`rodcad.design.net.hubs`), so the rods meet them a little off their axes,
 and where the net's rods meet a hub at awkward angles, by more than the nominal cone lets them.
-Such a hub is printed with wider cones: the narrowest of the catalog's range that lets its rods
-turn as far (plus :data:`CONE_MARGIN`), as wide as the range and its neighbours' openings, which must leave each socket's lip whole,
-allow (:meth:`rodcad.catalog.net.node.NodeHardware.widest_cone`).
+Such a hub is printed with wider cones: the widest the catalog's range and its neighbours'
+openings, which must leave each socket's lip whole, allow
+(:meth:`rodcad.catalog.net.node.NodeHardware.widest_cone`). That is what the design's refinement
+keeps the rods' turns within (:func:`widest_swing_limits`): widened only as far as its rods
+turned (and a degree), a hub made lighter by the wider cone let the net designed again turn them
+further still, round after round (a strip with diagonals went 55 -> 61.9 -> 63.1 deg and never
+held them).
 A wider cone takes plastic out of the hub, so the hub is lighter and its centre of mass moves:
 the net is designed again with the new hubs, round after round (:data:`CONE_ROUNDS`) while
 some rod still turns too far, each round widening from the last. Where no cone of the catalog
@@ -26,11 +30,7 @@ import numpy as np
 from rodcad.catalog.net.bend import bent_swing_deg
 from rodcad.design.net.plan import NetPlan, replan
 
-__all__ = ["CONE_MARGIN", "CONE_ROUNDS", "widen_cones", "widest_swing_limits"]
-
-#: A hub's cone is widened this much beyond what its rods' turns need (deg): the design made
-#: again with the lighter hub turns them a little differently.
-CONE_MARGIN = 1.0
+__all__ = ["CONE_ROUNDS", "widen_cones", "widest_swing_limits"]
 
 #: Rounds of cones widened and the net designed again (each round designs the net once).
 CONE_ROUNDS = 3
@@ -87,21 +87,21 @@ def _needed_cones(check, planned: NetPlan) -> np.ndarray | None:
     t = plan.target
     cones = (planned.node_cone.copy() if planned.node_cone is not None
              else np.full(t.n, planned.hardware.cone_deg, float))
-    need = np.zeros(t.n)
+    need = np.zeros(t.n, bool)  # (hubs whose rods turn too far for their cones)
     limits = plan.end_swing_limits
     for e, c in check.over_swing:
         k = int(t.edges[e, c])
         if limits[e, c] < plan.hub(k).swing_deg - 1e-9:  # (a bent rod's end face limits it, not the cone)
             continue
-        need[k] = max(need[k], float(check.swing_deg[e, c]) + CONE_MARGIN)
+        need[k] = True
     new = cones.copy()
     ends = t.node_ends()
-    for k in np.flatnonzero(need > 0):
+    for k in np.flatnonzero(need):
         hub = planned.hub(int(k))
         at = ends[k]
         dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
         dirs /= np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
-        new[k] = max(cones[k], min(hub.cone_for_turn(need[k]), hub.widest_cone(dirs)))
+        new[k] = max(cones[k], hub.widest_cone(dirs))
     return new if np.any(new > cones + 1e-9) else None
 
 

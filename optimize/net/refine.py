@@ -22,9 +22,10 @@ grows where the prediction held and shrinks where it did not.
 
 A rod turns in its hub's socket as the net moves, and the socket lets it turn only so far
 (``swing``: each rod end's limit). Each end's turn from its socket's axis is linearised the same
-way (the socket's axis turns with its body, the rod's direction with both its pivots), and the
-steps keep the ends within half their limit of it within their limits (an end already beyond
-it at the start no further beyond); a step whose equilibrium turns a rod further is not kept.
+way (the socket's axis turns with its body, the rod's direction with both its pivots); each
+step's program keeps the ends that turn within half their limit of it within their limits (an
+end already beyond its limit at the start, no further beyond), and a step whose equilibrium
+turns a rod past that is not kept.
 """
 
 from __future__ import annotations

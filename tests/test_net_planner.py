@@ -378,3 +378,29 @@ def test_at_most_a_tenth_of_the_drawn_net_family_sample_exits_1(family_sample):
     net_family, outs = family_sample
     assert sum(o.code == 1 for o in outs) <= 0.1 * len(outs)
     assert not any(w in o.reason for o in outs for w in net_family.WINDOW_ONLY)
+
+
+def test_joints_whose_sag_leaves_rods_too_short_become_one_rod_per_edge(tmp_path):
+    # a drawn mesh (the seeded family's, seed 2) whose long edges' two-rod joints, hung at their
+    # funicular sag, leave a rod shorter than the catalog prints: refused before, now those
+    # edges are one rod each (between larger hubs, or spliced) and the net is designed
+    from rodcad.design.net.joints import SagLimit
+    from rodcad.pipeline.net import build_net
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import net_family
+
+    m = next(x for x in net_family.family(2, 16) if x.name == "mesh-delaunay-015")
+    (tmp_path / f"{m.name}.obj").write_text(m.obj)
+    path = tmp_path / f"{m.name}.yaml"
+    path.write_text(m.yaml)
+    design = load_design(path)
+    with pytest.raises(SagLimit) as exc:
+        plan_net(design.net, design.catalog, hang=True, g=design.g)
+    assert exc.value.edges and "shorter than" in str(exc.value)
+    check = build_net(design).check
+    assert check.ok, check.limit()
+    t = check.plan.target
+    on_joints = t.source[t.joint_mask[t.edges].any(axis=1)] if t.joints is not None else np.array([], int)
+    assert not np.isin(sorted(exc.value.edges), on_joints).any()  # (those edges: one rod each)
+    assert any("funicular sag" in n and "one rod each" in n for n in check.notes)

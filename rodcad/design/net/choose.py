@@ -32,6 +32,7 @@ import numpy as np
 from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
 from rodcad.design.net.cones import widen_cones
 from rodcad.design.net.inverted import lighten_inverted
+from rodcad.design.net.joints import SagLimit
 from rodcad.design.net.spacing import grow_tight_hubs
 from rodcad.design.net.weights import weigh_hubs
 from rodcad.design.net.plan import plan_net
@@ -72,8 +73,22 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
 
 def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float | None) -> NetCheck:
     on_surface = target.surface is not None
-    plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g)
+    try:
+        plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g)
+        sagged = None
+    except SagLimit as exc:  # (the joints' sag leaves rods too short: those edges one rod each)
+        plan = _whole_plan(target, catalog, tolerance, g, exc.edges)
+        if plan is None:
+            raise
+        sagged = exc
     check = design(plan)
+    if sagged is not None:
+        k = plan.rod_pieces
+        check.chose(f"The two-rod joints on drawn edge(s) {sorted(sagged.edges)[:8]}, hung at their funicular sag, "
+                    f"would leave rods the catalog cannot print ({sagged}); those edges are one rod each"
+                    + (f" ({int(np.count_nonzero(k > 1))} of them spliced rigidly from printed pieces on steel dowel "
+                       "pins)" if np.any(k > 1) else "") + ", between hubs of the family made larger to take what the "
+                    "rod cannot.")
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
         return _fallen(_hardware_fitted(check, design, g), design)
@@ -91,15 +106,7 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
         if check.ok or weak == tried:
             break
         tried = weak
-        plan = None
-        # (larger hubs at their ends leave another rod too short: spliced between theirs; nodes
-        # moved within the tolerance only where neither holds them)
-        for how in ({"spread": False}, {"splice_whole": True, "spread": False}, {"splice_whole": True}):
-            try:
-                plan = plan_net(target, catalog, tolerance=tolerance, hang=not on_surface, g=g, whole=weak, **how)
-                break
-            except DesignLimit:
-                continue
+        plan = _whole_plan(target, catalog, tolerance, g, weak, hang=not on_surface)
         if plan is None:
             break
         other = last = design(plan)
@@ -121,6 +128,20 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
             check.why = why + (" " + check.why if check.why else "")
             check.notes.append(why)
     return check
+
+
+def _whole_plan(target: NetTarget, catalog, tolerance: float | None, g: float, whole: frozenset[int],
+                hang: bool = True):
+    """The net planned with the drawn edges ``whole`` one rod each (:func:`plan_net`'s ``whole``),
+    or None where no such plan builds: between larger hubs first; where those leave another rod
+    too short, spliced between the hubs their nodes get anyway; nodes moved within the tolerance
+    only where neither holds them."""
+    for how in ({"spread": False}, {"splice_whole": True, "spread": False}, {"splice_whole": True}):
+        try:
+            return plan_net(target, catalog, tolerance=tolerance, hang=hang, g=g, whole=whole, **how)
+        except DesignLimit:
+            continue
+    return None
 
 
 def _fallen(check: NetCheck, design) -> NetCheck:

@@ -43,8 +43,10 @@ import math
 import numpy as np
 
 from rodcad.design.net.target import NetTarget
+from rodcad.errors import DesignLimit
 
-__all__ = ["MAX_SAG", "MERGE_SHARE", "ReindexedSurface", "SLACK", "drawn_target", "hang_joints", "merge_close", "pieces", "split_long"]
+__all__ = ["MAX_SAG", "MERGE_SHARE", "ReindexedSurface", "SLACK", "SagLimit", "drawn_target", "hang_joints", "merge_close",
+           "pieces", "split_long"]
 
 #: Nodes merge into one hub only where that moves each by at most this share of the
 #: tolerance (of the net's size).
@@ -53,6 +55,17 @@ MERGE_SHARE = 0.5
 SLACK = 1e-3
 #: A funicular sag deeper than this share of the edge is no small kink: the joints stay drawn.
 MAX_SAG = 0.25
+
+
+class SagLimit(DesignLimit):
+    """Two-rod joints hung at their funicular sag leave rods the catalog cannot print, or too
+    close for the largest hub: ``edges``, the drawn edges cut into rods in line, which the
+    caller may plan as one rod each instead (:func:`rodcad.design.net.plan.plan_net`'s
+    ``whole``)."""
+
+    def __init__(self, message: str, edges: frozenset[int]):
+        super().__init__(message)
+        self.edges = edges
 
 
 @dataclasses.dataclass(frozen=True)

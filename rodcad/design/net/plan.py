@@ -23,7 +23,7 @@ from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod
 from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
 from rodcad.design.net.collapse import (MAX_ROUNDS, added_anchors, anchor_pairs, collapse_short, collapses,
                                        join_anchor_pairs, tight_triangles)
-from rodcad.design.net.joints import hang_joints, merge_close, pieces, split_long
+from rodcad.design.net.joints import SagLimit, hang_joints, merge_close, pieces, split_long
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
@@ -327,7 +327,9 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
                                                     fixed=t.joint_mask)
             moved = np.union1d(moved, also)
         if problems:
-            raise DesignLimit("with the two-rod joints at their funicular sag, " + "; ".join(problems))
+            src = base.source if base.source is not None else np.arange(base.m)
+            raise SagLimit("with the two-rod joints at their funicular sag, " + "; ".join(problems),
+                           frozenset(int(src[e]) for e in np.flatnonzero(counts > 1)))
     plan = _plan(t, hw, node_pivot, (lo_hw, hi), pieces if np.any(pieces > 1) else None)
     plan.merged = merged
     plan.collapsed = collapses(base, merged)

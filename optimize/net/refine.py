@@ -84,7 +84,7 @@ def swing_angles(res, swing: Swing, edges: np.ndarray) -> np.ndarray:
 def _swing_gradient(res, swing: Swing, edges: np.ndarray, derivs, ends: np.ndarray) -> np.ndarray:
     """(len(ends), m) d(turn) / d(masses) of the rod ends ``ends`` ((q, 2): rod, end): the socket's
     axis turns with its body (``dw x axis``), the rod's direction with its two pivots."""
-    dx, dw = derivs
+    dw = derivs[1]
     rod, end = ends[:, 0], ends[:, 1]
     node, other = edges[rod, end], edges[rod, 1 - end]
     axis = np.einsum("qab,qb->qa", res.rotations[node], swing.pivots[rod, end])
@@ -93,11 +93,7 @@ def _swing_gradient(res, swing: Swing, edges: np.ndarray, derivs, ends: np.ndarr
     d = p1 - p0
     length = np.linalg.norm(d, axis=1)
     u = d / length[:, None]
-
-    def moved(n, p):  # (q, 3, m) d(pivot) / d(masses)
-        return dx[n] + np.cross(dw[n], (p - res.positions[n])[:, :, None], axisa=1, axisb=1, axisc=1)
-
-    du = moved(other, p1) - moved(node, p0)
+    du = _moved(res, derivs, other, p1) - _moved(res, derivs, node, p0)
     du = (du - u[:, :, None] * np.einsum("qc,qcm->qm", u, du)[:, None, :]) / length[:, None, None]
     da = np.cross(dw[node], axis[:, :, None], axisa=1, axisb=1, axisc=1)
     dcos = np.einsum("qc,qcm->qm", u, da) + np.einsum("qc,qcm->qm", axis, du)
@@ -147,17 +143,23 @@ def net_fit(target_positions, edges, pivots=None, rotations=None, fit_nodes=None
 def fit_distances(res, fit: NetFit) -> np.ndarray:
     """(k [+ 2 m],) each measured point's distance from where it was drawn (mm): the nodes, then
     the rods' pivots (end 0, end 1 of rod 0, ...)."""
-    d = [np.linalg.norm(res.positions[fit.nodes] - fit.points, axis=1)]
-    if fit.ends is not None:
-        d.append(np.linalg.norm(res.ends - fit.ends, axis=2).ravel())
-    return np.concatenate(d)
+    return np.linalg.norm(_offsets(res, fit), axis=1)
 
 
 def _offsets(res, fit: NetFit) -> np.ndarray:
+    """(k [+ 2 m], 3) each measured point less where it was drawn, in :func:`fit_distances`' order."""
     d = [res.positions[fit.nodes] - fit.points]
     if fit.ends is not None:
         d.append((res.ends - fit.ends).reshape(-1, 3))
     return np.concatenate(d)
+
+
+def _moved(res, derivs, node: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """(q, 3, m) d(point) / d(masses) of points ``point`` (q, 3) carried by the bodies of nodes
+    ``node``: the node point's derivative and the body's turn times the arm from it."""
+    dx, dw = derivs
+    arm = point - res.positions[node]
+    return dx[node] + np.cross(dw[node], arm[:, :, None], axisa=1, axisb=1, axisc=1)
 
 
 def equilibrium_derivatives(net: Net, state: NetState, tensions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -214,16 +216,14 @@ def _fit_jacobian(res, fit: NetFit, edges: np.ndarray, derivs: tuple[np.ndarray,
     """(len(rows), 3, m) d(measured point) / d(masses) for the points ``rows`` of
     :func:`fit_distances`' order: a node's its node point's; a pivot's its node point's and its
     body's turn times the arm ``ends - node point``."""
-    dx, dw = derivs
+    dx = derivs[0]
     k = fit.nodes.size
     out = np.empty((rows.size, 3, dx.shape[2]))
     on_node = rows < k
     out[on_node] = dx[fit.nodes[rows[on_node]]]
     if np.any(~on_node):
         rod, end = np.divmod(rows[~on_node] - k, 2)
-        node = edges[rod, end]
-        arm = res.ends[rod, end] - res.positions[node]
-        out[~on_node] = dx[node] + np.cross(dw[node], arm[:, :, None], axisa=1, axisb=1, axisc=1)
+        out[~on_node] = _moved(res, derivs, edges[rod, end], res.ends[rod, end])
     return out
 
 

@@ -343,7 +343,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     fn, fp, fit_ends = fit_of(plan)
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
               allow_compression=t.any_may_push, g=g, com=plan.statics_com, fit_nodes=fn, fit_points=fp,
-              fit_ends=fit_ends, swing_limits=widest_swing_limits(plan) if hub else None)
+              fit_ends=fit_ends)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
     # a step (dense derivatives and a linear program on hundreds of masses), so the statics' best fit
     # stays; otherwise the statics' masses, solved once from the target, are refined through
@@ -358,9 +358,13 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     note("the masses designed" + (", refined through the solver" if refine else "")
          + (f", the net solved with a multi-start of {n_starts} start(s)" if n_starts > 1 else
             ", the net solved from the target"))
-    design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
-                        refine=refine, callback=note, statics=probe.statics if probe is not None else None,
-                        leave_unstable=fall, **kw)
+    if probe is not None and not refine and n_starts <= 1:
+        design = probe  # (the same solve from the target, the same statics)
+    else:
+        design = design_net(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, n_starts=n_starts, seed=seed,
+                            refine=refine, callback=note, statics=probe.statics if probe is not None else None,
+                            leave_unstable=fall, swing_limits=widest_swing_limits(plan) if hub and refine else None,
+                            **kw)
     recheck = False
     if plan.bent:
         final = plan.rod_com(design.masses)

@@ -98,7 +98,7 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
             other.chose("The two-rod joints hang at the funicular sag below their chords: on the target "
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
             check = other
-    tried: frozenset[int] = frozenset()
+    tried: frozenset[int] = frozenset() if sagged is None else sagged.edges  # (those stay one rod each)
     last = check
     for _ in range(RETRIES):  # joints that cannot hang: their edges one rod (between larger hubs, or spliced)
         # (the joints left where the last try's could not hang either: in line with their rods, say)

@@ -53,9 +53,7 @@ def widest_swing_limits(plan: NetPlan) -> np.ndarray:
         if not at:
             continue
         hub = plan.hub(k)
-        dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
-        dirs /= np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
-        wide = hub.widest_cone(dirs)
+        wide = hub.widest_cone(_socket_axes(plan, at))
         if wide <= hub.cone_deg:
             continue
         hub = hub.coned(wide)
@@ -64,6 +62,12 @@ def widest_swing_limits(plan: NetPlan) -> np.ndarray:
             a = arcs[e]
             out[e, c] = max(out[e, c], swing if a is None else min(swing, bent_swing_deg(hub, a)))
     return out
+
+
+def _socket_axes(plan: NetPlan, at) -> np.ndarray:
+    """(k, 3) the unit axes of a hub's sockets, its rod ends ``at`` ((rod, end) pairs)."""
+    dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
+    return dirs / np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
 
 
 def _swing_only(check) -> bool:
@@ -97,11 +101,7 @@ def _needed_cones(check, planned: NetPlan) -> np.ndarray | None:
     new = cones.copy()
     ends = t.node_ends()
     for k in np.flatnonzero(need):
-        hub = planned.hub(int(k))
-        at = ends[k]
-        dirs = np.array([plan.pivots[e, c] for e, c in at], float).reshape(-1, 3)
-        dirs /= np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-12)
-        new[k] = max(cones[k], hub.widest_cone(dirs))
+        new[k] = max(cones[k], planned.hub(int(k)).widest_cone(_socket_axes(plan, ends[k])))
     return new if np.any(new > cones + 1e-9) else None
 
 

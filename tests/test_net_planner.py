@@ -68,17 +68,56 @@ def test_long_edges_become_rods_in_line_whose_joints_hang_on_the_surface_and_agr
     assert t.joints is not None and len(t.joints) == drawn.m
     assert np.all(p.lengths <= p.length_range[1] + 1e-9) and np.all(p.lengths >= p.length_range[0] - 1e-9)
     assert np.bincount(t.source, minlength=drawn.m).tolist() == [2] * drawn.m
-    # each joint on the surface under its chord's midpoint, below the chord, in its vertical plane
+    # each joint on the surface below its chord, in the chord's vertical plane, halfway along the
+    # surface's curve under the chord (its two rods alike: the curve is steeper at one end)
+    def surface(xy):
+        return 0.0016 * ((xy[..., 0] - 150) ** 2 + (xy[..., 1] - 120) ** 2) - 60
+
     for k in t.joints:
         a, b = [int(x) for e in np.flatnonzero((t.edges == k).any(axis=1)) for x in t.edges[e] if x != k]
-        mid = 0.5 * (t.positions[a] + t.positions[b])
-        z = 0.0016 * ((mid[0] - 150) ** 2 + (mid[1] - 120) ** 2) - 60
-        assert np.allclose(t.positions[k], [mid[0], mid[1], z]) and z < mid[2]
+        pa, pb, pk = t.positions[a], t.positions[b], t.positions[k]
+        c = float(np.dot(pk[:2] - pa[:2], pb[:2] - pa[:2]) / np.dot(pb[:2] - pa[:2], pb[:2] - pa[:2]))
+        assert np.allclose(pk[:2], pa[:2] + c * (pb[:2] - pa[:2]), atol=1e-9) and 0 < c < 1
+        assert np.isclose(pk[2], surface(pk[:2])) and pk[2] < pa[2] + c * (pb[2] - pa[2])
+        u = np.linspace(0.0, 1.0, 4001)[:, None]
+        xy = pa[:2] + u * (pb[:2] - pa[:2])
+        curve = np.column_stack([xy, surface(xy)])
+        curve[[0, -1], 2] = pa[2], pb[2]
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+        half = np.interp(c, u[:, 0], arc)
+        assert abs(half - 0.5 * arc[-1]) < 1e-3 * arc[-1], (half, arc[-1])  # (the planner samples it at 257 points)
     # a hanging surface: its joints balance exactly (two more in-plane equations, two more unknowns)
     assert check.ok and check.design.statics.exact and check.rel_size < 1e-6
     err, moved = _settle(check, 3)
     assert err < TOL, f"MuJoCo rests {err:.2e} of the size off rodcad's equilibrium"
     assert moved > 100 * err
+
+
+STEEP = """design: 1
+name: steep
+net:
+  surface: {z: "0.00248541 * (x - 227.9)**2 + 0.0128586 * (y - 121.2)**2 - 154", x: [0, 497.8], y: [0, 212], u: 4, v: 2}
+  anchored: boundary
+"""
+
+
+def test_the_rods_in_line_on_a_steepening_surface_are_alike_and_none_too_short(cat):
+    """A 4 x 2 grid over an elliptic bowl 500 mm long and 190 mm deep (family seed 3): its edges
+    climb the bowl's side steeply at one end, and joints spaced evenly under the chord left a
+    26.9 mm piece (16 mm of rod between its ball ends) beside a long one, cut finer to fit: the
+    net was refused. Spaced evenly along the surface's curve, every piece is within the
+    catalog's lengths and an edge's pieces differ by no more than their end hubs do."""
+    d = load_design("steep.yaml", text=STEEP)
+    plan = plan_net(d.net, d.catalog)
+    t = plan.target
+    lo, hi = plan.length_range
+    assert np.all(plan.lengths >= lo - 1e-9) and np.all(plan.lengths <= hi + 1e-9)
+    assert t.joints is not None and len(t.joints)
+    hubs = float(np.ptp(plan.node_pivot))  # (a larger end hub sets its first joint in by the difference)
+    for e in np.unique(t.source):
+        pieces = plan.lengths[t.source == e]
+        if pieces.size > 1:
+            assert np.ptp(pieces) <= 2 * hubs + 0.02 * pieces.max(), (e, pieces)
 
 
 TRIPOD = NetTarget("nodes", np.array([[0.0, 0.0, 0.0], [160.0, 0.0, 0.0], [80.0, 140.0, 0.0], [80.0, 46.0, -60.0]]),

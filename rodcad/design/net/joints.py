@@ -27,12 +27,12 @@ one node whose balance is two equations in the plane (the third holds by symmetr
 plane): the design stays as determined as it was, and solves the joint like any node.
 
 Where the joint's target is: on the target surface of a generated net (the surface point
-under the chord point, which lies in the chord's vertical plane; for a hanging net below the
-chord), where the design's masses can make the rods kink that much; or at the funicular sag
-below the drawn edge (:func:`hang_joints`, the tension from the statics of the net as drawn),
-measured against the drawn edge (or surface): the fit counts the sag. A joint that cannot
-hang within the tolerance (a rod without tension, a rise) is left to the fit, which then
-says so.
+under a point of the chord, in the chord's vertical plane, the joints spaced evenly along that
+curve; for a hanging net below the chord), where the design's masses can make the rods kink
+that much; or at the funicular sag below the drawn edge (:func:`hang_joints`, the tension
+from the statics of the net as drawn), measured against the drawn edge (or surface): the fit
+counts the sag. A joint that cannot hang within the tolerance (a rod without tension, a rise)
+is left to the fit, which then says so.
 """
 
 from __future__ import annotations
@@ -146,9 +146,13 @@ def split_long(t: NetTarget, counts: np.ndarray, offsets: np.ndarray | None = No
     docstring): on the target surface under the chord for a generated net, on the edge
     otherwise. Rods keep their edge's index (its first piece) and bend; the other pieces
     follow at the end, in order; the fit measures each joint against where it was put.
-    ``offsets`` (m, 2): how much further (mm, along the chord) the first and the last joint
-    sit from the edge's two nodes than the pieces between joints are long (an end hub larger
-    than a joint's by that much leaves every rod of the edge as long; None: equal pieces).
+    The joints are spaced evenly along the line they go on: the chord, or on a surface the
+    surface's curve under it (spaced evenly under the chord, the pieces of an edge that climbs
+    a steepening surface came out uneven: some too long for the catalog, and cut finer, others
+    too short). ``offsets`` (m, 2): how much further (mm, along that line) the first and the
+    last joint sit from the edge's two nodes than the pieces between joints are long (an end
+    hub larger than a joint's by that much leaves every rod of the edge as long; None: equal
+    pieces).
     Returns (the target, (m,) the edge of ``t`` each rod lies on)."""
     counts = np.asarray(counts, int)
     if np.all(counts <= 1):
@@ -165,11 +169,20 @@ def split_long(t: NetTarget, counts: np.ndarray, offsets: np.ndarray | None = No
         i, j = int(edges[e, 0]), int(edges[e, 1])
         k = int(counts[e])
         a = np.arange(1, k)[:, None] / k
-        if offsets is not None:
+        # the joints along the line they go on: the chord, or on a surface the surface's curve
+        # under it, measured along that curve (its pieces alike where it is steeper at one end)
+        if t.surface is None:
             d = float(np.linalg.norm(pos[j] - pos[i]))
+        else:
+            u, curve = _under(t, i, j)
+            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+            d = float(arc[-1])
+        if offsets is not None:
             o = np.clip(offsets[e], 0.0, None)
             if o.sum() < 0.5 * d:
                 a = (o[0] + a * (d - o.sum())) / d
+        if t.surface is not None:
+            a = np.interp(a[:, 0] * d, arc, u)[:, None]
         pts = pos[i] + a * (pos[j] - pos[i])
         if t.surface is not None:
             pts[:, 2] = np.asarray(t.surface(pts[:, 0], pts[:, 1], i), float) * np.ones(k - 1)
@@ -196,6 +209,19 @@ def split_long(t: NetTarget, counts: np.ndarray, offsets: np.ndarray | None = No
                               source=np.concatenate([source, np.asarray(src, int)]),
                               joints=np.asarray(old_joints + joints, int), drawn=drawn_target(t))
     return out, np.concatenate([np.arange(t.m), np.asarray(parent, int)])
+
+
+#: Points of the surface's curve under an edge's chord that :func:`split_long` measures along.
+UNDER_SAMPLES = 257
+
+
+def _under(t: NetTarget, i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """(the chord's parameters from node ``i`` (0) to ``j`` (1), the target surface's points
+    under them): the curve a generated net's joints between the two go on."""
+    u = np.linspace(0.0, 1.0, UNDER_SAMPLES)
+    pts = t.positions[i] + u[:, None] * (t.positions[j] - t.positions[i])
+    pts[1:-1, 2] = np.asarray(t.surface(pts[1:-1, 0], pts[1:-1, 1], i), float) * np.ones(UNDER_SAMPLES - 2)
+    return u, pts
 
 
 def hang_joints(t: NetTarget, tensions: np.ndarray, masses: np.ndarray, joint_mass: np.ndarray, g: float) -> NetTarget:

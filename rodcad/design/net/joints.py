@@ -181,10 +181,10 @@ def split_long(t: NetTarget, counts: np.ndarray, offsets: np.ndarray | None = No
             o = np.clip(offsets[e], 0.0, None)
             if o.sum() < 0.5 * d:
                 a = (o[0] + a * (d - o.sum())) / d
-        if t.surface is not None:
-            a = np.interp(a[:, 0] * d, arc, u)[:, None]
-        pts = pos[i] + a * (pos[j] - pos[i])
-        if t.surface is not None:
+        if t.surface is None:
+            pts = pos[i] + a * (pos[j] - pos[i])
+        else:
+            pts = pos[i] + np.interp(a[:, 0] * d, arc, u)[:, None] * (pos[j] - pos[i])
             pts[:, 2] = np.asarray(t.surface(pts[:, 0], pts[:, 1], i), float) * np.ones(k - 1)
         ids = list(range(n, n + k - 1))
         n += k - 1

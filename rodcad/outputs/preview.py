@@ -143,7 +143,11 @@ def fit_title(fig, ax, title: str) -> None:
     (the layout is redone after each wrap). The title's width and its place across the
     canvas are known once the layout has placed the axes; drawing the figure only moves it
     up or down, so it is not drawn here (the previews of the examples and of ten drawn
-    shapes, and titles wrapped on 2D and 3D axes, came out byte-identical without it)."""
+    shapes, and titles wrapped on 2D and 3D axes, came out byte-identical without it).
+
+    The layout is final when it returns: the figure is left with no layout engine (the
+    placeholder ``tight_layout`` leaves behind made every save draw the figure twice, once
+    only to lay it out again; the pictures are the same bytes without that draw)."""
     import textwrap
 
     lines = title.splitlines()
@@ -152,10 +156,11 @@ def fit_title(fig, ax, title: str) -> None:
         fig.tight_layout()
         box = text.get_window_extent(fig.canvas.get_renderer())
         if box.x0 >= 0 and box.x1 <= fig.bbox.width:
-            return
+            break
         centre = (box.x0 + box.x1) / 2
         room = 2 * min(centre, fig.bbox.width - centre) - 8  # px, a margin of 4 on each side
         longest = max(len(line) for line in lines)
         width = max(20, int(longest * min(0.95, room / max(box.width, 1.0))))
         lines = [w for line in lines for w in (textwrap.wrap(line, width) or [""])]
         text.set_text("\n".join(lines))
+    fig.set_layout_engine(None)

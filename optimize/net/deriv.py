@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from optimize.net.model import Net, NetState, skew
+from optimize.net.model import Net, NetState, cross, skew
 
 __all__ = [
     "Hess",
@@ -125,7 +125,7 @@ def _to_local(net: Net, a: np.ndarray, GP: np.ndarray) -> np.ndarray:
     out = np.empty((net.m, 12))
     for k in (0, 1):
         out[:, 6 * k:6 * k + 3] = GP[:, k]
-        out[:, 6 * k + 3:6 * k + 6] = np.cross(a[:, k], GP[:, k])  # (-[a]x)' G = a x G
+        out[:, 6 * k + 3:6 * k + 6] = cross(a[:, k], GP[:, k])  # (-[a]x)' G = a x G
     return out
 
 
@@ -164,7 +164,7 @@ def evaluate(net: Net, state: NetState, full: bool = True) -> NetEval:
     if b.size:
         w = np.zeros((b.size, 3))
         w[:, 2] = wz[b]
-        grad[net.rot_idx[b][:, None] + np.arange(3)] += np.cross(node_c[b], w)
+        grad[net.rot_idx[b][:, None] + np.arange(3)] += cross(node_c[b], w)
     Gc = np.stack([-u, u], axis=1)
     Jloc = _to_local(net, a, Gc)
     data = np.zeros(pat.j_indices.size)

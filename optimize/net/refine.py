@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from optimize.net.deriv import evaluate, gauge_rows, hessian
-from optimize.net.model import Net, NetState
+from optimize.net.model import Net, NetState, cross
 from optimize.net.newton import RHO, newton_matrix, pd_factor
 
 __all__ = ["ACTIVE", "NetFit", "Swing", "equilibrium_derivatives", "fit_distances", "net_fit", "refine_masses",
@@ -199,7 +199,7 @@ def equilibrium_derivatives(net: Net, state: NetState, tensions: np.ndarray) -> 
     else:
         for k in (0, 1):
             local[:, 6 * k:6 * k + 3] = GP[:, k]
-            local[:, 6 * k + 3:6 * k + 6] = np.cross(ev.a[:, k], GP[:, k])
+            local[:, 6 * k + 3:6 * k + 6] = cross(ev.a[:, k], GP[:, k])
     keep = net.loc >= 0
     cols = np.broadcast_to(np.arange(net.m)[:, None], net.loc.shape)
     G = sp.csc_matrix((local[keep], (net.loc[keep], cols[keep])), shape=(net.nvar, net.m)).toarray()

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from optimize.net.model import cross
 from optimize.net.trf import trf
 
 __all__ = ["FIXED_TURN", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets",
@@ -237,10 +238,10 @@ def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, no
         for k, sign in ((0, 1.0), (1, -1.0)):
             Fk = sign * T[:, None] * u - (g * mass * f[:, k])[:, None] * z
             np.add.at(force, E[:, k], Fk)
-            np.add.at(moment, E[:, k], np.cross(P[:, k], Fk))
+            np.add.at(moment, E[:, k], cross(P[:, k], Fk))
         w = -g * M[:, None] * z
         force += w
-        moment += np.cross(hub_com(P), w)
+        moment += cross(hub_com(P), w)
         return np.concatenate([force[rfree] / F, moment[rfree] / (F * lmean)], axis=1).ravel()
 
     sidx = np.full((m, 2), -1)

@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from optimize.net.deriv import evaluate, rod_frames
-from optimize.net.model import Net, NetState
+from optimize.net.model import Net, NetState, cross
 from optimize.net.newton import CONVERGED, descend, is_stable, kkt_residual, restore
 
 __all__ = ["NET_MESSAGES", "NetResult", "more_starts", "net_sag_guess", "pivots_by_node", "pivots_from_nodes",
@@ -262,13 +262,13 @@ def _result(net: Net, out) -> NetResult:
     node_c = np.einsum("nab,nb->na", state.R, net.node_com)
     for k, a in enumerate(anchors):
         w = np.array([0.0, 0.0, net.g * net.node_masses[a]])
-        moments[k] = np.cross(node_c[a], w)
+        moments[k] = cross(node_c[a], w)
     for end in (0, 1):
         nodes = net.edges[:, end]
         for e in np.flatnonzero(net.anchored[nodes]):
             k = pos_in[int(nodes[e])]
             reactions[k] -= F[e, end]
-            moments[k] -= np.cross(ev.a[e, end], F[e, end])
+            moments[k] -= cross(ev.a[e, end], F[e, end])
     force_scale = max(net.weight, float(np.max(np.abs(lam), initial=0.0)))
     compressed = np.flatnonzero(lam < -1e-9 * force_scale)
     status = out.status if not (out.status == 0 and not success) else 1

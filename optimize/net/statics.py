@@ -35,7 +35,7 @@ from scipy.optimize import linprog
 
 from optimize.boxqp import box_qp
 from optimize.net.deriv import evaluate
-from optimize.net.model import Net
+from optimize.net.model import Net, cross
 
 __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "node_mass_needs", "statics_of"]
 
@@ -112,10 +112,10 @@ def statics_of(net: Net, state) -> NetStatics:
         eb = e[body[node[e]]]
         if eb.size:
             arm = ev.a[eb, end]
-            mT = np.cross(arm, pull[eb])
+            mT = cross(arm, pull[eb])
             wvec = np.zeros((eb.size, 3))
             wvec[:, 2] = wz[eb]
-            mM = np.cross(arm, wvec)
+            mM = cross(arm, wvec)
             rb = row_of[node[eb], 3:]
             cb = np.repeat(eb[:, None], 3, axis=1)
             rT.append(rb)
@@ -140,7 +140,7 @@ def statics_of(net: Net, state) -> NetStatics:
     if fb.size:
         w = np.zeros((fb.size, 3))
         w[:, 2] = wz_node[fb]
-        b[row_of[fn[fb], 3:]] = np.cross(node_c[fn[fb]], w)
+        b[row_of[fn[fb], 3:]] = cross(node_c[fn[fb]], w)
     return NetStatics(A_T, A_m, b, rows, ev.dist.copy())
 
 

@@ -61,6 +61,29 @@ def test_centerline_of_curved_rods_is_their_arc():
     assert curve_distance(cl, pts) == pytest.approx(rho - math.sqrt(rho**2 - 20**2), rel=1e-3)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_the_farthest_point_of_a_polyline_is_the_one_every_point_asked_gives(seed):
+    """curves._farthest asks the tree for a sample and the points whose Lipschitz bound reaches
+    the largest distance found: the same number as asking for every point, on polylines near
+    the tree's points and far from them, with spikes the sample steps over."""
+    from scipy.spatial import cKDTree
+
+    from optimize.chain.curves import FARTHEST_STRIDE, _farthest, resample
+
+    rng = np.random.default_rng(seed)
+    for _ in range(150):
+        walk = np.cumsum(rng.normal(size=(int(rng.integers(3, 40)), 2)) * rng.uniform(0.1, 30), axis=0)
+        points = resample(walk, int(rng.integers(2, 6000)))
+        near = walk + rng.normal(size=walk.shape) * rng.uniform(0, 5)
+        spiky = points.copy()
+        spiky[rng.integers(len(spiky), size=3)] += rng.normal(size=(3, 2)) * 40  # off between two samples
+        for ref in (resample(near, int(rng.integers(2, 3000))), rng.normal(size=(int(rng.integers(1, 40)), 2)) * 50):
+            tree = cKDTree(ref)
+            for pts in (points, spiky):
+                assert _farthest(tree, pts) == tree.query(pts)[0].max()
+    assert FARTHEST_STRIDE > 1  # (else nothing is left unasked)
+
+
 def test_a_taut_target_and_a_runaway_length_are_explained():
     with pytest.raises(ValueError, match="straight line between the anchors"):
         discretize(np.array([[0.0, 0.0], [100.0, 0.0], [200.0, 0.0]]), [20.0])

@@ -10,6 +10,7 @@ code) for the collapsed net's equilibrium.
 from __future__ import annotations
 
 import json
+import re
 
 import mujoco_net
 import numpy as np
@@ -137,3 +138,54 @@ net:
     assert code == 1 and "Traceback" not in err
     assert "1 of the 4 drawn edge(s) are shorter than the shortest rod" in err and "leave nothing to hang" in err
     assert not (tmp_path / "out").exists()
+    # what would build it: the net drawn so much larger (its hubs, set by its angles, stay), which
+    # does build; no shorter rods (16 mm between two of the smallest hubs: less than the hubs' balls
+    # and a body of two walls, 17.4 mm)
+    assert "rods print from" not in err
+    _builds_drawn_larger(path, err, tmp_path, capsys)
+
+
+def _builds_drawn_larger(path, err: str, tmp_path, capsys) -> None:
+    """The design at ``path`` drawn as much larger as ``err`` says builds (exit 0)."""
+    larger = 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
+    assert 1 < larger < 2
+    d = load_design(path)
+    text = path.read_text()
+    if d.net.surface is None:
+        nodes = np.array(json.loads(re.search(r"nodes: (\[\[.*\]\])", text).group(1)))
+        text = text.replace(re.search(r"nodes: (\[\[.*\]\])", text).group(1), json.dumps((nodes * larger).tolist()))
+    else:  # z(x, y) drawn larger: s z(x / s, y / s) over the ranges times s
+        z = re.search(r'z: "(.*)"', text).group(1)
+        text = text.replace(z, f"{larger!r} * ({z.replace('x', f'(x / {larger!r})').replace('y', f'(y / {larger!r})')})")
+        for key in ("x", "y"):
+            lo, hi = json.loads(re.search(rf"\n    {key}: (\[.*\])", text).group(1))
+            text = re.sub(rf"\n    {key}: \[.*\]", f"\n    {key}: [{lo * larger!r}, {hi * larger!r}]", text)
+    bigger = tmp_path / f"larger-{path.name}"
+    bigger.write_text(text)
+    code = main(["build", str(bigger), "--no-cad", "-q", "-o", str(tmp_path / "larger")])
+    assert code == 0, capsys.readouterr().err
+
+
+def test_a_small_grid_too_fine_for_its_hubs_says_how_much_larger_or_which_rods_would_build_it(tmp_path, capsys):
+    """A 4 x 2 grid on a tilted bowl 122 x 57 mm, anchored on its border (the drawn-net family's
+    grid-tilted-108, seed 2): its three free nodes' hubs (4 rods each) leave four rods 19.1-19.9 mm,
+    under the catalog's 20 mm, and collapsing them leaves nothing to hang. Drawn 3.1 % larger it
+    builds; so it would with rods printed from 19 mm (above the hubs' own shortest rod, 17.4 mm)."""
+    path = tmp_path / "tilted.yaml"
+    path.write_text("""design: 1
+name: tilted
+net:
+  surface:
+    z: "0.00979435 * ((x - 52.39)**2 + (y - 27.07)**2) - 36.58 + 0.187 * x"
+    x: [0, 122.2]
+    y: [0, 57.48]
+    u: 4
+    v: 2
+  anchored: boundary
+""")
+    code = main(["build", str(path), "--no-cad", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 1 and "Traceback" not in err and "leave nothing to hang" in err
+    rod = float(re.search(r"rods print from ([0-9.]+) mm pivot to pivot", err).group(1))
+    assert load_design(path).catalog.node.shortest_rod() <= rod < 20
+    _builds_drawn_larger(path, err, tmp_path, capsys)

@@ -39,15 +39,17 @@ as many hubs), not one hub for the whole ring.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from rodcad.catalog.net.node import NodeHardware
 from rodcad.design.net.joints import ReindexedSurface, drawn_target
 from rodcad.design.net.target import NetTarget
 
 __all__ = ["Collapse", "added_anchors", "anchor_pairs", "collapse_short", "collapses", "drawn_nodes", "join_anchor_pairs",
-           "tight_triangles"]
+           "short_edges_would", "tight_triangles"]
 
 #: Rounds of collapses at most (each merges at least one pair; nets of thousands of nodes
 #: stop far sooner: a round takes every short edge it can).
@@ -292,3 +294,20 @@ def added_anchors(t: NetTarget) -> list[tuple[int, tuple[int, int]]]:
         a, b = (int(da[x]) for x in np.argsort(d)[:2]) if da.size >= 2 else (int(da[0]), int(da[0]))
         out.append((int(k), (min(a, b), max(a, b))))
     return out
+
+
+def short_edges_would(t: NetTarget, hw: NodeHardware, rp: np.ndarray, short: np.ndarray, shortest: float) -> str:
+    """What would make the drawn edges ``short`` of ``t`` rods, between the hubs of pivot radii
+    ``rp`` their nodes' angles need (a net scaled keeps its angles, and so its hubs): the net
+    drawn so much larger, or rods printed from the shortest such edge leaves ('' for none)."""
+    if not short.size:
+        return ""
+    d = t.edge_lengths[short]
+    ends = rp[t.edges[short]].sum(axis=1)
+    larger = float(np.max((shortest + ends) / d))
+    text = f" (drawn {math.ceil(1000 * (larger - 1)) / 10:g} % larger, every such rod would be {shortest:g} mm or more)"
+    rod = math.floor(10 * float(np.min(d - ends))) / 10
+    if rod >= hw.shortest_rod():
+        text += (f", or a catalog whose rods print from {rod:g} mm pivot to pivot (the rod family's length.min, "
+                 f"{shortest:g} mm)")
+    return text

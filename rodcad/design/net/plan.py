@@ -22,7 +22,7 @@ import numpy as np
 from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
 from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
 from rodcad.design.net.collapse import (MAX_ROUNDS, added_anchors, anchor_pairs, collapse_short, collapses,
-                                       join_anchor_pairs, tight_triangles)
+                                       join_anchor_pairs, short_edges_would, tight_triangles)
 from rodcad.design.net.joints import SagLimit, hang_joints, merge_close, pieces, split_long
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
@@ -390,12 +390,14 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
 
     between = 0
     least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
-    drawn, first = t, None
+    drawn, first, would = t, None, ""
     for _ in range(MAX_ROUNDS):
         rp, _ = size_hubs(t, hw, shortest, longest)
         short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
         thin = tight_triangles(t, least) if hw.is_hub else np.zeros(0, int)  # (rods meeting tighter than
-        first = (short.size, np.setdiff1d(thin, short).size) if first is None else first  # the largest hub allows)
+        if first is None:  # the largest hub allows)
+            first = (short.size, np.setdiff1d(thin, short).size)
+            would = short_edges_would(t, hw, rp, short, shortest)
         short = np.union1d(short, thin)
         if not short.size:
             pairs = anchor_pairs(t, least) if hw.is_hub else []
@@ -413,8 +415,9 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
                 what.append(f"{first[1]} close a triangle whose rods meet tighter than the largest hub allows "
                             f"({least:.3g} deg)")
             raise DesignLimit(" and ".join(what) + ": collapsed into one hub each, they leave nothing to hang (every "
-                              "rod left would join two anchors); draw the net larger, or with fewer cells")
+                              "rod left would join two anchors); draw the net larger, or with fewer cells" + would)
     return t, between
+
 
 
 def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int],

@@ -156,7 +156,8 @@ def _builds_drawn_larger(path, err: str, tmp_path, capsys) -> None:
         text = text.replace(re.search(r"nodes: (\[\[.*\]\])", text).group(1), json.dumps((nodes * larger).tolist()))
     else:  # z(x, y) drawn larger: s z(x / s, y / s) over the ranges times s
         z = re.search(r'z: "(.*)"', text).group(1)
-        text = text.replace(z, f"{larger!r} * ({z.replace('x', f'(x / {larger!r})').replace('y', f'(y / {larger!r})')})")
+        scaled = z.replace("x", f"(x / {larger!r})").replace("y", f"(y / {larger!r})")
+        text = text.replace(z, f"{larger!r} * ({scaled})")
         for key in ("x", "y"):
             lo, hi = json.loads(re.search(rf"\n    {key}: (\[.*\])", text).group(1))
             text = re.sub(rf"\n    {key}: \[.*\]", f"\n    {key}: [{lo * larger!r}, {hi * larger!r}]", text)

@@ -149,11 +149,10 @@ def _builds_drawn_larger(path, err: str, tmp_path, capsys) -> None:
     """The design at ``path`` drawn as much larger as ``err`` says builds (exit 0)."""
     larger = 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
     assert 1 < larger < 2
-    d = load_design(path)
     text = path.read_text()
-    if d.net.surface is None:
-        nodes = np.array(json.loads(re.search(r"nodes: (\[\[.*\]\])", text).group(1)))
-        text = text.replace(re.search(r"nodes: (\[\[.*\]\])", text).group(1), json.dumps((nodes * larger).tolist()))
+    if load_design(path).net.surface is None:
+        drawn = re.search(r"nodes: (\[\[.*\]\])", text).group(1)
+        text = text.replace(drawn, json.dumps((np.array(json.loads(drawn)) * larger).tolist()))
     else:  # z(x, y) drawn larger: s z(x / s, y / s) over the ranges times s
         z = re.search(r'z: "(.*)"', text).group(1)
         scaled = z.replace("x", f"(x / {larger!r})").replace("y", f"(y / {larger!r})")

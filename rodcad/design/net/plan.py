@@ -390,14 +390,13 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
 
     between = 0
     least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
-    drawn, first, would = t, None, ""
+    drawn, first = t, None
     for _ in range(MAX_ROUNDS):
         rp, _ = size_hubs(t, hw, shortest, longest)
         short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
         thin = tight_triangles(t, least) if hw.is_hub else np.zeros(0, int)  # (rods meeting tighter than
         if first is None:  # the largest hub allows)
-            first = (short.size, np.setdiff1d(thin, short).size)
-            would = short_edges_would(t, hw, rp, short, shortest)
+            first, first_short = (short.size, np.setdiff1d(thin, short).size), (rp, short)
         short = np.union1d(short, thin)
         if not short.size:
             pairs = anchor_pairs(t, least) if hw.is_hub else []
@@ -415,9 +414,9 @@ def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) 
                 what.append(f"{first[1]} close a triangle whose rods meet tighter than the largest hub allows "
                             f"({least:.3g} deg)")
             raise DesignLimit(" and ".join(what) + ": collapsed into one hub each, they leave nothing to hang (every "
-                              "rod left would join two anchors); draw the net larger, or with fewer cells" + would)
+                              "rod left would join two anchors); draw the net larger, or with fewer cells"
+                              + short_edges_would(drawn, hw, *first_short, shortest))
     return t, between
-
 
 
 def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int],

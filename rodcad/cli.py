@@ -84,13 +84,21 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _builds_solids(argv: Sequence[str]) -> bool:
     """Whether the command line is a ``rodcad build`` that may build solids in worker
-    processes (no ``--no-cad``, no ``--jobs 1``, no ``--help``)."""
+    processes (no ``--no-cad``, no ``--jobs 1``, no ``--help``; no ``--jobs`` where the run may
+    use one CPU: :func:`rodcad.parallel.default_jobs`)."""
     if not argv or argv[0] != "build" or any(a in ("--no-cad", "-h", "--help") for a in argv):
         return False
     for a, b in zip(argv, argv[1:] + [""]):
         if (a == "--jobs" and b == "1") or a == "--jobs=1":
             return False
-    return True
+        if a == "--jobs" or a.startswith("--jobs="):
+            return True
+    from rodcad.parallel import default_jobs
+
+    try:
+        return default_jobs() > 1
+    except InputError:  # said by the build itself
+        return False
 
 
 def _terminate(signum: int, frame: object) -> None:

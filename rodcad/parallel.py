@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore", "cached_map", "default_jobs",
+__all__ = ["JOBS_ENV", "PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore", "cached_map", "default_jobs",
            "in_process", "kept", "kept_workers", "start_workers", "task_runner", "worker_pool"]
 
 #: A build starts a local Dask cluster by default when it has at least this many tasks per
@@ -30,12 +30,33 @@ __all__ = ["PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore",
 PARTS_PER_WORKER = 12
 
 
+#: The environment variable that caps the worker processes a run starts where it is not told
+#: (``--jobs``): a shared machine's or a batch job's share of its CPUs. 1 runs everything in
+#: the one process (no worker pool, no local Dask cluster).
+JOBS_ENV = "RODCAD_JOBS"
+
+
 def default_jobs() -> int:
-    """Number of CPUs this process may use."""
+    """Number of CPUs this process may use: those it may run on, at most :data:`JOBS_ENV`
+    where that is set.
+
+    Raises:
+        InputError: :data:`JOBS_ENV` is set but is not a whole number of 1 or more.
+    """
     try:
-        return max(1, len(os.sched_getaffinity(0)))
+        cpus = max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not on Linux
-        return max(1, os.cpu_count() or 1)
+        cpus = max(1, os.cpu_count() or 1)
+    cap = os.environ.get(JOBS_ENV, "").strip()
+    if not cap:
+        return cpus
+    if not cap.isdigit() or int(cap) < 1:
+        from rodcad.errors import InputError, Problem
+
+        raise InputError([Problem(JOBS_ENV, 0, 0, JOBS_ENV,
+                                  f"the environment variable {JOBS_ENV}={cap!r} must be a whole number of 1 or "
+                                  "more (the worker processes a run may start)")])
+    return min(cpus, int(cap))
 
 
 #: What the forkserver imports before it forks any worker: the CAD kernel and the modules
@@ -205,8 +226,9 @@ def cached_map(fn: Callable[[Any], Any], items: Sequence[Any], keys: Sequence[st
             todo[key] = item
             home[key] = homes[n] if homes is not None else key
     work = list(todo.items())
-    jobs = max(1, min(jobs or default_jobs(), len(work))) if work else 1
-    workers = kept() if homes is not None and jobs > 1 else None
+    workers = kept() if homes is not None else None  # (their number is the default there)
+    jobs = max(1, min(jobs or (workers.jobs if workers is not None else default_jobs()), len(work))) if work else 1
+    workers = workers if jobs > 1 else None
     pool = worker_pool(jobs) if jobs > 1 and workers is None else None
     try:
         if workers is not None:

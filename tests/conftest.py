@@ -42,6 +42,10 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1, user_api="blas")
+    # and rodcad's own worker processes (rodcad.parallel.JOBS_ENV): a build's default pool or
+    # local Dask cluster would only share the same CPUs, after importing the CAD kernel again in
+    # each of its processes. The tests of those paths ask for them (--jobs 2, jobs=2, --scheduler).
+    os.environ["RODCAD_JOBS"] = "1"
 
 
 def _session_folder(tmp_path_factory, name: str) -> Path:

@@ -68,10 +68,40 @@ def test_the_row_alternates_come_with_a_computed_table(tmp_path: Path, monkeypat
     assert row_alternates(rod, 0, cache) == table[ROWS] == row_alternates(rod, 0, table=plain)
 
 
-@pytest.mark.parametrize("argv, starts", [
-    (["build", "d.yaml"], True), (["build", "d.yaml", "--no-cad"], False), (["build", "d.yaml", "--jobs", "1"], False),
-    (["build", "d.yaml", "--jobs=1"], False), (["simulate", "d.yaml"], False), (["build", "-h"], False)])
-def test_the_workers_start_early_only_for_a_build_with_solids(argv: list[str], starts: bool) -> None:
+@pytest.mark.parametrize("argv, cpus, starts", [
+    (["build", "d.yaml"], 2, True), (["build", "d.yaml", "--no-cad"], 2, False),
+    (["build", "d.yaml", "--jobs", "1"], 2, False), (["build", "d.yaml", "--jobs=1"], 2, False),
+    (["simulate", "d.yaml"], 2, False), (["build", "-h"], 2, False),
+    (["build", "d.yaml"], 1, False), (["build", "d.yaml", "--jobs", "2"], 1, True)])
+def test_the_workers_start_early_only_for_a_build_with_solids(argv: list[str], cpus: int, starts: bool,
+                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where the run may use ``cpus`` CPUs (RODCAD_JOBS, or the machine's): with one, only an
+    explicit ``--jobs`` above 1 starts them."""
     from rodcad.cli import _builds_solids
 
+    monkeypatch.setattr("rodcad.parallel.default_jobs", lambda: cpus)
     assert _builds_solids(argv) == starts
+
+
+def test_rodcad_jobs_caps_the_default_workers_and_a_bad_value_is_named(monkeypatch: pytest.MonkeyPatch,
+                                                                      tmp_path: Path, capsys) -> None:
+    from rodcad.cli import main
+    from rodcad.errors import InputError
+    from rodcad.parallel import JOBS_ENV, default_jobs
+
+    monkeypatch.delenv(JOBS_ENV, raising=False)
+    cpus = default_jobs()
+    monkeypatch.setenv(JOBS_ENV, "1")
+    assert default_jobs() == 1
+    monkeypatch.setenv(JOBS_ENV, str(cpus + 3))
+    assert default_jobs() == cpus  # a cap, never more than the CPUs
+    design = tmp_path / "d.yaml"
+    design.write_text((Path(__file__).resolve().parents[1] / "examples" / "semicircle.yaml").read_text())
+    for bad in ("0", "two", "-1", "1.5"):
+        monkeypatch.setenv(JOBS_ENV, bad)
+        with pytest.raises(InputError):
+            default_jobs()
+        assert main(["build", str(design), "-o", str(tmp_path / "out"), "--no-cad", "-q"]) == 2
+        err = capsys.readouterr().err
+        assert f"{JOBS_ENV}={bad!r}" in err and "Traceback" not in err
+        assert not (tmp_path / "out").exists()

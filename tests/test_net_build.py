@@ -263,9 +263,11 @@ def test_exit_codes_of_net_builds(tmp_path, capsys):
 V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0]]\n"
          "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
 
-#: V_NET built with its solids by the session's BuildStore, on a Dask local cluster even for its 4
-#: distinct parts (two per worker): tests/test_netprint.py reads the same build.
-V_BUILD = {"text": V_NET, "patches": (("rodcad.parallel", "PARTS_PER_WORKER", 1),)}
+#: V_NET built with its solids by the session's BuildStore (``build_store.cli_build(*V_ARGS,
+#: **V_BUILD)``), on a local Dask cluster of 2 worker processes (``--jobs 2``) even for its 4
+#: distinct parts: tests/test_netprint.py and tests/test_view_net_cad.py read the same build.
+V_ARGS = ("v.yaml", "-q", "--jobs", "2")
+V_BUILD = {"text": V_NET}
 
 
 def test_a_net_with_its_solids_hangs_as_designed(build_store):
@@ -275,7 +277,7 @@ def test_a_net_with_its_solids_hangs_as_designed(build_store):
     within 0.2 % of its size of the design."""
     from rodcad.cad.export import read_assembly
 
-    code, out, _ = build_store.cli_build("v.yaml", "-q", **V_BUILD)
+    code, out, _ = build_store.cli_build(*V_ARGS, **V_BUILD)
     assert code == 0
     data = json.loads((out / "design.json").read_text())
     assert {k: data["cad"][k] for k in ("hubs", "rods")} == {"hubs": 3, "rods": 2}

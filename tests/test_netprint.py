@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 from gcode_util import NOT_ROD, model_vertices, needs_slicer, read_gcode, slice_file, travel_moves
-from test_net_build import V_BUILD, V_NET  # one session build of the same net
+from test_net_build import V_ARGS, V_BUILD, V_NET  # one session build of the same net
 
 from rodcad.catalog.loader import load_catalog
 from rodcad.cli import main
@@ -26,7 +26,7 @@ from rodcad.cli import main
 def built(build_store):
     """A small hub net (3 hubs, 2 rods holding steel balls) built with its solids (the
     session's build, tests/test_net_build.py's too)."""
-    code, out, _ = build_store.cli_build("v.yaml", "-q", **V_BUILD)
+    code, out, _ = build_store.cli_build(*V_ARGS, **V_BUILD)
     assert code == 0
     return out, json.loads((out / "design.json").read_text())
 

@@ -9,14 +9,14 @@ import json
 import numpy as np
 import pytest
 
-from test_net_build import V_BUILD
+from test_net_build import V_ARGS, V_BUILD
 from test_view import _check_mass_colors, _color, _scene, _world_vertices
 
 
 def test_a_built_net_shows_its_solids_named_as_in_assembly_step(build_store):
     from rodcad.cad.export import read_assembly
 
-    code, out, _ = build_store.cli_build("v.yaml", "-q", **V_BUILD)
+    code, out, _ = build_store.cli_build(*V_ARGS, **V_BUILD)
     assert code == 0
     data = json.loads((out / "design.json").read_text())
     scene = _scene(out)

@@ -58,6 +58,13 @@ def run(args: argparse.Namespace) -> int:
         except (OutputFolderError, ValueError) as err:
             problems.append(Problem(str(folder), 0, 0, "-o" if args.outdir else "name", str(err)))
             break  # the best fit's folder sits beside OUTDIR: one problem says it
+    if args.jobs is None:  # the default's cap from the environment, before any work
+        from rodcad.parallel import default_jobs
+
+        try:
+            default_jobs()
+        except InputError as err:
+            problems.extend(err.problems)
     if problems:
         raise InputError(problems)
     if args.seed is not None and args.seed < 0:

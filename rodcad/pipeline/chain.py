@@ -379,8 +379,9 @@ def _design_notes(r: BuildResult) -> list[str]:
 
 
 def write_outputs(result: BuildResult, outdir: str | Path, *,
-                  progress: Progress | None = None) -> dict[str, Any]:
-    """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files.
+                  progress: Progress | None = None, jobs: int | None = None) -> dict[str, Any]:
+    """Write design.json, report.md, preview.png/.svg and (with CAD) the STEP/STL files
+    (``jobs``: worker processes for them and the preview, default the CPUs; 1: all here).
 
     Everything goes to a temporary folder first, renamed to ``outdir`` at the
     end: a failed or interrupted run leaves ``outdir`` as it was.
@@ -394,7 +395,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
         if result.fabrication is not None:
             from rodcad.cad.chainfiles import start_rod_files, write_assembly
 
-            if default_jobs() > 1:
+            if (default_jobs() if jobs is None else jobs) > 1:
                 # the preview is drawn in a worker of its own beside the rest (matplotlib's import
                 # and drawing, 1.5-2.5 s, are then off this process's path); from a copy of the
                 # result without its solids, which cannot be pickled
@@ -407,7 +408,7 @@ def write_outputs(result: BuildResult, outdir: str | Path, *,
             # writes the rest
             fixture = result.fixture
             rod_files = stack.enter_context(start_rod_files(
-                [(result.fabrication, tmp)], extra=[] if fixture is None else
+                [(result.fabrication, tmp)], jobs=jobs, extra=[] if fixture is None else
                 [(fixture, tmp / "fixture.step", tmp / "fixture.stl", "fixture", fixture.volume)]))
             extra = [] if fixture is None else [AssemblyPart("fixture", fixture, np.eye(4), (0.55, 0.55, 0.6))]
             with progress.step("writing assembly.step"):

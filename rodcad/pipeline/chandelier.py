@@ -160,10 +160,10 @@ def _hung_chains(design: Design, res, *, method: str, seed: int, intervals, prog
 
 
 def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
-                             progress: Progress | None = None) -> dict[str, Any]:
+                             progress: Progress | None = None, jobs: int | None = None) -> dict[str, Any]:
     """design.json, report.md, preview.png (3D) and, with CAD, assembly.step, frame.step/.stl
     and <chain>/rods/*.step|stl|3mf and <chain>/print.3mf; staged like a chain's
-    (:func:`rodcad.pipeline.chain.write_outputs`), whose return it shares."""
+    (:func:`rodcad.pipeline.chain.write_outputs`), whose return it shares (``jobs`` as its)."""
     with staged(outdir, progress) as (tmp, progress):
         if b.frame is not None:
             from rodcad.cad.chainfiles import start_rod_files
@@ -175,7 +175,7 @@ def write_chandelier_outputs(b: ChandelierBuild, outdir: str | Path, *,
             # every chain's distinct rods and the frame, written and checked in worker processes at once
             with progress.step("writing and checking the rods' STEP/STL files, frame.step and frame.stl"), \
                     start_rod_files([(fab, tmp / ch.name) for ch, fab in zip(b.result.chains, b.fabrications)],
-                                    extra=[(frame, tmp / "frame.step", tmp / "frame.stl", "frame",
+                                    jobs=jobs, extra=[(frame, tmp / "frame.step", tmp / "frame.stl", "frame",
                                             frame.volume)]) as files:
                 files.finish()
             with progress.step("writing each chain's print.3mf (PrusaSlicer project) and rods/*.3mf"):

@@ -72,7 +72,7 @@ def run(design: Design, outdir: str | Path, *, cad: bool | None = None, method: 
     result = build(design, cad=cad, method=method, seed=seed, jobs=jobs, scheduler=scheduler, progress=progress)
     ok = result.meets_tolerance if isinstance(result, ChandelierBuild) else result.ok
     target = Path(outdir) if ok else best_fit_folder(Path(outdir))
-    data = write(result, target, progress=progress)
+    data = write(result, target, progress=progress, jobs=jobs)
     return Run(kind_of(design), result, target, bool(ok), data)
 
 
@@ -91,15 +91,17 @@ def build(design: Design, *, cad: bool | None = None, method: str | None = None,
     return _pipeline("chain").build(design, method=method, seed=seed, cad=cad, jobs=jobs, progress=progress)
 
 
-def write(result: Any, outdir: str | Path, *, progress: Progress | None = None) -> dict[str, Any]:
+def write(result: Any, outdir: str | Path, *, progress: Progress | None = None,
+          jobs: int | None = None) -> dict[str, Any]:
     """Write what :func:`build` returned to ``outdir`` (staged: all or nothing); the data
-    written to design.json."""
+    written to design.json. ``jobs``: worker processes for a chain's or a chandelier's files
+    (default: :func:`rodcad.parallel.default_jobs`; 1: all here)."""
     net = _pipeline("net")
     if isinstance(result, net.NetBuild):
         return net.write_net_outputs(result, outdir, progress=progress)
     if isinstance(result, ChandelierBuild):
-        return _pipeline("chandelier").write_chandelier_outputs(result, outdir, progress=progress)
-    return _pipeline("chain").write_outputs(result, outdir, progress=progress)
+        return _pipeline("chandelier").write_chandelier_outputs(result, outdir, progress=progress, jobs=jobs)
+    return _pipeline("chain").write_outputs(result, outdir, progress=progress, jobs=jobs)
 
 
 def _pipeline(kind: str):

@@ -33,7 +33,9 @@ def _z(x, y):
     return 0.004 * ((x - 75) ** 2 + (y - 60) ** 2) - 30
 
 
-def _strip(width: float, length: float = 300.0, bays: int = 6, sag: float = 60.0) -> str:
+def _strip(width: float, length: float = 300.0, bays: int = 6, sag: float = 60.0, zigzag: bool = False) -> str:
+    """A ladder hung from its four corners: two rails sagging as parabolas, rungs and a diagonal
+    in each bay (``zigzag``: alternating in direction)."""
     nodes, edges = [], []
     for b in range(bays + 1):
         x = length * b / bays
@@ -44,7 +46,7 @@ def _strip(width: float, length: float = 300.0, bays: int = 6, sag: float = 60.0
         if 0 < b < bays:
             edges.append([p, q])
         if b < bays:
-            edges += [[p, p + 2], [q, q + 2], [p, q + 2]]
+            edges += [[p, p + 2], [q, q + 2], [q, p + 2] if zigzag and b % 2 else [p, q + 2]]
     return (f"design: 1\nname: strip\nnet:\n  nodes: {nodes}\n  edges: {edges}\n"
             f"  anchored: [0, 1, {2 * bays}, {2 * bays + 1}]\n")
 
@@ -145,14 +147,19 @@ net:
     _builds_drawn_larger(path, err, tmp_path, capsys)
 
 
+def _scaled_nodes(text: str, factor: float) -> str:
+    """A design given by its nodes, drawn ``factor`` times as large."""
+    drawn = re.search(r"nodes: (\[\[.*\]\])", text).group(1)
+    return text.replace(drawn, json.dumps((np.array(json.loads(drawn)) * factor).tolist()))
+
+
 def _builds_drawn_larger(path, err: str, tmp_path, capsys) -> None:
     """The design at ``path`` drawn as much larger as ``err`` says builds (exit 0)."""
     larger = 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
     assert 1 < larger < 2
     text = path.read_text()
     if load_design(path).net.surface is None:
-        drawn = re.search(r"nodes: (\[\[.*\]\])", text).group(1)
-        text = text.replace(drawn, json.dumps((np.array(json.loads(drawn)) * larger).tolist()))
+        text = _scaled_nodes(text, larger)
     else:  # z(x, y) drawn larger: s z(x / s, y / s) over the ranges times s
         z = re.search(r'z: "(.*)"', text).group(1)
         scaled = z.replace("x", f"(x / {larger!r})").replace("y", f"(y / {larger!r})")
@@ -189,3 +196,28 @@ net:
     rod = float(re.search(r"rods print from ([0-9.]+) mm pivot to pivot", err).group(1))
     assert load_design(path).catalog.node.shortest_rod() <= rod < 20
     _builds_drawn_larger(path, err, tmp_path, capsys)
+
+
+def test_a_net_that_misses_after_its_nodes_were_collapsed_says_how_much_larger_would_keep_them(tmp_path, capsys):
+    """A ladder 156 x 41 mm of six bays whose diagonals zig-zag (the drawn-net family's
+    strip-zigzag-010, seed 2): its rails, 26-35 mm node to node, are shorter than a rod between
+    their hubs, so ten drawn nodes collapse into three hubs, and what is left misses. The one line
+    says so and how much larger the ladder drawn would keep every node: drawn that much larger,
+    no node collapses; a little less, some still do."""
+    text = _strip(40.8, length=156.3, bays=6, sag=41.0, zigzag=True)
+    path = tmp_path / "ladder.yaml"
+    path.write_text(text)
+    assert main(["build", str(path), "--no-cad", "-q", "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert re.search(r"; 10 drawn nodes were collapsed into 3 hub\(s\), \d+ drawn edge\(s\) being shorter than a rod "
+                     r"between their hubs: the net drawn larger keeps them \(drawn [0-9.]+ % larger", err), err
+    assert "Traceback" not in err and ".;" not in err
+    larger = 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
+    for factor, collapses in ((larger, False), (1 + 0.9 * (larger - 1), True)):
+        scaled = tmp_path / f"ladder-{factor:.4f}.yaml"
+        scaled.write_text(_scaled_nodes(text, factor))
+        out = tmp_path / f"out-{factor:.4f}"
+        code = main(["build", str(scaled), "--no-cad", "-q", "-o", str(out)])
+        capsys.readouterr()
+        data = json.loads(((out if code == 0 else tmp_path / f"{out.name}.best-fit") / "design.json").read_text())
+        assert bool(data["planner"].get("collapsed_edges")) == collapses, factor

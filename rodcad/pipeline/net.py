@@ -64,7 +64,13 @@ class NetBuild:
         return self.solids is not None and not self.solids.as_built.success
 
     def limit(self) -> str:
-        return self.check.limit()
+        """What keeps the net off its target and what would reach it; where the planner
+        collapsed drawn nodes, how much larger the net drawn would keep them."""
+        from rodcad.design.net.collapse import collapse_hint
+
+        said = self.check.limit()
+        hint = "" if self.check.ok else collapse_hint(self.check.plan)
+        return said.rstrip(".") + hint if hint else said
 
 
 def build_net(design: Design, *, seed: int | None = None, cad: bool = False, jobs: int | None = None,

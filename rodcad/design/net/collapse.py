@@ -49,7 +49,7 @@ from rodcad.design.net.joints import ReindexedSurface, drawn_target
 from rodcad.design.net.target import NetTarget
 
 __all__ = ["Collapse", "added_anchors", "anchor_pairs", "collapse_short", "collapses", "drawn_nodes", "join_anchor_pairs",
-           "short_edges_would", "tight_triangles"]
+           "collapse_hint", "short_edges_would", "tight_triangles"]
 
 #: Rounds of collapses at most (each merges at least one pair; nets of thousands of nodes
 #: stop far sooner: a round takes every short edge it can).
@@ -311,3 +311,25 @@ def short_edges_would(t: NetTarget, hw: NodeHardware, rp: np.ndarray, short: np.
         text += (f", or a catalog whose rods print from {rod:g} mm pivot to pivot (the rod family's length.min, "
                  f"{shortest:g} mm)")
     return text
+
+
+def collapse_hint(plan) -> str:
+    """For a net that misses its target after drawn nodes were collapsed into hubs (a
+    :class:`rodcad.design.net.plan.NetPlan`'s ``collapsed``): how many, and how much larger the
+    net drawn would keep them (:func:`short_edges_would`, from the drawn net's hubs: a net
+    scaled keeps its angles); '' where none was collapsed for a short edge (a thin triangle's
+    collapse stays at any scale) or nodes drawn on top of each other were merged."""
+    from rodcad.design.net.sizing import size_hubs
+
+    if not plan.collapsed or plan.merged:
+        return ""
+    drawn = drawn_target(plan.target)
+    hw, (lo, hi) = plan.hardware, plan.length_range
+    rp, _ = size_hubs(drawn, hw, lo, hi)
+    short = np.flatnonzero(drawn.edge_lengths - rp[drawn.edges].sum(axis=1) < lo * (1 - 1e-9))
+    would = short_edges_would(drawn, hw, rp, short, lo)
+    if not would:
+        return ""
+    n = sum(len(c.drawn) for c in plan.collapsed)
+    return (f"; {n} drawn nodes were collapsed into {len(plan.collapsed)} hub(s), {short.size} drawn edge(s) being "
+            f"shorter than a rod between their hubs: the net drawn larger keeps them{would}")

@@ -33,7 +33,13 @@ Which edges. Edges collapse in rounds, shortest first, each round a matching (no
 collapses a round), because a hub's angles and so its size change when it gains rods: after
 each round the hubs are sized again and the edges still short collapse in the next. A ring
 of equal short edges so becomes every other node merged with its neighbour (a ring of half
-as many hubs), not one hub for the whole ring.
+as many hubs), not one hub for the whole ring (:func:`collapse_until_buildable`, the
+planner's step).
+
+What would keep them. A net scaled keeps its angles, and so its hubs: where the collapse leaves
+nothing to hang, the refusal says how much larger the net drawn would have no short edge, or
+from what length printed rods would do (:func:`short_edges_would`); where what it leaves
+misses its target, the one line of the miss says the same (:func:`collapse_hint`).
 """
 
 from __future__ import annotations
@@ -47,9 +53,10 @@ import numpy as np
 from rodcad.catalog.net.node import NodeHardware
 from rodcad.design.net.joints import ReindexedSurface, drawn_target
 from rodcad.design.net.target import NetTarget
+from rodcad.errors import DesignLimit
 
 __all__ = ["Collapse", "added_anchors", "anchor_pairs", "collapse_short", "collapses", "drawn_nodes", "join_anchor_pairs",
-           "collapse_hint", "short_edges_would", "tight_triangles"]
+           "collapse_hint", "collapse_until_buildable", "short_edges_would", "tight_triangles"]
 
 #: Rounds of collapses at most (each merges at least one pair; nets of thousands of nodes
 #: stop far sooner: a round takes every short edge it can).
@@ -294,6 +301,44 @@ def added_anchors(t: NetTarget) -> list[tuple[int, tuple[int, int]]]:
         a, b = (int(da[x]) for x in np.argsort(d)[:2]) if da.size >= 2 else (int(da[0]), int(da[0]))
         out.append((int(k), (min(a, b), max(a, b))))
     return out
+
+
+def collapse_until_buildable(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -> tuple[NetTarget, int]:
+    """The net with every edge shorter than the shortest rod between the smallest hubs its
+    nodes' angles allow collapsed (:mod:`rodcad.design.net.collapse`), and every thin
+    triangle whose rods meet tighter than the largest hub allows, round by round until none
+    is left. Returns (the net, rods left out between two anchors)."""
+    from rodcad.design.net.sizing import size_hubs
+
+    between = 0
+    least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
+    drawn, first = t, None
+    for _ in range(MAX_ROUNDS):
+        rp, _ = size_hubs(t, hw, shortest, longest)
+        short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
+        thin = tight_triangles(t, least) if hw.is_hub else np.zeros(0, int)  # (rods meeting tighter than
+        if first is None:  # the largest hub allows)
+            first, first_short = (short.size, np.setdiff1d(thin, short).size), (rp, short)
+        short = np.union1d(short, thin)
+        if not short.size:
+            pairs = anchor_pairs(t, least) if hw.is_hub else []
+            if not pairs:
+                break
+            t = join_anchor_pairs(t, pairs)
+            continue
+        t, dropped = collapse_short(t, short)
+        between += dropped
+        if t.m == 0 or t.anchored_mask.all():
+            what = [f"{first[0]} of the {drawn.m} drawn edge(s) are shorter than the shortest rod between the "
+                    f"smallest hubs their nodes allow ({shortest:g} mm pivot to pivot; the shortest drawn "
+                    f"{float(drawn.edge_lengths.min()):.3g} mm node to node)"] if first[0] else []
+            if first[1]:
+                what.append(f"{first[1]} close a triangle whose rods meet tighter than the largest hub allows "
+                            f"({least:.3g} deg)")
+            raise DesignLimit(" and ".join(what) + ": collapsed into one hub each, they leave nothing to hang (every "
+                              "rod left would join two anchors); draw the net larger, or with fewer cells"
+                              + short_edges_would(drawn, hw, *first_short, shortest))
+    return t, between
 
 
 def short_edges_would(t: NetTarget, hw: NodeHardware, rp: np.ndarray, short: np.ndarray, shortest: float) -> str:

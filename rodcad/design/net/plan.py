@@ -21,8 +21,7 @@ import numpy as np
 
 from rodcad.catalog.net.bend import NetRodArc, bent_rod_com, bent_swing_deg, rod_arc
 from rodcad.catalog.net.node import NetRodNumbers, NodeHardware
-from rodcad.design.net.collapse import (MAX_ROUNDS, added_anchors, anchor_pairs, collapse_short, collapses,
-                                       join_anchor_pairs, short_edges_would, tight_triangles)
+from rodcad.design.net.collapse import added_anchors, collapse_until_buildable, collapses
 from rodcad.design.net.joints import SagLimit, hang_joints, merge_close, pieces, split_long
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
@@ -271,7 +270,7 @@ def plan_net(target: NetTarget, catalog, *, tolerance: float | None = None, hang
     t = target
     if hw.is_hub:
         t, merged = merge_close(t, lo_hw + 2 * rp_min, tol)
-    t, between = _collapsed(t, hw, lo_hw, hi)
+    t, between = collapse_until_buildable(t, hw, lo_hw, hi)
     drawn_at = t.positions
     # the most a node may move to spread rods drawn too close or too short (mm): only where
     # nothing else the planner does (rods in line, hubs of their own size) holds them
@@ -379,44 +378,6 @@ def resized(plan: NetPlan, node_pivot: np.ndarray) -> NetPlan:
     new = dataclasses.replace(new, merged=plan.merged, collapsed=plan.collapsed, between_anchors=plan.between_anchors,
                               added_anchors=plan.added_anchors, spread=plan.spread, node_cone=plan.node_cone)
     return replan(new, new.pivots) if plan.node_cone is not None else new
-
-
-def _collapsed(t: NetTarget, hw: NodeHardware, shortest: float, longest: float) -> tuple[NetTarget, int]:
-    """The net with every edge shorter than the shortest rod between the smallest hubs its
-    nodes' angles allow collapsed (:mod:`rodcad.design.net.collapse`), and every thin
-    triangle whose rods meet tighter than the largest hub allows, round by round until none
-    is left. Returns (the net, rods left out between two anchors)."""
-    from rodcad.design.net.sizing import size_hubs
-
-    between = 0
-    least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
-    drawn, first = t, None
-    for _ in range(MAX_ROUNDS):
-        rp, _ = size_hubs(t, hw, shortest, longest)
-        short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
-        thin = tight_triangles(t, least) if hw.is_hub else np.zeros(0, int)  # (rods meeting tighter than
-        if first is None:  # the largest hub allows)
-            first, first_short = (short.size, np.setdiff1d(thin, short).size), (rp, short)
-        short = np.union1d(short, thin)
-        if not short.size:
-            pairs = anchor_pairs(t, least) if hw.is_hub else []
-            if not pairs:
-                break
-            t = join_anchor_pairs(t, pairs)
-            continue
-        t, dropped = collapse_short(t, short)
-        between += dropped
-        if t.m == 0 or t.anchored_mask.all():
-            what = [f"{first[0]} of the {drawn.m} drawn edge(s) are shorter than the shortest rod between the "
-                    f"smallest hubs their nodes allow ({shortest:g} mm pivot to pivot; the shortest drawn "
-                    f"{float(drawn.edge_lengths.min()):.3g} mm node to node)"] if first[0] else []
-            if first[1]:
-                what.append(f"{first[1]} close a triangle whose rods meet tighter than the largest hub allows "
-                            f"({least:.3g} deg)")
-            raise DesignLimit(" and ".join(what) + ": collapsed into one hub each, they leave nothing to hang (every "
-                              "rod left would join two anchors); draw the net larger, or with fewer cells"
-                              + short_edges_would(drawn, hw, *first_short, shortest))
-    return t, between
 
 
 def _whole_floor(base: NetTarget, hw: NodeHardware, longest: float, whole: frozenset[int],

@@ -277,7 +277,7 @@ def run_member(m: Member, folder: Path) -> Outcome:
     joints = 0 if t.joints is None else len(t.joints)
     hubs = len({round(float(x), 4) for x in c.plan.node_pivot}) if c.plan.node_pivot is not None else 1
     return Outcome(m.name, m.kind, 0 if b.ok else 1, float(c.rel_size), time.perf_counter() - t0, t.n, t.m,
-                   joints, hubs, "" if b.ok else c.limit())
+                   joints, hubs, "" if b.ok else b.limit())
 
 
 def _child(m: Member, folder: str, queue, memory_gb: float) -> None:

@@ -20,8 +20,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["JOBS_ENV", "PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore", "cached_map", "default_jobs",
-           "in_process", "kept", "kept_workers", "start_workers", "task_runner", "worker_pool"]
+__all__ = ["JOBS_ENV", "PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore", "cached_map",
+           "default_jobs", "in_process", "kept", "kept_workers", "start_workers", "task_runner", "worker_pool"]
 
 #: A build starts a local Dask cluster by default when it has at least this many tasks per
 #: CPU (a distinct net part: 0.5-2 s of kernel work each); fewer run in this process, where

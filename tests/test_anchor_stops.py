@@ -173,12 +173,24 @@ def test_bad_anchor_limits(tmp_path, capsys):
     assert "constraints.anchor_stops" in err and "printed to order" in err
 
 
-def test_a_held_chain_is_built_with_its_fixture(tmp_path, capsys):
+def test_a_held_chain_is_built_with_its_fixture(tmp_path, capsys, monkeypatch):
     """With CAD: fixture.step/.stl written and checked (valid, same volume, watertight),
     in the assembly, in design.json and report.md, and no problem against the rods at rest.
     The bound given by hand (-35 deg) keeps the first rod off the arc's -50 deg: the chain
-    hangs 8 % off it, so the design accepts that (else exit 1, saying which bound)."""
+    hangs 8 % off it, so the design accepts that (else exit 1, saying which bound). Built with
+    ``--jobs 1`` where the default would be two workers: no worker process is started, to the
+    last file written."""
+    import rodcad.parallel
     from rodcad.cad.export import assembly_leaves
+
+    monkeypatch.setenv("RODCAD_JOBS", "2")
+    monkeypatch.setattr(rodcad.parallel, "default_jobs", lambda: 2)
+
+    class NoPool:
+        def __init__(self, *args, **kwargs):
+            raise AssertionError("--jobs 1 started a worker process")
+
+    monkeypatch.setattr(rodcad.parallel, "ProcessPoolExecutor", NoPool)
 
     path = tmp_path / "d.yaml"
     text = ("design: 1\nname: held\nanchors: [[0, 0], [150, 0]]\ntarget: {form: arc, sag: 50}\n"

@@ -39,8 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--no-cad", action="store_true", help="design and check only: no solids, no STEP/STL")
     p.add_argument("--method", choices=METHOD_NAMES, help="inverse-design method (default: the design's)")
     p.add_argument("--seed", type=int, metavar="N", help="random seed (default: the design's)")
-    p.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: number of CPUs, at most RODCAD_JOBS; a net's CAD: a "
-                   "Dask local cluster of N workers, by default when the net has enough distinct parts)")
+    p.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: number of CPUs, at most "
+                   "RODCAD_JOBS; a net's CAD: a Dask local cluster of N workers, by default when the net has enough "
+                   "distinct parts)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="build a net's parts on this Dask scheduler's workers "
                    "(e.g. tcp://10.0.0.5:8786; they must import the same rodcad)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress, only the summary")

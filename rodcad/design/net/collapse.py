@@ -52,6 +52,7 @@ import numpy as np
 
 from rodcad.catalog.net.node import NodeHardware
 from rodcad.design.net.joints import ReindexedSurface, drawn_target
+from rodcad.design.net.sizing import short_edges, size_hubs
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
@@ -308,14 +309,12 @@ def collapse_until_buildable(t: NetTarget, hw: NodeHardware, shortest: float, lo
     nodes' angles allow collapsed (:mod:`rodcad.design.net.collapse`), and every thin
     triangle whose rods meet tighter than the largest hub allows, round by round until none
     is left. Returns (the net, rods left out between two anchors)."""
-    from rodcad.design.net.sizing import size_hubs
-
     between = 0
     least = hw.sized(hw.pivot_limits[1]).min_angle_deg if hw.is_hub else 0.0  # (the largest hub's)
     drawn, first = t, None
     for _ in range(MAX_ROUNDS):
         rp, _ = size_hubs(t, hw, shortest, longest)
-        short = np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
+        short = short_edges(t, rp, shortest)
         thin = tight_triangles(t, least) if hw.is_hub else np.zeros(0, int)  # (rods meeting tighter than
         if first is None:  # the largest hub allows)
             first, first_short = (short.size, np.setdiff1d(thin, short).size), (rp, short)
@@ -364,14 +363,12 @@ def collapse_hint(plan) -> str:
     net drawn would keep them (:func:`short_edges_would`, from the drawn net's hubs: a net
     scaled keeps its angles); '' where none was collapsed for a short edge (a thin triangle's
     collapse stays at any scale) or nodes drawn on top of each other were merged."""
-    from rodcad.design.net.sizing import size_hubs
-
     if not plan.collapsed or plan.merged:
         return ""
     drawn = drawn_target(plan.target)
     hw, (lo, hi) = plan.hardware, plan.length_range
     rp, _ = size_hubs(drawn, hw, lo, hi)
-    short = np.flatnonzero(drawn.edge_lengths - rp[drawn.edges].sum(axis=1) < lo * (1 - 1e-9))
+    short = short_edges(drawn, rp, lo)
     would = short_edges_would(drawn, hw, rp, short, lo)
     if not would:
         return ""

@@ -17,7 +17,7 @@ import numpy as np
 from rodcad.catalog.net.node import NodeHardware
 from rodcad.design.net.target import NetTarget
 
-__all__ = ["least_angles", "size_hubs"]
+__all__ = ["least_angles", "short_edges", "size_hubs"]
 
 
 def least_angles(t: NetTarget) -> np.ndarray:
@@ -67,10 +67,9 @@ def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float,
     rp = np.minimum(rp, max(hi, lo))
     if floor is not None:
         rp = np.maximum(rp, floor)
-    d = t.edge_lengths
     for _ in range(3):  # a short rod's nodes get the least hubs their angles allow
-        short = d - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9)
-        if not short.any():
+        short = short_edges(t, rp, shortest)
+        if not short.size:
             break
         ends = np.unique(t.edges[short])
         rp[ends] = np.minimum(rp[ends], np.minimum(need[ends], max(hi, lo)))
@@ -91,10 +90,16 @@ def size_hubs(t: NetTarget, hw: NodeHardware, shortest: float, longest: float,
     return rp, problems
 
 
+def short_edges(t: NetTarget, rp: np.ndarray, shortest: float) -> np.ndarray:
+    """The edges of ``t`` whose rod, between hubs of pivot radii ``rp`` (n,) at their nodes, is
+    shorter than ``shortest`` (mm, pivot to pivot) (indices)."""
+    return np.flatnonzero(t.edge_lengths - rp[t.edges].sum(axis=1) < shortest * (1 - 1e-9))
+
+
 def _short_rods(t: NetTarget, rp: np.ndarray, shortest: float, hw: NodeHardware) -> list[str]:
     d = t.edge_lengths
     L = d - rp[t.edges].sum(axis=1)
-    short = np.flatnonzero(L < shortest * (1 - 1e-9))
+    short = short_edges(t, rp, shortest)
     if not short.size:
         return []
     order = short[np.argsort(L[short])]

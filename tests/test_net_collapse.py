@@ -153,9 +153,14 @@ def _scaled_nodes(text: str, factor: float) -> str:
     return text.replace(drawn, json.dumps((np.array(json.loads(drawn)) * factor).tolist()))
 
 
+def _advised_scale(err: str) -> float:
+    """The scale ``err`` advises: "drawn X % larger"."""
+    return 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
+
+
 def _builds_drawn_larger(path, err: str, tmp_path, capsys) -> None:
     """The design at ``path`` drawn as much larger as ``err`` says builds (exit 0)."""
-    larger = 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
+    larger = _advised_scale(err)
     assert 1 < larger < 2
     text = path.read_text()
     if load_design(path).net.surface is None:
@@ -212,7 +217,7 @@ def test_a_net_that_misses_after_its_nodes_were_collapsed_says_how_much_larger_w
     assert re.search(r"; 10 drawn nodes were collapsed into 3 hub\(s\), \d+ drawn edge\(s\) being shorter than a rod "
                      r"between their hubs: the net drawn larger keeps them \(drawn [0-9.]+ % larger", err), err
     assert "Traceback" not in err and ".;" not in err
-    larger = 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
+    larger = _advised_scale(err)
     for factor, collapses in ((larger, False), (1 + 0.9 * (larger - 1), True)):
         scaled = tmp_path / f"ladder-{factor:.4f}.yaml"
         scaled.write_text(_scaled_nodes(text, factor))

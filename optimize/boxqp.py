@@ -20,6 +20,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from optimize.gram import Gram
+
 __all__ = ["BoxQPResult", "box_qp"]
 
 
@@ -93,6 +95,7 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
     zl = np.where(has_lo, 1.0, 0.0)
     zu = np.where(has_hi, 1.0, 0.0)
     At = A.T.tocsr()
+    normal = Gram(A)
     scale = 1.0 + max(float(np.max(np.abs(b), initial=0.0)), float(np.max(np.abs(c), initial=0.0)))
     reg = 1e-12
     success = False
@@ -109,7 +112,7 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
             success = True
             break
         d = q + _ratio(zl, sl, has_lo) + _ratio(zu, su, has_hi) + reg
-        N = (A @ sp.diags(1.0 / d) @ At + sp.identity(k) * (reg * scale)).tocsc()
+        N = normal.matrix(1.0 / d, reg * scale)
         try:
             lu = splu(N, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         except RuntimeError:
@@ -153,7 +156,6 @@ def box_qp(q, c, A, b, lo, hi, *, tol: float = 1e-10, max_iter: int = 100) -> Bo
 
 def _polish(q, c, A, b, lo, hi, x, zl, zu):
     """Hold the bounds the interior point ends on and solve the rest exactly."""
-    n = x.size
     width = np.where(np.isfinite(hi - lo), hi - lo, 1.0)
     at_lo = np.isfinite(lo) & ((x - lo) < 1e-7 * np.maximum(width, 1.0)) & (zl > 1e-9)
     at_hi = np.isfinite(hi) & ((hi - x) < 1e-7 * np.maximum(width, 1.0)) & (zu > 1e-9)

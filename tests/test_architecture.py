@@ -151,7 +151,7 @@ def test_module_size(name):
 # --------------------------------------------------------------------------- chains and nets
 
 #: The top-level modules of :mod:`optimize` besides its two kinds: what both use.
-SHARED_OPTIMIZE = ("optimize.boxqp", "optimize.distance", "optimize.validate")
+SHARED_OPTIMIZE = ("optimize.boxqp", "optimize.distance", "optimize.gram", "optimize.validate")
 
 #: rodcad's role packages (each may have a ``net`` subpackage); the other top-level modules
 #: and packages (errors, yamlio, yamlspec, parallel, progress, outdir, ...) are shared.

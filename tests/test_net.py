@@ -276,6 +276,8 @@ def test_derivatives_against_finite_differences():
     grad = np.array([(lag(h * eye[k]) - lag(-h * eye[k])) / (2 * h) for k in range(net.nvar)])
     mine = ev.grad + ev.J.T @ lam
     assert np.max(np.abs(grad - mine)) < 1e-6 * np.max(np.abs(mine))
+    # J' lam without J (the solver's restoration and KKT residual) is J.T @ lam to the bit
+    np.testing.assert_array_equal(ev.jt(lam), ev.J.T @ lam)
     c = np.array([(evaluate(net, st.moved(net, h * eye[k]), False).c - evaluate(net, st.moved(net, -h * eye[k]), False).c)
                   / (2 * h) for k in range(net.nvar)]).T
     assert np.max(np.abs(c - ev.J.toarray())) < 1e-8

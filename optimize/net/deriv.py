@@ -12,7 +12,7 @@ construction. For a pivot on a node body, ``P = x + exp([w]x) a`` gives ``dP/dx 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -48,6 +48,7 @@ class Pattern:
     k_diag: np.ndarray       # (nvar,) positions of the diagonal
     k_body: np.ndarray       # (nbodies, 3, 3) positions of each free body's rotation block
     bodies: np.ndarray       # the free node bodies
+    gram: object = None      # J J' on J's pattern (optimize.gram.Gram), made when first needed
 
 
 def _csx(keys: np.ndarray, nrow: int, ncol: int):
@@ -100,7 +101,8 @@ class NetEval:
         shares: (m, 2) the vertical weight share of each pivot (force).
         energy: potential energy; energy_scale: the sum of its terms' magnitudes (round-off).
         grad: (nvar,) gradient of the energy; Jloc: (m, nloc) the rods' Jacobian rows in
-            their local unknowns; J: (m, nvar) constraint Jacobian (CSR). None unless full.
+            their local unknowns; J: (m, nvar) constraint Jacobian (CSR, built when first
+            read: most evaluations need only ``Jloc`` and :meth:`jt`). None unless full.
     """
 
     a: np.ndarray
@@ -115,7 +117,25 @@ class NetEval:
     energy_scale: float
     grad: np.ndarray | None = None
     Jloc: np.ndarray | None = None
-    J: sp.csr_matrix | None = None
+    #: the pattern J is assembled on and the net's local unknowns (set with Jloc)
+    pattern: Pattern | None = field(default=None, repr=False)
+    loc: np.ndarray | None = field(default=None, repr=False)
+    _J: sp.csr_matrix | None = field(default=None, repr=False)
+
+    @property
+    def J(self) -> sp.csr_matrix | None:
+        if self._J is None and self.Jloc is not None:
+            pat, keep = self.pattern, self.loc >= 0
+            data = np.zeros(pat.j_indices.size)
+            data[pat.j_pos[keep]] = self.Jloc[keep]
+            self._J = sp.csr_matrix((data, pat.j_indices, pat.j_indptr), shape=(self.loc.shape[0], pat.k_indptr.size - 1))
+        return self._J
+
+    def jt(self, v: np.ndarray) -> np.ndarray:
+        """J' v (nvar,), summed rod by rod as ``J.T @ v`` sums it (the same bits), without J."""
+        keep = self.loc >= 0
+        return np.bincount(self.loc[keep], weights=(self.Jloc * v[:, None])[keep],
+                           minlength=self.pattern.k_indptr.size - 1).astype(float)
 
 
 def _to_local(net: Net, a: np.ndarray, GP: np.ndarray) -> np.ndarray:
@@ -166,12 +186,9 @@ def evaluate(net: Net, state: NetState, full: bool = True) -> NetEval:
         w[:, 2] = wz[b]
         grad[net.rot_idx[b][:, None] + np.arange(3)] += cross(node_c[b], w)
     Gc = np.stack([-u, u], axis=1)
-    Jloc = _to_local(net, a, Gc)
-    data = np.zeros(pat.j_indices.size)
-    data[pat.j_pos[keep]] = Jloc[keep]
     ev.grad = grad
-    ev.Jloc = Jloc
-    ev.J = sp.csr_matrix((data, pat.j_indices, pat.j_indptr), shape=(net.m, net.nvar))
+    ev.Jloc = _to_local(net, a, Gc)
+    ev.pattern, ev.loc = pat, net.loc
     return ev
 
 

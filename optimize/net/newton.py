@@ -44,6 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from optimize.gram import Gram
 from optimize.net.deriv import Hess, NetEval, assemble, energy_change, evaluate, gauge_rows, hessian
 from optimize.net.model import Net, NetState
 
@@ -78,11 +79,12 @@ def multipliers(net: Net, ev: NetEval) -> np.ndarray:
     J = ev.J
     if net.nvar == 0:
         return np.zeros(net.m)
-    JJ = (J @ J.T).tocsc()
+    if ev.pattern.gram is None:  # J J' on J's pattern (the same matrix as (J @ J.T).tocsc())
+        ev.pattern.gram = Gram(J, reverse=False)
+    JJ = ev.pattern.gram.matrix(data=J.data)
     w = net.lengths / net.mean_length
     eps = 1e-10 * max(float(JJ.diagonal().max(initial=0.0)), 1e-300)
-    A = (JJ + sp.diags(eps * w)).tocsc()
-    lu = spd_lu(A)
+    lu = spd_lu(ev.pattern.gram.matrix(None, eps * w, data=J.data))  # (JJ + diags(eps w)).tocsc()
     rhs = -(J @ ev.grad)
     lam = lu.solve(rhs)
     for _ in range(3):
@@ -97,7 +99,7 @@ def kkt_residual(net: Net, ev: NetEval, lam: np.ndarray) -> tuple[float, np.ndar
     the weight and the largest |tension|), the moment imbalance of a free node body over
     that scale times the mean rod length, and each rod's length error over its length.
     """
-    r = ev.grad + ev.J.T @ lam
+    r = ev.grad + ev.jt(lam)
     F = _force_scale(net, lam)
     nf = int(np.count_nonzero(net.pos_idx >= 0))
     scale = np.full(net.nvar, F)
@@ -119,10 +121,7 @@ class Factor:
     lu: object
     rho: float
     mu: float
-    J: sp.csr_matrix
-
-    def __post_init__(self) -> None:
-        self.Jt = self.J.T.tocsr()
+    ev: NetEval  # the evaluation K was assembled at (its J)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self.lu.solve(b)
@@ -171,7 +170,7 @@ def factor(net: Net, hess, ev: NetEval, gauge: np.ndarray, s_h: float, mu0: floa
             if raised:
                 mu *= 10
                 lu = pd_factor(newton_matrix(net, hess, ev, gauge, mu, rho, s_h)) or lu
-            return Factor(lu, rho * s_h, mu, ev.J), mu
+            return Factor(lu, rho * s_h, mu, ev), mu
         mu = 1e-6 if mu == 0 else mu * 10
         raised = True
     raise FloatingPointError("no proximal weight made the Newton matrix positive definite")
@@ -297,7 +296,7 @@ def restore(net: Net, state: NetState, max_iter: int = 200, nu: float = 1e-3) ->
     for it in range(1, max_iter + 1):
         if _violation(net, ev) <= tol:
             return state, ev, True, it - 1
-        g = ev.J.T @ ev.c
+        g = ev.jt(ev.c)
         improved = False
         for _ in range(30):
             A = assemble(net, zero, ev, rho=1.0, diag=nu * net.var_scale)
@@ -331,7 +330,7 @@ def _project(net: Net, state: NetState, fac: Factor, tol: float, max_iter: int =
     for _ in range(max_iter):
         if ok:
             break
-        d = -fac.solve(fac.rho * (fac.Jt @ ev.c))
+        d = -fac.solve(fac.rho * fac.ev.jt(ev.c))
         trial = state.moved(net, d)
         tev = evaluate(net, trial, full=False)
         tv = _violation(net, tev)
@@ -433,7 +432,7 @@ def descend(net: Net, state: NetState, *, max_iter: int = 200, max_escapes: int 
         # restoration of tens of factorizations), back to the full step within a few iterations
         first = min(1.0, 4.0 * alpha)
         old = kkt
-        state, ev = trial, (tev if tev.J is not None else evaluate(net, trial))
+        state, ev = trial, (tev if tev.grad is not None else evaluate(net, trial))
         lam = multipliers(net, ev)
         kkt, r = kkt_residual(net, ev, lam)
         stall = stall + 1 if kkt > 0.5 * old else 0

@@ -113,7 +113,7 @@ def built(build_design, tmp_path_factory):
     text = text.replace("name: pla-parametric\n", "name: pla-parametric-one-scale\n", 1).replace(
         "    scale: {min: 0.55, max: 1.6}\n", "")
     (root / "one-scale.yaml").write_text(text, encoding="utf-8")
-    return build_design(DESIGN + f"catalog: {root / 'one-scale.yaml'}\n", "roundtrip", "--jobs", "2")
+    return build_design(DESIGN + f"catalog: {root / 'one-scale.yaml'}\n", "roundtrip", "--jobs", "1")
 
 
 @pytest.fixture(scope="module")
@@ -271,7 +271,7 @@ def test_an_edit_that_cannot_be_balanced_exits_1_with_the_best_fit(built, tmp_pa
     for i, edit in ((1, _bead), (3, _groove)):
         _write(edit(_read(_step(out, data, i))), _step(out, data, i))
     before = _snapshot(out)
-    code, res, err = _check([str(out), "--rebalance", "--json", "--jobs", "2"], capsys)
+    code, res, err = _check([str(out), "--rebalance", "--json", "--jobs", "1"], capsys)
     assert code == 1
     assert not res["rebalance"]["balanced"]
     assert "cannot be balanced" in res["rebalance"]["notes"][0]

@@ -264,17 +264,17 @@ V_NET = ("design: 1\nname: v\nnet:\n  nodes: [[0, 0, 0], [45, 0, -50], [95, 0, 0
          "  edges: [[0, 1], [1, 2]]\n  anchored: [0, 2]\n")
 
 #: V_NET built with its solids by the session's BuildStore (``build_store.cli_build(*V_ARGS,
-#: **V_BUILD)``), on a local Dask cluster of 2 worker processes (``--jobs 2``) even for its 4
-#: distinct parts: tests/test_netprint.py and tests/test_view_net_cad.py read the same build.
-V_ARGS = ("v.yaml", "-q", "--jobs", "2")
+#: **V_BUILD)``), its 4 distinct parts in this process (a build on Dask worker processes is
+#: tests/test_net_parts.py's): tests/test_netprint.py and tests/test_view_net_cad.py read the
+#: same build.
+V_ARGS = ("v.yaml", "-q")
 V_BUILD = {"text": V_NET}
 
 
 def test_a_net_with_its_solids_hangs_as_designed(build_store):
     """With CAD: every hub and rod a valid solid in its files (STEP re-read, STL watertight:
-    checked as written, here by worker processes as a large net's are), the assembly one
-    named solid per part, and the net re-solved with the solids' masses and centres of mass
-    within 0.2 % of its size of the design."""
+    checked as written), the assembly one named solid per part, and the net re-solved with the
+    solids' masses and centres of mass within 0.2 % of its size of the design."""
     from rodcad.cad.export import read_assembly
 
     code, out, _ = build_store.cli_build(*V_ARGS, **V_BUILD)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
 from pathlib import Path
 
@@ -306,3 +307,36 @@ def test_the_runners_count_each_task_as_it_finishes():
                 got = _dask(client)(abs, items, progress=lambda d, t: seen.append((d, t)))
         assert got == [abs(x) for x in items]
         assert seen == [(k, len(items)) for k in range(1, len(items) + 1)]
+
+
+def test_jobs_above_one_start_a_local_cluster_of_that_many_worker_processes(monkeypatch):
+    """``--jobs N`` (N > 1) runs a net's parts on a ``distributed.LocalCluster`` of N worker
+    processes that rodcad starts, each importing this rodcad (PYTHONPATH); at most one per task;
+    1 runs them here. The cluster is made of threads here, the class patched to record what it
+    was asked for: a build on N spawned processes is :func:`grid_builds`'s (--scheduler) and
+    costs each process the CAD kernel's import."""
+    import distributed
+
+    import rodcad
+    from rodcad.parallel import in_process, task_runner
+
+    asked = []
+    real = distributed.LocalCluster
+
+    def threads(**kw):
+        asked.append(kw)
+        threaded = {k: v for k, v in kw.items() if k != "env"}  # a nanny's, for its processes
+        return real(**{**threaded, "processes": False})
+
+    monkeypatch.setattr(distributed, "LocalCluster", threads)
+    with task_runner(5, jobs=2) as (run, where):
+        assert run(abs, [-3, 1, -2]) == [3, 1, 2]
+    assert where == "2 Dask worker processes"
+    (kw,) = asked
+    assert kw["n_workers"] == 2 and kw["processes"] and kw["threads_per_worker"] == 1
+    assert kw["env"]["PYTHONPATH"].split(os.pathsep)[0] == str(Path(rodcad.__file__).resolve().parents[1])
+    with task_runner(1, jobs=2) as (run, where):  # one task: no cluster
+        assert run is in_process and where == "in this process"
+    with task_runner(5, jobs=1) as (run, where):
+        assert run is in_process
+    assert len(asked) == 1

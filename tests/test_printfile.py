@@ -63,7 +63,7 @@ def rods(catalog):
     length, curvature, mass = CURVED
     types.append(load_catalog("pla-parametric").rod("rod", length, curvature))
     masses.append(mass)
-    return fabricate_chain(types, masses, seed=0, jobs=2).rods
+    return fabricate_chain(types, masses, seed=0, jobs=1).rods
 
 
 @pytest.fixture(scope="module")

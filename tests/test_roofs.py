@@ -78,9 +78,9 @@ def pair():
     lo, hi = mass_info(weighted).mass_range
     curved = load_catalog("pla-parametric").rod("rod", 47.604, 0.005325)
     types, masses = [weighted, curved], [lo + 0.9 * (hi - lo), 14.0]
-    plain = fabricate_chain(types, masses, seed=0, jobs=2).rods
-    shared = fabricate_chain(types, masses, seed=0, jobs=2, layers=LAYERS).rods
-    kept = fabricate_chain(types, masses, seed=0, jobs=2, layers=LAYERS, keep_roofs={1}).rods
+    plain = fabricate_chain(types, masses, seed=0, jobs=1).rods
+    shared = fabricate_chain(types, masses, seed=0, jobs=1, layers=LAYERS).rods
+    kept = fabricate_chain(types, masses, seed=0, jobs=1, layers=LAYERS, keep_roofs={1}).rods
     return plain, shared, kept
 
 

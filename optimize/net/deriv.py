@@ -128,7 +128,8 @@ class NetEval:
             pat, keep = self.pattern, self.loc >= 0
             data = np.zeros(pat.j_indices.size)
             data[pat.j_pos[keep]] = self.Jloc[keep]
-            self._J = sp.csr_matrix((data, pat.j_indices, pat.j_indptr), shape=(self.loc.shape[0], pat.k_indptr.size - 1))
+            shape = (self.loc.shape[0], pat.k_indptr.size - 1)  # (m, nvar)
+            self._J = sp.csr_matrix((data, pat.j_indices, pat.j_indptr), shape=shape)
         return self._J
 
     def jt(self, v: np.ndarray) -> np.ndarray:

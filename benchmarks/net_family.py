@@ -407,10 +407,15 @@ def main(argv=None) -> int:
         order = {m.name: i for i, m in enumerate(family(a.seed, a.n))}
         outs.sort(key=lambda o: order.get(o.name, 1 << 30))
         return _summary(outs)
-    members = [m for m in family(a.seed, a.n) if a.only in m.kind or a.only in m.name]
+    everyone = family(a.seed, a.n)
+    members = [m for m in everyone if a.only in m.kind or a.only in m.name]
     if a.part:
         first, last = (int(x) for x in a.part.split(":"))
         members = members[first:last]
+    if not members:  # (the names carry the seed's draw: another seed names other nets)
+        ap.error(f"no member of the seed {a.seed} family of {a.n} matches --only {a.only!r}"
+                 f"{' and --part ' + a.part if a.part else ''}; its kinds: "
+                 f"{', '.join(sorted({m.kind for m in everyone}))}, e.g. {everyone[-1].name}")
     print(f"# drawn-net family: seed {a.seed}, {len(members)} nets; {platform.node()}, "
           f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}", flush=True)
     outs = []

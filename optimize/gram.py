@@ -50,7 +50,6 @@ class Gram:
         keys = np.concatenate([j * k + i, np.arange(k) * (k + 1)])  # column-major: CSC
         uniq, inv = np.unique(keys, return_inverse=True)
         self.k = k
-        self.reverse = reverse
         self.cols = cols[term]
         self.ia = entry[term]
         self.ib = at_entry[term_t]

@@ -136,7 +136,7 @@ class NetEval:
         """J' v (nvar,), summed rod by rod as ``J.T @ v`` sums it (the same bits), without J."""
         keep = self.loc >= 0
         return np.bincount(self.loc[keep], weights=(self.Jloc * v[:, None])[keep],
-                           minlength=self.pattern.k_indptr.size - 1).astype(float)
+                           minlength=self.pattern.k_indptr.size - 1).astype(float, copy=False)
 
 
 def _to_local(net: Net, a: np.ndarray, GP: np.ndarray) -> np.ndarray:

@@ -92,9 +92,15 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
     joints = plan.target.joints
     if joints is None or not len(joints) or check.ok:
         return _fallen(_hardware_fitted(check, design, g), design)
+    unsagged = ""  # (why the joints stay on the surface, where their sag's plan does not build)
     if on_surface:
-        other = design(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g))
-        if _rank(other) > _rank(check):
+        try:
+            other = design(plan_net(target, catalog, tolerance=tolerance, hang=True, g=g))
+        except DesignLimit as exc:  # (the surface's plan stands, whatever design is kept: told why)
+            other = None
+            unsagged = (f"The two-rod joints stay on the target surface: at their funicular sag below their chords "
+                        f"the net does not build ({exc}).")
+        if other is not None and _rank(other) > _rank(check):
             other.chose("The two-rod joints hang at the funicular sag below their chords: on the target "
                                f"surface the net hung {100 * check.rel_size:.3g} % of its size off it.")
             check = other
@@ -120,6 +126,8 @@ def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float 
                                f"with them the net {check.limit()}; those edges are one rod each{spliced}, between "
                                "hubs of the family made larger to take what the rod cannot.")
             check = other
+    if unsagged:
+        check.chose(unsagged)
     check = _hardware_fitted(check, design, g)
     check = _fallen(check, design)
     if not check.ok:

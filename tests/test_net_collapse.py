@@ -21,6 +21,7 @@ from rodcad.cli import main
 from rodcad.design.loader import load_design
 from rodcad.design.net.choose import design_drawn_net
 from rodcad.design.net.plan import plan_net
+from rodcad.outputs.net.report import planner_summary
 
 GRID = """design: 1
 name: fine
@@ -81,6 +82,17 @@ def test_a_grid_drawn_too_fine_is_collapsed_on_its_surface_and_measured_against_
     for c in free:
         assert check.node_error[c.node] == pytest.approx(np.linalg.norm(eq.positions[c.node] - c.point), abs=1e-12)
     assert check.rel_size == pytest.approx(check.error_mm / drawn.size)  # (the size as drawn)
+    # the planner's line says how much larger the grid drawn keeps every node: drawn that much
+    # larger (z(x, y) as s z(x / s, y / s) over ranges s times as wide), none collapses; a little less, some do
+    line = planner_summary(plan)
+    assert "drawn nodes collapsed into" in line and ", kept if drawn larger (drawn " in line, line
+    larger = _advised_scale(line)
+    for s, collapses in ((larger, False), (1 + 0.9 * (larger - 1), True)):
+        text = GRID.replace('z: "0.004 * ((x - 75)**2 + (y - 60)**2) - 30"',
+                            f'z: "{s!r} * (0.004 * ((x / {s!r} - 75)**2 + (y / {s!r} - 60)**2) - 30)"')
+        scaled = load_design("larger.yaml", text=text.replace("x: [0, 150], y: [0, 120]",
+                                                               f"x: [0, {150 * s!r}], y: [0, {120 * s!r}]"))
+        assert bool(plan_net(scaled.net, scaled.catalog).collapsed) == collapses, s
 
 
 def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(tmp_path, capsys):
@@ -118,11 +130,15 @@ def test_a_strip_too_narrow_for_its_rungs_hangs_on_them_and_agrees_with_mujoco(t
     assert all(c["moved_mm"] == pytest.approx(14.0) for c in col)
     report = (tmp_path / "out" / "report.md").read_text()
     assert "shorter than the shortest rod between the smallest hubs" in report and "nodes [2, 3] -> node" in report
-    # and so does the terminal, where a user sees first how far the drawing moved
+    # and so does the terminal, where a user sees first how far the drawing moved (and no promise
+    # that the strip drawn larger keeps its nodes: the end bays' triangles meet tighter than the
+    # largest hub allows at any size)
     line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("planner:")]
     assert line == [f"planner: drawn {len(x)} nodes, {d.net.m} edges; built {t.n} nodes, {t.m} rods: 10 drawn nodes "
                     f"collapsed into 5 hub(s), a drawn node moved up to 14 mm ({100 * 14.0 / t.size:.3g} % of its "
                     "size); 2 anchor point(s) added (report.md)"], line
+    scaled = load_design("strip-x4.yaml", text=_scaled_nodes(text, 4.0))
+    assert plan_net(scaled.net, scaled.catalog, hang=True).collapsed
 
 
 def test_a_net_its_collapse_leaves_nothing_of_says_how_many_edges_were_short(tmp_path, capsys):

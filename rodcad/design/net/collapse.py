@@ -57,7 +57,7 @@ from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
 __all__ = ["Collapse", "added_anchors", "anchor_pairs", "collapse_short", "collapses", "drawn_nodes", "join_anchor_pairs",
-           "collapse_hint", "collapse_until_buildable", "short_edges_would", "tight_triangles"]
+           "collapse_hint", "collapse_until_buildable", "kept_larger", "short_edges_would", "tight_triangles"]
 
 #: Rounds of collapses at most (each merges at least one pair; nets of thousands of nodes
 #: stop far sooner: a round takes every short edge it can).
@@ -360,18 +360,28 @@ def short_edges_would(t: NetTarget, hw: NodeHardware, rp: np.ndarray, short: np.
 def collapse_hint(plan) -> str:
     """For a net that misses its target after drawn nodes were collapsed into hubs (a
     :class:`rodcad.design.net.plan.NetPlan`'s ``collapsed``): how many, and how much larger the
-    net drawn would keep them (:func:`short_edges_would`, from the drawn net's hubs: a net
-    scaled keeps its angles); '' where none was collapsed for a short edge (a thin triangle's
-    collapse stays at any scale) or nodes drawn on top of each other were merged."""
-    if not plan.collapsed or plan.merged:
-        return ""
-    drawn = drawn_target(plan.target)
-    hw, (lo, hi) = plan.hardware, plan.length_range
-    rp, _ = size_hubs(drawn, hw, lo, hi)
-    short = short_edges(drawn, rp, lo)
-    would = short_edges_would(drawn, hw, rp, short, lo)
+    net drawn would keep them (:func:`kept_larger`; '' where it would not keep every one)."""
+    would, short = kept_larger(plan)
     if not would:
         return ""
     n = sum(len(c.drawn) for c in plan.collapsed)
-    return (f"; {n} drawn nodes were collapsed into {len(plan.collapsed)} hub(s), {short.size} drawn edge(s) being "
+    return (f"; {n} drawn nodes were collapsed into {len(plan.collapsed)} hub(s), {short} drawn edge(s) being "
             f"shorter than a rod between their hubs: the net drawn larger keeps them{would}")
+
+
+def kept_larger(plan) -> tuple[str, int]:
+    """How much larger the net drawn would keep the drawn nodes the plan collapsed for edges
+    shorter than a rod between their hubs (:func:`short_edges_would`, from the drawn net's hubs:
+    a net scaled keeps its angles), and how many such edges: ('', 0) where none was collapsed
+    for a short edge, nodes drawn on top of each other were merged, or the drawn net has a
+    triangle whose rods meet tighter than the largest hub allows (its collapse stays at any
+    size)."""
+    if not plan.collapsed or plan.merged:
+        return "", 0
+    drawn = drawn_target(plan.target)
+    hw, (lo, hi) = plan.hardware, plan.length_range
+    if hw.is_hub and tight_triangles(drawn, hw.sized(hw.pivot_limits[1]).min_angle_deg).size:
+        return "", 0
+    rp, _ = size_hubs(drawn, hw, lo, hi)
+    short = short_edges(drawn, rp, lo)
+    return short_edges_would(drawn, hw, rp, short, lo), int(short.size)

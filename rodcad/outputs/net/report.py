@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from rodcad.design.net.collapse import kept_larger
 from rodcad.outputs.view import view_line
 
 __all__ = ["assembly_layers", "net_report", "net_summary", "planner_summary"]
@@ -66,6 +67,7 @@ def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
                    "drawn.")
     col = pl.get("collapsed_edges") or []
     if col:
+        would, _ = kept_larger(plan)
         drawn = sum(len(c["drawn_nodes"]) for c in col)
         worst = max(col, key=lambda c: c["moved_mm"])
         out.append(f"- {drawn} drawn nodes joined by edges shorter than the shortest rod between the smallest hubs "
@@ -76,7 +78,7 @@ def _planner_lines(plan, data: dict[str, Any]) -> list[str]:
                    + f". Each hub is on the drawn surface or edges (at an anchor, the anchor), and the fit measures "
                    f"it against that point; a drawn node is up to {worst['moved_mm']:.3g} mm from the hub that "
                    f"replaces it (drawn nodes {worst['drawn_nodes']}). Rods that came to join the same two nodes "
-                   "are one rod.")
+                   "are one rod." + (f" The net drawn larger keeps those nodes{would}." if would else ""))
     if pl.get("added_anchors"):
         add = pl["added_anchors"]
         out.append(f"- {len(add)} anchor point(s) added, each midway between two drawn anchors (on a generated net's "
@@ -321,8 +323,10 @@ def planner_summary(plan) -> str:
     what = []
     if collapsed:
         worst = max(c.moved_mm for c in collapsed)
+        would, _ = kept_larger(plan)
         what.append(f"{sum(len(c.drawn) for c in collapsed)} drawn nodes collapsed into {len(collapsed)} hub(s), a "
-                    f"drawn node moved up to {worst:.3g} mm ({100 * worst / t.size:.3g} % of its size)")
+                    f"drawn node moved up to {worst:.3g} mm ({100 * worst / t.size:.3g} % of its size)"
+                    + (f", kept if drawn larger{would}" if would else ""))
     if plan.merged:
         what.append(f"{len(plan.merged)} group(s) of nearly coincident nodes merged")
     if spread:

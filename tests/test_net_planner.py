@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -462,3 +463,34 @@ def test_a_surface_net_whose_joints_cannot_sag_is_designed_with_them_on_its_surf
     assert check.ok and check.rel_size <= 0.01, check.limit()
     assert check.equilibrium.stable
     assert any("at their funicular sag below their chords the net does not build" in n for n in check.notes)
+
+
+def test_the_rod_a_joint_that_cannot_hang_would_need_spans_its_hubs_as_built(tmp_path):
+    """A strip whose short rails collapsed into hubs (the drawn-net family's strip-diagonal-114,
+    seed 4): the drawn edge whose two-rod joint cannot hang joins two hubs the collapse moved
+    apart. The rod that would replace the joint spans those hubs (about 85 mm apart, a rod of
+    about 53 mm between the largest hubs, which the catalog prints), not the edge as drawn (it
+    said a rod of 0.58 mm); and the line reads as one sentence."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import net_family
+
+    m = next(x for x in net_family.family(4, 115) if x.name == "strip-diagonal-114")
+    path = tmp_path / f"{m.name}.yaml"
+    path.write_text(m.yaml)
+    d = load_design(path)
+    check = design_drawn_net(d.net, d.catalog, seed=d.seed)
+    assert not check.ok
+    line = check.limit()
+    found = re.search(r"two-rod joints on 1 drawn edge\(s\) \(\[(\d+)\]\).*One rod each \(([0-9.]+) mm between the "
+                      r"family's largest hubs", line)
+    assert found, line
+    edge, rod = int(found.group(1)), float(found.group(2))
+    t = check.plan.target
+    rods = np.flatnonzero(t.source == edge)
+    nodes, counts = np.unique(t.edges[rods], return_counts=True)
+    a, b = nodes[counts == 1]
+    big = check.plan.hardware.pivot_limits[1]
+    assert rod == pytest.approx(np.linalg.norm(t.positions[a] - t.positions[b]) - 2 * big, abs=0.01)
+    drawn = np.linalg.norm(np.subtract(*d.net.positions[d.net.edges[edge]]))
+    assert drawn - 2 * big < 5 < 20 < rod <= check.plan.length_range[1]
+    assert ".." not in line and ". ." not in line

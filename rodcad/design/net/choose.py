@@ -295,8 +295,7 @@ def slack_joints(check: NetCheck, tried: NetCheck | None = None) -> str:
     share = float(np.max(T[weak])) / float(np.max(np.abs(T), initial=1e-300))
     src = t.source if t.source is not None else np.arange(t.m)
     edges = sorted({int(x) for x in src[weak]})
-    drawn = t.drawn if t.drawn is not None else t
-    d = np.linalg.norm(drawn.positions[drawn.edges[edges, 1]] - drawn.positions[drawn.edges[edges, 0]], axis=1)
+    d = np.array([_hub_to_hub(t, src, e) for e in edges])
     big = plan.hardware.pivot_limits[1]
     need = float(d.max() - 2 * big)
     why = ("they lie in line with their rods (no kink below their chords: they balance only inverted, an "
@@ -307,7 +306,23 @@ def slack_joints(check: NetCheck, tried: NetCheck | None = None) -> str:
            f"{float(np.max(check.node_error[t.joint_mask])):.3g} mm below its chord")
     return (f"The two-rod joints on {len(edges)} drawn edge(s) ({edges[:8]}) cannot hang on the target within the "
             f"tolerance ({check.tolerance * t.size:.3g} mm): {why}; a ball joint between two rods carries its weight "
-            f"only by a kink below its chord. A rod of {need:.4g} mm between the family's largest hubs (pivot radius "
-            f"{big:g} mm; the rod family's length.max) or a rigid in-line splice (node.splice) would hold them"
-            + (f"; planned so (one rod each, spliced where longer), the net {tried.limit()}" if tried is not None
-               else "") + ".")
+            f"only by a kink below its chord. "
+            + (f"A rod of {need:.4g} mm between the family's largest hubs (pivot radius {big:g} mm; the rod family's "
+               "length.max)" if need > plan.length_range[1] else
+               f"One rod each ({need:.4g} mm between the family's largest hubs, pivot radius {big:g} mm)")
+            + " or a rigid in-line splice (node.splice) would hold them"
+            + (f"; planned so (one rod each, spliced where longer), the net {tried.limit().rstrip('.')}"
+               if tried is not None else "") + ".")
+
+
+def _hub_to_hub(t: NetTarget, src: np.ndarray, edge: int) -> float:
+    """How far apart the hubs at the ends of drawn edge ``edge``'s rods in line are (mm): the
+    built net's, where a collapse moved a drawn node into a hub elsewhere; as drawn where its
+    rods do not make one line between two hubs."""
+    rods = np.flatnonzero(src == edge)
+    nodes, counts = np.unique(t.edges[rods], return_counts=True)
+    ends = nodes[counts == 1]
+    if len(ends) == 2 and not t.joint_mask[ends].any():
+        return float(np.linalg.norm(t.positions[ends[1]] - t.positions[ends[0]]))
+    drawn = t.drawn if t.drawn is not None else t
+    return float(np.linalg.norm(drawn.positions[drawn.edges[edge, 1]] - drawn.positions[drawn.edges[edge, 0]]))

@@ -50,6 +50,7 @@ def test_a_drawn_shape_hangs_within_the_tolerance_or_exits_1_with_its_reason(sha
         assert fit > 0.01 and not out.exists()
         line = err.strip().splitlines()[-1]
         assert "off the curve (tolerance 1 %)" in line and "would" in line  # what limits it and what would reach it
+        assert ".;" not in line
 
 
 @pytest.mark.parametrize("shape", [diamond(100.0, 10.0), heart_outline(160.0, 12.0), heart_outline(160.0, 12.0, 1.25)],

@@ -90,7 +90,7 @@ def _chain(written, design, outdir: Path) -> int:
     result, target = written.result, written.outdir
     print(summary_text(result, target))
     if not result.meets_tolerance:
-        print(f"rodcad: {design.name} {result.limit()}; {outdir} left as it was, the best fit is in {target}",
+        print(f"rodcad: {design.name} {result.limit().rstrip('.')}; {outdir} left as it was, the best fit is in {target}",
               file=sys.stderr)
     elif not written.ok:
         print("rodcad: the anchor fixture is not fit to print: " + "; ".join(result.fixture_problems)
@@ -125,7 +125,7 @@ def _net(written, design, outdir: Path) -> int:
         print(f"as built (the solids' masses and centres of mass): {b.solids.error_mm:.3g} mm "
               f"({100 * b.solids.rel_size:.3g} % of its size) from the design{stalled}")
     if not b.check.ok:
-        print(f"rodcad: {design.name} {b.limit()}; {outdir} left as it was, the best fit is in {target}",
+        print(f"rodcad: {design.name} {b.limit().rstrip('.')}; {outdir} left as it was, the best fit is in {target}",
               file=sys.stderr)
         return 1
     if unsolved:

@@ -90,8 +90,8 @@ def _chain(written, design, outdir: Path) -> int:
     result, target = written.result, written.outdir
     print(summary_text(result, target))
     if not result.meets_tolerance:
-        print(f"rodcad: {design.name} {result.limit().rstrip('.')}; {outdir} left as it was, the best fit is in {target}",
-              file=sys.stderr)
+        print(f"rodcad: {design.name} {result.limit().rstrip('.')}; {outdir} left as it was, the best fit is in "
+              f"{target}", file=sys.stderr)
     elif not written.ok:
         print("rodcad: the anchor fixture is not fit to print: " + "; ".join(result.fixture_problems)
               + f"; {outdir} left as it was, the design and its fixture are in {target}", file=sys.stderr)

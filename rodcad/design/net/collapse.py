@@ -56,8 +56,9 @@ from rodcad.design.net.sizing import short_edges, size_hubs
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
-__all__ = ["Collapse", "added_anchors", "anchor_pairs", "collapse_short", "collapses", "drawn_nodes", "join_anchor_pairs",
-           "collapse_hint", "collapse_until_buildable", "kept_larger", "short_edges_would", "tight_triangles"]
+__all__ = ["Collapse", "added_anchors", "anchor_pairs", "collapse_short", "collapses", "drawn_nodes",
+           "join_anchor_pairs", "collapse_hint", "collapse_until_buildable", "kept_larger", "short_edges_would",
+           "tight_triangles"]
 
 #: Rounds of collapses at most (each merges at least one pair; nets of thousands of nodes
 #: stop far sooner: a round takes every short edge it can).

@@ -114,6 +114,25 @@ def test_rods_printed_to_order_put_every_joint_on_the_curve(form, params):
         discretize(curve, [30.0], length_range=(45.0, 25.0))
 
 
+def test_a_corner_closer_than_the_shortest_rod_to_the_last_carries_no_joint_of_its_own():
+    """Rods printed to order land exactly on each piece's end, so no rod fits a piece shorter than
+    the shortest rod: a corner that close to an anchor (a drop drawn with a 16 mm lip under a
+    catalog printing from 20 mm) was a joint of its own and the target was refused. The rods
+    now cross it; the other corners stay joints."""
+    lip = np.column_stack([np.zeros(9), np.linspace(0.0, -16.0, 9)])
+    rest = np.array([[-16.0, -16.0 - 40.0 * t] for t in np.linspace(0, 1, 9)[1:]]
+                    + [[-16.0 + 80.0 * t, -56.0] for t in np.linspace(0, 1, 9)[1:]])
+    curve = np.vstack([lip, rest])  # corners at 16 mm (the lip's end) and at 56 mm (the bottom)
+    d = discretize(curve, [30.0], length_range=(20.0, 60.0))
+    assert np.all((d.lengths >= 20.0 - 1e-9) & (d.lengths <= 60.0 + 1e-9))
+    assert np.min(np.hypot(*(d.points - [0.0, -16.0]).T)) > 1.0  # the lip's corner: crossed
+    assert np.min(np.hypot(*(d.points - [-16.0, -56.0]).T)) < 1e-9  # the bottom corner: a joint
+    assert d.joint_error < 1e-9 and np.allclose(d.points[[0, -1]], curve[[0, -1]])
+    # with rods from 15 mm the lip's corner is a joint again
+    short = discretize(curve, [30.0], length_range=(15.0, 60.0))
+    assert np.min(np.hypot(*(short.points - [0.0, -16.0]).T)) < 1e-9
+
+
 @pytest.mark.parametrize("form, params, before, after", [
     ("semicircle", {}, 0.5, 0.03), ("function", {"y": "-0.004*x*(200-x)"}, 0.5, 0.03),
     ("arc", {"sag": 60}, 0.5, 0.03), ("triangle", {"depth": 137.3}, 0.0, 0.1)])

@@ -338,12 +338,16 @@ def discretize(
     if exact is not None:
         return _slack(exact)
     corners_in = find_corners(curve, corner_angle_deg)
-    # a corner closer than half the shortest rod to the ends or to the previous corner
-    # cannot carry a joint of its own: keep the first of such a cluster
+    # a corner too close to the ends or to the previous corner cannot carry a joint of its own:
+    # keep the first of such a cluster, the rods cross the others. Too close: nearer than half
+    # the shortest rod (a piece's rods end within half a rod of its end), or for rods printed to
+    # order, whose equal chords land on the piece's end exactly, nearer than the shortest rod
+    # (no rod fits the piece between)
     s_vert = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(curve, axis=0).T))])
+    near = min(allowed) if length_range is not None else 0.5 * min(allowed)
     kept, last = [], 0.0
     for c in corners_in:
-        if s_vert[c] - last >= 0.5 * min(allowed) and s_vert[-1] - s_vert[c] >= 0.5 * min(allowed):
+        if s_vert[c] - last >= near and s_vert[-1] - s_vert[c] >= near:
             kept.append(c)
             last = s_vert[c]
     corners_in = kept

@@ -492,5 +492,7 @@ def test_the_rod_a_joint_that_cannot_hang_would_need_spans_its_hubs_as_built(tmp
     big = check.plan.hardware.pivot_limits[1]
     assert rod == pytest.approx(np.linalg.norm(t.positions[a] - t.positions[b]) - 2 * big, abs=0.01)
     drawn = np.linalg.norm(np.subtract(*d.net.positions[d.net.edges[edge]]))
-    assert drawn - 2 * big < 5 < 20 < rod <= check.plan.length_range[1]
+    assert drawn - 2 * big < 1.0  # (what the line said: the edge as drawn between the largest hubs)
+    lo, hi = check.plan.length_range
+    assert lo <= rod <= hi  # a rod the catalog prints: "one rod each", not a longer length.max
     assert ".." not in line and ". ." not in line

@@ -17,6 +17,7 @@ them, are the same.
     gram = Gram(A)                       # A: CSR, its pattern fixed
     N = gram.matrix(w, r)                # CSC, (k, k)
     N = gram.matrix(w, r, data=A2.data)  # the same pattern with other values
+    s = gram.sums(w); N0, N1 = gram.assemble(s), gram.assemble(s, r)  # one product, two diagonals
 """
 
 from __future__ import annotations
@@ -64,12 +65,22 @@ class Gram:
                data: np.ndarray | None = None) -> sp.csc_matrix:
         """The matrix (CSC) for column weights ``w`` (None: ones) and diagonal ``r``; ``data``:
         A's values on its pattern (default: those it was made with)."""
+        return self.assemble(self.sums(w, data=data), r)
+
+    def sums(self, w: np.ndarray | None = None, *, data: np.ndarray | None = None) -> np.ndarray:
+        """The product's entries on its pattern, before a diagonal is added and exact zeros are
+        left out: several matrices of one product (:meth:`assemble`) sum its terms once."""
         a = self.data if data is None else data
         if w is None:
             terms = a[self.ia] * a[self.ib]
         else:
             terms = (a[self.ia] * w[self.cols]) * a[self.ib]
-        out = np.bincount(self.pos, weights=terms, minlength=self.size).astype(float, copy=False)
+        return np.bincount(self.pos, weights=terms, minlength=self.size).astype(float, copy=False)
+
+    def assemble(self, sums: np.ndarray, r: np.ndarray | float = 0.0) -> sp.csc_matrix:
+        """The matrix (CSC) of the product's entries ``sums`` (:meth:`sums`, left as they are)
+        plus the diagonal ``r``."""
+        out = sums.copy()
         out[self.diag] += r  # a zero sum the product left out is 0 + r there too
         keep = out != 0
         if keep.all():

@@ -45,6 +45,10 @@ def test_the_gram_matrix_is_scipys_product_bit_for_bit(seed):
         gram = Gram(A, reverse=False)
         _same((A @ A.T).tocsc(), gram.matrix())
         _same(((A @ A.T).tocsc() + sp.diags(np.broadcast_to(r, (k,)))).tocsc(), gram.matrix(None, r))
+        # both from one sum of the terms (the multipliers' two matrices): the sums left as they were
+        sums = gram.sums()
+        _same((A @ A.T).tocsc(), gram.assemble(sums))
+        _same(((A @ A.T).tocsc() + sp.diags(np.broadcast_to(r, (k,)))).tocsc(), gram.assemble(sums, r))
         # other values on the same pattern (a Jacobian at the next state)
         B = A.copy()
         B.data = rng.normal(size=B.data.size)

@@ -81,10 +81,11 @@ def multipliers(net: Net, ev: NetEval) -> np.ndarray:
         return np.zeros(net.m)
     if ev.pattern.gram is None:  # J J' on J's pattern (the same matrix as (J @ J.T).tocsc())
         ev.pattern.gram = Gram(J, reverse=False)
-    JJ = ev.pattern.gram.matrix(data=J.data)
+    sums = ev.pattern.gram.sums(data=J.data)  # J J' summed once for both matrices
+    JJ = ev.pattern.gram.assemble(sums)
     w = net.lengths / net.mean_length
     eps = 1e-10 * max(float(JJ.diagonal().max(initial=0.0)), 1e-300)
-    lu = spd_lu(ev.pattern.gram.matrix(None, eps * w, data=J.data))  # (JJ + diags(eps w)).tocsc()
+    lu = spd_lu(ev.pattern.gram.assemble(sums, eps * w))  # (JJ + diags(eps w)).tocsc()
     rhs = -(J @ ev.grad)
     lam = lu.solve(rhs)
     for _ in range(3):

@@ -83,15 +83,12 @@ def test_a_grid_drawn_too_fine_is_collapsed_on_its_surface_and_measured_against_
         assert check.node_error[c.node] == pytest.approx(np.linalg.norm(eq.positions[c.node] - c.point), abs=1e-12)
     assert check.rel_size == pytest.approx(check.error_mm / drawn.size)  # (the size as drawn)
     # the planner's line says how much larger the grid drawn keeps every node: drawn that much
-    # larger (z(x, y) as s z(x / s, y / s) over ranges s times as wide), none collapses; a little less, some do
+    # larger, none collapses; a little less, some do
     line = planner_summary(plan)
     assert "drawn nodes collapsed into" in line and ", kept if drawn larger (drawn " in line, line
     larger = _advised_scale(line)
     for s, collapses in ((larger, False), (1 + 0.9 * (larger - 1), True)):
-        text = GRID.replace('z: "0.004 * ((x - 75)**2 + (y - 60)**2) - 30"',
-                            f'z: "{s!r} * (0.004 * ((x / {s!r} - 75)**2 + (y / {s!r} - 60)**2) - 30)"')
-        scaled = load_design("larger.yaml", text=text.replace("x: [0, 150], y: [0, 120]",
-                                                               f"x: [0, {150 * s!r}], y: [0, {120 * s!r}]"))
+        scaled = load_design("larger.yaml", text=_scaled_surface(GRID, s))
         assert bool(plan_net(scaled.net, scaled.catalog).collapsed) == collapses, s
 
 
@@ -170,6 +167,19 @@ def _scaled_nodes(text: str, factor: float) -> str:
     return text.replace(drawn, json.dumps((np.array(json.loads(drawn)) * factor).tolist()))
 
 
+def _scaled_surface(text: str, factor: float) -> str:
+    """A design on a surface z(x, y) drawn ``factor`` times as large: s z(x / s, y / s) over
+    ranges s times as wide (the surface's keys in block or flow style)."""
+    z = re.search(r'z: "(.*?)"', text).group(1)
+    scaled = z.replace("x", f"(x / {factor!r})").replace("y", f"(y / {factor!r})")
+    text = text.replace(z, f"{factor!r} * ({scaled})")
+    for key in ("x", "y"):
+        where = rf"(?<=[\s{{,]){key}: \[[^\]]*\]"
+        lo, hi = json.loads(re.search(where, text).group(0)[len(key) + 2:])
+        text = re.sub(where, f"{key}: [{lo * factor!r}, {hi * factor!r}]", text)
+    return text
+
+
 def _advised_scale(err: str) -> float:
     """The scale ``err`` advises: "drawn X % larger"."""
     return 1 + float(re.search(r"drawn ([0-9.]+) % larger", err).group(1)) / 100
@@ -180,15 +190,7 @@ def _builds_drawn_larger(path, err: str, tmp_path, capsys) -> None:
     larger = _advised_scale(err)
     assert 1 < larger < 2
     text = path.read_text()
-    if load_design(path).net.surface is None:
-        text = _scaled_nodes(text, larger)
-    else:  # z(x, y) drawn larger: s z(x / s, y / s) over the ranges times s
-        z = re.search(r'z: "(.*)"', text).group(1)
-        scaled = z.replace("x", f"(x / {larger!r})").replace("y", f"(y / {larger!r})")
-        text = text.replace(z, f"{larger!r} * ({scaled})")
-        for key in ("x", "y"):
-            lo, hi = json.loads(re.search(rf"\n    {key}: (\[.*\])", text).group(1))
-            text = re.sub(rf"\n    {key}: \[.*\]", f"\n    {key}: [{lo * larger!r}, {hi * larger!r}]", text)
+    text = _scaled_nodes(text, larger) if load_design(path).net.surface is None else _scaled_surface(text, larger)
     bigger = tmp_path / f"larger-{path.name}"
     bigger.write_text(text)
     code = main(["build", str(bigger), "--no-cad", "-q", "-o", str(tmp_path / "larger")])

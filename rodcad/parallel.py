@@ -6,8 +6,10 @@ from a *forkserver* that has imported the CAD modules (:mod:`rodcad.cad`) but ne
 anything; where forkserver is missing, they are spawned.
 
 A net's parts are tasks for Dask (:func:`task_runner`): on an existing scheduler (a cluster),
-or on a ``distributed.LocalCluster`` whose worker processes are spawned fresh by their nannies
-(never forked from this process), each importing the same rodcad as this one.
+or on a ``distributed.LocalCluster`` (:func:`local_cluster`) whose worker processes come from
+the same forkserver (never forked from this process), so that they start with the CAD kernel
+imported instead of importing it each (spawned, each importing the same rodcad as this one,
+where forkserver is missing).
 """
 
 from __future__ import annotations
@@ -21,12 +23,13 @@ from pathlib import Path
 from typing import Any, Protocol
 
 __all__ = ["JOBS_ENV", "PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "KeyValueStore", "cached_map",
-           "default_jobs", "in_process", "kept", "kept_workers", "start_workers", "task_runner", "worker_pool"]
+           "default_jobs", "in_process", "kept", "kept_workers", "local_cluster", "start_workers", "task_runner",
+           "worker_pool"]
 
 #: A build starts a local Dask cluster by default when it has at least this many tasks per
 #: CPU (a distinct net part: 0.5-2 s of kernel work each); fewer run in this process, where
-#: the cluster's start (spawning workers that import the CAD kernel, about 10 s on 2 cores)
-#: would cost more than the parallel work saves.
+#: the cluster's start (2-4 s on 2 cores: the forkserver's import of the CAD kernel, each
+#: worker's of distributed) would cost more than the parallel work saves.
 PARTS_PER_WORKER = 12
 
 
@@ -60,9 +63,10 @@ def default_jobs() -> int:
 
 
 #: What the forkserver imports before it forks any worker: the CAD kernel and the modules
-#: whose functions the workers run (the tables of reachable masses, the rods' solids).
+#: whose functions the workers run (the tables of reachable masses, the rods' solids, a net's
+#: parts on a local Dask cluster).
 WORKER_PRELOAD = ("rodcad.cad.solids", "rodcad.cad.collision", "rodcad.cad.export",
-                  "rodcad.fabrication.intervals", "rodcad.cad.rods")
+                  "rodcad.fabrication.intervals", "rodcad.cad.rods", "rodcad.cad.net.build")
 
 
 def _context() -> multiprocessing.context.BaseContext:
@@ -297,18 +301,36 @@ def task_runner(tasks: int, *, jobs: int | None = None, scheduler: str | None = 
     if n == 1:
         yield in_process, "in this process"
         return
+    from distributed import Client
+
+    with local_cluster(n) as cluster, Client(cluster) as client:
+        yield _dask(client), f"{n} Dask worker processes"
+
+
+@contextmanager
+def local_cluster(n: int) -> Iterator[Any]:
+    """A ``distributed.LocalCluster`` of ``n`` single-threaded worker processes, forked by
+    their nannies from the forkserver of :func:`start_workers` (the CAD kernel imported, never
+    used), or spawned where forkserver is missing, each importing the rodcad this one runs.
+
+    Spawned, each worker imported the CAD kernel on its own: about 8 s of CPU a worker, the
+    most of a small net's parallel build on 2 cores."""
     import logging
 
-    from distributed import Client, LocalCluster
+    import dask
+    from distributed import LocalCluster
 
     import rodcad
 
-    root = str(Path(rodcad.__file__).resolve().parents[1])  # the workers import this rodcad
+    start_workers()
+    method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+    root = str(Path(rodcad.__file__).resolve().parents[1])  # spawned workers import this rodcad
     path = os.pathsep.join([root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
     env = {"PYTHONPATH": path, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                      silence_logs=logging.ERROR, env=env) as cluster, Client(cluster) as client:
-        yield _dask(client), f"{n} Dask worker processes"
+    with dask.config.set({"distributed.worker.multiprocessing-method": method}), \
+            LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                         silence_logs=logging.ERROR, env=env) as cluster:
+        yield cluster
 
 
 def _dask(client) -> Runner:

@@ -118,22 +118,39 @@ def _orbits(points: np.ndarray, centre: np.ndarray) -> list[frozenset]:
 @pytest.fixture(scope="module")
 def grid_builds(tmp_path_factory):
     """The symmetric grid built with its solids in this process (--jobs 1) and on a Dask
-    LocalCluster of 2 worker processes (spawned fresh; --scheduler its address)."""
-    from distributed import LocalCluster
+    LocalCluster of 2 worker processes (rodcad's, whose workers fork from a forkserver that
+    imported the CAD kernel; --scheduler its address): (local, dask, what the cluster's workers
+    had loaded before any task and their parents' process ids)."""
+    from distributed import Client
+
+    from rodcad.parallel import local_cluster
 
     tmp = tmp_path_factory.mktemp("grid3")
     design = tmp / "grid3.yaml"
     design.write_text(GRID)
     assert main(["build", str(design), "-o", str(tmp / "local"), "-q", "--jobs", "1"]) == 0
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    probe = "[m in __import__('sys').modules for m in ('build123d', 'rodcad.cad.net.build')]"
+    with local_cluster(2) as cluster:
+        with Client(cluster) as client:
+            workers = client.run(eval, probe), client.run(os.getppid)
         assert main(["build", str(design), "-o", str(tmp / "dask"), "-q", "--scheduler", cluster.scheduler_address]) == 0
-    return tmp / "local", tmp / "dask"
+    return tmp / "local", tmp / "dask", workers
+
+
+def test_a_local_clusters_workers_start_with_the_cad_kernel_imported(grid_builds):
+    """rodcad's local cluster (``--jobs N`` on a net) forks its workers from the forkserver that
+    imported the CAD kernel once (spawned, each imported it: about 8 s of CPU a worker): before
+    any task, each worker has build123d and a net's part builder loaded, and none is this
+    process's own child (never forked from a process that may have used the kernel)."""
+    loaded, parents = grid_builds[2]
+    assert len(loaded) == 2 and all(v == [True, True] for v in loaded.values()), loaded
+    assert os.getpid() not in parents.values()
 
 
 def test_a_symmetric_net_writes_each_distinct_part_once(grid_builds):
     from rodcad.cad.export import import_step
 
-    out, _ = grid_builds
+    out, *_ = grid_builds
     data = json.loads((out / "design.json").read_text())
     nodes = np.array([n["target"] for n in data["net"]["nodes"]], float)
     centre = np.array([60.0, 60.0])
@@ -165,7 +182,7 @@ def test_the_assembly_places_every_instance_with_its_balls_in_its_hubs_sockets(g
     put its material where a ball is)."""
     from rodcad.cad.export import assembly_leaves
 
-    out, _ = grid_builds
+    out, *_ = grid_builds
     data = json.loads((out / "design.json").read_text())
     text = (out / "assembly.step").read_text()
     assert text.count("NEXT_ASSEMBLY_USAGE_OCCURRENCE") == len(data["net"]["rods"]) + len(data["cad"]["hub_parts"])
@@ -189,7 +206,7 @@ def test_the_assembly_places_every_instance_with_its_balls_in_its_hubs_sockets(g
 def test_the_build_on_a_dask_cluster_equals_the_build_in_process(grid_builds):
     from rodcad.cad.export import import_step
 
-    local, dask = grid_builds
+    local, dask, _ = grid_builds
     files = sorted(str(p.relative_to(local)) for p in local.rglob("*") if p.is_file())
     assert files == sorted(str(p.relative_to(dask)) for p in dask.rglob("*") if p.is_file())
     a, b = (json.loads((d / "design.json").read_text()) for d in (local, dask))
@@ -207,7 +224,7 @@ def test_every_stl_is_watertight_within_its_deflection(grid_builds):
 
     from rodcad.cad.export import import_step
 
-    out, _ = grid_builds
+    out, *_ = grid_builds
     data = json.loads((out / "design.json").read_text())
     defl = data["cad"]["mesh"]["deflection_mm"]
     assert defl == pytest.approx(0.03)
@@ -313,8 +330,8 @@ def test_jobs_above_one_start_a_local_cluster_of_that_many_worker_processes(monk
     """``--jobs N`` (N > 1) runs a net's parts on a ``distributed.LocalCluster`` of N worker
     processes that rodcad starts, each importing this rodcad (PYTHONPATH); at most one per task;
     1 runs them here. The cluster is made of threads here, the class patched to record what it
-    was asked for: a build on N spawned processes is :func:`grid_builds`'s (--scheduler) and
-    costs each process the CAD kernel's import."""
+    was asked for: a build on rodcad's cluster of worker processes is :func:`grid_builds`'s
+    (--scheduler its address)."""
     import distributed
 
     import rodcad

@@ -76,6 +76,46 @@ def test_a_312_rod_design_balances_and_hangs_where_mujoco_rests():
     assert moved > 100 * err  # it really travelled
 
 
+def test_a_big_nets_linear_programs_without_presolve_where_the_presolved_ones_stop(monkeypatch):
+    """Past LP_SIMPLEX_RODS the statics' linear programs run HiGHS's interior point presolved
+    and, where that has not ended optimal or infeasible within LP_PRESOLVED_ITERATIONS, again
+    without presolve: forced to fall back at once (a limit of one iteration), the 312-rod
+    dome's masses are the same as presolved (the margin program's optimum is unique, the
+    central masses the strictly convex program's), and an infeasible one says so either way."""
+    import optimize.net.statics as statics
+
+    spec = _dome()
+    nm = np.full(spec.n, 0.5)
+    asked = []
+    real = statics.linprog
+
+    def recorded(c, **kw):
+        lp = real(c, **kw)
+        asked.append((kw.get("options", {}).get("presolve", True), lp.status))
+        return lp
+
+    monkeypatch.setattr(statics, "linprog", recorded)
+
+    def design(positions):
+        return statics.design_net_masses(positions, spec.edges, spec.lengths, (0.8, 4.5), spec.anchored,
+                                         node_masses=nm)
+
+    presolved = design(spec.positions)
+    assert presolved.exact and asked and all(p and s == 0 for p, s in asked)
+    monkeypatch.setattr(statics, "LP_PRESOLVED_ITERATIONS", 1)
+    asked.clear()
+    fallen = design(spec.positions)
+    assert fallen.exact and [p for p, _ in asked] == [True, False] and asked[0][1] == 1
+    np.testing.assert_allclose(fallen.masses, presolved.masses, rtol=0, atol=1e-6 * 4.5)
+    np.testing.assert_allclose(fallen.tensions, presolved.tensions, rtol=0, atol=1e-6 * np.abs(presolved.tensions).max())
+    # the same rods standing as a dome would push: no masses hang it, presolved or not
+    for limit in (100, 1):
+        monkeypatch.setattr(statics, "LP_PRESOLVED_ITERATIONS", limit)
+        asked.clear()
+        assert not design(spec.positions * [1.0, 1.0, -1.0]).exact
+        assert asked[0] == (True, 2) or (limit == 1 and asked[:2] == [(True, 1), (False, 2)]), asked
+
+
 def test_big_nets_limited_perturbed_starts_find_the_same_shape(monkeypatch):
     """The iteration limits a big net's perturbed starts get (here forced on a small net) still
     bring a start back to the designed shape, and a start they stop is reported, not hidden."""

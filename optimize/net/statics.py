@@ -42,12 +42,21 @@ __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "n
 #: The central masses keep this share of the linear program's margin from the bounds.
 CENTRAL_SLACK = 1e-3
 #: Nets of more rods than this solve their linear programs by HiGHS's interior point method
-#: (with crossover to a vertex) without presolve, instead of its dual simplex: on 2,000-rod
-#: nets whose rods' buildable masses are a few micrograms wide, the simplex ran 46 s into
-#: "numerical difficulties" where the interior point said "infeasible" in 0.4 s, and with
-#: presolve the interior point too ran 70 s into them where without it it found the optimum
-#: in 2.8 s; smaller nets keep the simplex they were designed with.
+#: (with crossover to a vertex) instead of its dual simplex: on 2,000-rod nets whose rods'
+#: buildable masses are a few micrograms wide, the simplex ran 46 s into "numerical
+#: difficulties" where the interior point said "infeasible" in 0.4 s; smaller nets keep the
+#: simplex they were designed with.
 LP_SIMPLEX_RODS = 300
+
+#: The interior point's iterations with presolve before the same program is solved without it
+#: (:func:`_linprog`). Presolved, a 2,112-rod grid's programs took 0.02-1.3 s where unpresolved
+#: they took 0.2-5 s, their vertices as exact or more (a margin's inequalities held to 6e-9
+#: where unpresolved they were 5.5e-6 off), and every one of its 16 infeasible programs said so
+#: either way; but two of its 31 ran on (47 s to the optimum, 40 s to "numerical
+#: difficulties") where unpresolved they took 1.2 and 1.3 s. Those reach this many iterations
+#: within a second (the others took 3-14): a count, not a time, so a design is the same on
+#: every machine.
+LP_PRESOLVED_ITERATIONS = 100
 
 #: :func:`node_mass_needs`: weights balance the forces where the least absolute imbalance (over
 #: the force scale) is at most this a row...
@@ -251,11 +260,16 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
     return _design(net, st, bounds, allow_compression, explain)
 
 
-def _lp_method(m: int) -> dict:
-    """linprog's method and options for a net of ``m`` rods (:data:`LP_SIMPLEX_RODS`)."""
+def _linprog(c: np.ndarray, m: int, **program):
+    """``scipy.optimize.linprog(c, **program)`` for a net of ``m`` rods: HiGHS's dual simplex
+    up to :data:`LP_SIMPLEX_RODS` rods, beyond that its interior point with presolve and, where
+    that does not end optimal or infeasible within :data:`LP_PRESOLVED_ITERATIONS`, without."""
     if m <= LP_SIMPLEX_RODS:
-        return {"method": "highs"}
-    return {"method": "highs-ipm", "options": {"presolve": False}}
+        return linprog(c, method="highs", **program)
+    lp = linprog(c, method="highs-ipm", options={"maxiter": LP_PRESOLVED_ITERATIONS}, **program)
+    if lp.status in (0, 2):
+        return lp
+    return linprog(c, method="highs-ipm", options={"presolve": False}, **program)
 
 
 def _fixed_solution(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray | None:
@@ -301,8 +315,8 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     A_ub, b_ub = _margin_rows(m, 0, lo_m, hi_m, width, allow_compression)
     lp_args = dict(A_ub=A_ub, b_ub=b_ub,
                    A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
-                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)], **_lp_method(m))
-    lp = linprog(c, **lp_args)
+                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)])
+    lp = _linprog(c, m, **lp_args)
     info = {"lp_status": int(lp.status)}
     x = _fixed_solution(A, b) if lp.status != 0 else None
     if x is not None:
@@ -424,7 +438,7 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
         k = A.shape[0]
         Ak = sp.hstack([A[:, :cols], sp.identity(k), -sp.identity(k)]).tocsr()
         c = np.concatenate([np.zeros(cols), np.ones(2 * k)])
-        lp = linprog(c, A_eq=Ak, b_eq=b, bounds=box[:cols] + [(0.0, None)] * (2 * k), **_lp_method(m))
+        lp = _linprog(c, m, A_eq=Ak, b_eq=b, bounds=box[:cols] + [(0.0, None)] * (2 * k))
         return (float(lp.fun), lp.x[:cols]) if lp.status == 0 else (np.inf, np.zeros(cols))
 
     out = np.zeros(net.n)
@@ -440,12 +454,12 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
     bnds = [(None, None)] * (2 * m) + [(0.0, 1.0)] * nw + [(0.0, 0.5)]
     c = np.zeros(2 * m + nw + 1)
     c[-1] = -1.0
-    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
+    lp = _linprog(c, m, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds)
     if lp.status == 0:
         bnds[-1] = (0.5 * float(lp.x[-1]), 0.5)
         c = np.zeros(2 * m + nw + 1)
         c[2 * m:2 * m + nw] = 1.0
-        lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds, **_lp_method(m))
+        lp = _linprog(c, m, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds)
     if lp.status == 0:
         x = lp.x
     out[free] = np.clip(x[2 * m:2 * m + nw], 0.0, 1.0) * extra[free]
@@ -483,7 +497,7 @@ def _why(A, b, m, lo_m, hi_m, width, allow_compression):
     b_ub = np.concatenate([hi_m, -lo_m, np.zeros(m)])
     A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 3 * m))]).tocsr()
     bounds = [(None, None)] * m + [(0.0, None)] * m + [(0.0, None)] * (3 * m)
-    lp = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bounds, **_lp_method(m))
+    lp = _linprog(c, m, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bounds)
     if lp.status != 0:
         return np.full(m, np.nan), np.zeros(0, int)
     p, r, k = lp.x[2 * m:3 * m], lp.x[3 * m:4 * m], lp.x[4 * m:]

@@ -357,3 +357,12 @@ def test_jobs_above_one_start_a_local_cluster_of_that_many_worker_processes(monk
     with task_runner(5, jobs=1) as (run, where):
         assert run is in_process
     assert len(asked) == 1
+    # by default a worker per CPU, up to one per PARTS_PER_WORKER tasks: none for fewer than two
+    import rodcad.parallel as parallel
+
+    monkeypatch.setattr(parallel, "default_jobs", lambda: 4)
+    k = parallel.PARTS_PER_WORKER
+    for tasks, workers in ((2 * k - 1, 1), (2 * k, 2), (3 * k + 1, 3), (40 * k, 4)):
+        with task_runner(tasks) as (run, where):
+            assert (run is in_process) == (workers == 1)
+            assert where == ("in this process" if workers == 1 else f"{workers} Dask worker processes")

@@ -30,8 +30,8 @@ __all__ = ["JOBS_ENV", "PARTS_PER_WORKER", "WORKER_PRELOAD", "KeptWorkers", "Key
 #: worker (a distinct net part: 0.5-2 s of kernel work each), a worker per CPU it may use up to
 #: one per that many tasks; fewer run in this process, where the cluster's start (2-4 s on 2
 #: cores: the forkserver's import of the CAD kernel, each worker's of distributed) would cost
-#: more than the parallel work saves. Measured on 2 cores, default against --jobs 1: the
-#: lampshade's 7 parts 12.7 against 14.3 s, the collar's 10 10.5 against 13.0 s.
+#: more than the parallel work saves. Measured on 2 cores, whole builds on 2 workers against
+#: --jobs 1: the lampshade's 7 parts 12.6 against 14.3 s, the collar's 10 9.2 against 13.0 s.
 PARTS_PER_WORKER = 3
 
 
@@ -328,6 +328,8 @@ def local_cluster(n: int) -> Iterator[Any]:
     method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
     root = str(Path(rodcad.__file__).resolve().parents[1])  # spawned workers import this rodcad
     path = os.pathsep.join([root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
+    # (forked, the workers' BLAS was loaded by the forkserver before these are set, as for the
+    # worker_pool's processes: they run the kernel, not large matrix products)
     env = {"PYTHONPATH": path, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
     with dask.config.set({"distributed.worker.multiprocessing-method": method}), \
             LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,

@@ -42,10 +42,9 @@ if __name__ == "__main__":
         from rodcad.parallel import local_cluster
         cluster = local_cluster(n)
     else:
-        import contextlib
         from distributed import LocalCluster
-        cluster = contextlib.closing(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                                  dashboard_address=None, silence_logs=logging.ERROR))
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
     with cluster as c:
         with Client(c) as client:
             t1 = time.perf_counter()

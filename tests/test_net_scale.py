@@ -1,6 +1,6 @@
 """A net of a few hundred rods designed on the paths the big nets take, checked independently.
 
-A 13 x 13 grid (312 rods: past :data:`optimize.net.statics.LP_SIMPLEX_RODS`, so its linear
+A 13 x 13 grid (312 rods: past :data:`optimize.net.lp.LP_SIMPLEX_RODS`, so its linear
 programs run HiGHS's interior point) hung from its border into a paraboloid is designed
 (:func:`optimize.design_net`), and the design is checked without the project's statics or
 solver: every free node's force balance at the target recomputed in plain numpy from the
@@ -16,7 +16,7 @@ from netgen import grid_net
 
 import optimize.net.solve as solve_mod
 from optimize import design_net, solve_net
-from optimize.net.statics import LP_SIMPLEX_RODS
+from optimize.net.lp import LP_SIMPLEX_RODS
 
 G = 9.81
 
@@ -82,19 +82,20 @@ def test_a_big_nets_linear_programs_without_presolve_where_the_presolved_ones_st
     without presolve: forced to fall back at once (a limit of one iteration), the 312-rod
     dome's masses are the same as presolved (the margin program's optimum is unique, the
     central masses the strictly convex program's), and an infeasible one says so either way."""
+    import optimize.net.lp as lp_mod
     import optimize.net.statics as statics
 
     spec = _dome()
     nm = np.full(spec.n, 0.5)
     asked = []
-    real = statics.linprog
+    real = lp_mod.linprog
 
     def recorded(c, **kw):
         lp = real(c, **kw)
         asked.append((kw.get("options", {}).get("presolve", True), lp.status))
         return lp
 
-    monkeypatch.setattr(statics, "linprog", recorded)
+    monkeypatch.setattr(lp_mod, "linprog", recorded)
 
     def design(positions):
         return statics.design_net_masses(positions, spec.edges, spec.lengths, (0.8, 4.5), spec.anchored,
@@ -102,7 +103,7 @@ def test_a_big_nets_linear_programs_without_presolve_where_the_presolved_ones_st
 
     presolved = design(spec.positions)
     assert presolved.exact and asked and all(p and s == 0 for p, s in asked)
-    monkeypatch.setattr(statics, "LP_PRESOLVED_ITERATIONS", 1)
+    monkeypatch.setattr(lp_mod, "LP_PRESOLVED_ITERATIONS", 1)
     asked.clear()
     fallen = design(spec.positions)
     assert fallen.exact and [p for p, _ in asked] == [True, False] and asked[0][1] == 1
@@ -110,7 +111,7 @@ def test_a_big_nets_linear_programs_without_presolve_where_the_presolved_ones_st
     np.testing.assert_allclose(fallen.tensions, presolved.tensions, rtol=0, atol=1e-6 * np.abs(presolved.tensions).max())
     # the same rods standing as a dome would push: no masses hang it, presolved or not
     for limit in (100, 1):
-        monkeypatch.setattr(statics, "LP_PRESOLVED_ITERATIONS", limit)
+        monkeypatch.setattr(lp_mod, "LP_PRESOLVED_ITERATIONS", limit)
         asked.clear()
         assert not design(spec.positions * [1.0, 1.0, -1.0]).exact
         assert asked[0] == (True, 2) or (limit == 1 and asked[:2] == [(True, 1), (False, 2)]), asked

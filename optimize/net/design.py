@@ -96,8 +96,8 @@ def _error(res: NetResult, fit: NetFit) -> float:
 
 
 def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
-               allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None, rotations=None,
-               n_starts: int = 8, seed: int = 0, refine: bool = True, tol: float = 1e-6,
+               allow_compression: bool | np.ndarray = False, g: float = 9.81, node_com=None, pivots=None,
+               rotations=None, n_starts: int = 8, seed: int = 0, refine: bool = True, tol: float = 1e-6,
                max_refine: int = 10, callback=None, statics: NetMassDesign | None = None,
                leave_unstable: bool = False, fit_nodes=None, fit_points=None, fit_ends=None,
                swing_limits=None) -> NetDesign:
@@ -108,7 +108,8 @@ def design_net(target_positions, edges, lengths, mass_bounds, anchored, *, node_
         edges, lengths, anchored, node_masses, com, g, node_com, pivots: as
             :func:`optimize.solve_net`; ``lengths`` are the target's pivot distances.
         mass_bounds: (m, 2) or (2,) rod mass bounds (g).
-        allow_compression: let rods push (by default every rod stays in tension).
+        allow_compression: let rods push: True every rod, or an (m,) mask of those that may (by
+            default every rod stays in tension).
         rotations: (n, 3, 3) node bodies' orientations at the target.
         n_starts: the multi-start's starts (1: the check from the target alone).
         seed: its seed.

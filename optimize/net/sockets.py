@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from optimize.net.model import cross
+from optimize.net.pushing import push_mask
 from optimize.net.trf import trf
 
 __all__ = ["FIXED_TURN", "STALL_COST", "STALL_DROP", "STALL_ITERS", "SocketBalance", "SocketProblem", "balance_sockets",
@@ -111,7 +112,7 @@ class _Stall:
 
 def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, node_masses, socket_com,
                     masses0, tensions0, start=None, max_turn_deg: float = 15.0, bound_slopes=None, com=None,
-                    allow_compression: bool = False, g: float = 9.81, max_nfev: int = 200,
+                    allow_compression: bool | np.ndarray = False, g: float = 9.81, max_nfev: int = 200,
                     tol: float = 1e-13) -> SocketBalance:
     """Socket turns, rod masses and tensions that balance every free hub (see the module).
 
@@ -137,7 +138,7 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
             range a few micrograms wide), or None: fixed bounds.
         com: (m, 3) rods' centres of mass (along the chord, off it, 0) (mm), or None: at
             mid-length on the axis.
-        allow_compression: let tensions go negative.
+        allow_compression: let tensions go negative: every rod's (True) or those of an (m,) mask.
         g: gravitational acceleration.
         max_nfev: the least squares' evaluations at most.
         tol: its ``ftol``/``xtol``/``gtol``.
@@ -162,7 +163,7 @@ def balance_sockets(target_positions, edges, pivots, mass_bounds, anchored, *, n
 
 def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, node_masses, socket_com,
                    masses0, tensions0, start=None, max_turn_deg: float = 15.0, bound_slopes=None, com=None,
-                   allow_compression: bool = False, g: float = 9.81) -> SocketProblem:
+                   allow_compression: bool | np.ndarray = False, g: float = 9.81) -> SocketProblem:
     """The least squares :func:`balance_sockets` solves: its residuals, their exact sparse
     Jacobian, the start and the bounds (arguments as :func:`balance_sockets`)."""
     X = np.asarray(target_positions, float)
@@ -331,10 +332,10 @@ def socket_problem(target_positions, edges, pivots, mass_bounds, anchored, *, no
     width = bounds[:, 1] - bounds[:, 0]
     theta0 = np.where(width > 0, (np.asarray(masses0, float) - bounds[:, 0]) / np.where(width > 0, width, 1.0), 0.5)
     T0 = np.asarray(tensions0, float) / F
-    if not allow_compression:
-        T0 = np.maximum(T0, 1e-9)
+    push = push_mask(allow_compression, m)
+    T0 = np.where(push, T0, np.maximum(T0, 1e-9))
     inner = 1e-9
-    lo = np.concatenate([np.full(2 * ns, -np.inf), np.full(m, -np.inf if allow_compression else 0.0), np.full(m, inner)])
+    lo = np.concatenate([np.full(2 * ns, -np.inf), np.where(push, -np.inf, 0.0), np.full(m, inner)])
     hi = np.concatenate([np.full(2 * ns, np.inf), np.full(m, np.inf), np.full(m, 1 - inner)])
     cap = np.repeat(np.tan(np.radians(turns))[turn], 2).reshape(ns, 2)
     ang0 = np.zeros((ns, 2))

@@ -15,7 +15,9 @@ mass hangs in the vertical plane through the axis (the lever rule above already 
 it). Anchored nodes take any reaction.
 
 :func:`design_net_masses` finds masses within their bounds (and tensions >= 0 unless
-compression is allowed) that balance the target exactly: a linear program for the
+compression is allowed: for every rod, or for a mask of them, :mod:`optimize.net.pushing`,
+whose rods then push no harder than they must and whose hubs are kept from turning) that
+balance the target exactly: a linear program for the
 largest margin from every bound, then a quadratic program (:func:`optimize.boxqp.box_qp`)
 for the masses nearest the middle of their bounds that keep most of that margin, polished
 to round-off. Where no such masses exist, bounded least squares gives the best fit, and
@@ -31,33 +33,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import linprog
 
 from optimize.boxqp import box_qp
 from optimize.net.deriv import evaluate
 from optimize.net.model import Net, cross
+from optimize.net.lp import net_linprog as _linprog
+from optimize.net.pushing import hub_stiffness_rows, least_push, push_mask, stiff_enough
 
 __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "node_mass_needs", "statics_of"]
 
 #: The central masses keep this share of the linear program's margin from the bounds.
 CENTRAL_SLACK = 1e-3
-#: Nets of more rods than this solve their linear programs by HiGHS's interior point method
-#: (with crossover to a vertex) instead of its dual simplex: on 2,000-rod nets whose rods'
-#: buildable masses are a few micrograms wide, the simplex ran 46 s into "numerical
-#: difficulties" where the interior point said "infeasible" in 0.4 s; smaller nets keep the
-#: simplex they were designed with.
-LP_SIMPLEX_RODS = 300
-
-#: The interior point's iterations with presolve before the same program is solved without it
-#: (:func:`_linprog`). Presolved, a 2,112-rod grid's programs took 0.02-1.3 s where unpresolved
-#: they took 0.2-5 s, their vertices as exact or more (a margin's inequalities held to 6e-9
-#: where unpresolved they were 5.5e-6 off), and every one of its 16 infeasible programs said so
-#: either way; but two of its 31 ran on (47 s to the optimum, 40 s to "numerical
-#: difficulties") where unpresolved they took 1.2 and 1.3 s. Those reach this many iterations
-#: within a second (the others took 3-14): a count, not a time, so a design is the same on
-#: every machine.
-LP_PRESOLVED_ITERATIONS = 100
-
 #: :func:`node_mass_needs`: weights balance the forces where the least absolute imbalance (over
 #: the force scale) is at most this a row...
 WEIGHT_EXACT = 1e-9
@@ -225,8 +211,9 @@ def _bounds(mass_bounds, m: int) -> np.ndarray:
 
 
 def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *, node_masses=None, com=None,
-                      allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None,
-                      rotations=None, forces_only: bool = False, explain: bool = True) -> NetMassDesign:
+                      allow_compression: bool | np.ndarray = False, g: float = 9.81, node_com=None, pivots=None,
+                      rotations=None, forces_only: bool = False, explain: bool = True,
+                      stiff_hubs: bool = True) -> NetMassDesign:
     """Rod masses within bounds that make the target an equilibrium (see the module).
 
     Args:
@@ -234,13 +221,18 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
         edges, lengths, anchored, node_masses, com, g, node_com, pivots: as
             :func:`optimize.solve_net`; ``lengths`` must be the target's pivot distances.
         mass_bounds: (m, 2) [lo, hi] per rod (g), 0 < lo <= hi; or one (2,) pair for all.
-        allow_compression: let rods push (T < 0); by default every rod stays in tension.
+        allow_compression: let rods push (T < 0): True every rod, or an (m,) mask of the rods
+            that may (e.g. rigid rods whose hardware holds them either way); by default every
+            rod stays in tension.
         rotations: (n, 3, 3) node bodies' orientations at the target.
         forces_only: balance the nodes' forces only, not the node bodies' moments (for a
             caller that then turns the bodies' pivots to cancel the moments of these forces).
         explain: where no masses within bounds balance, solve the second linear program
             that says why (``beyond``, ``needs_compression``); False leaves ``beyond`` NaN
             (for a caller that iterates on the best fit and explains only the last).
+        stiff_hubs: with a mask of rods that may push, ask their hubs to resist turning
+            (:func:`optimize.net.pushing.hub_stiffness_rows`); False leaves it aside (for a
+            caller asking whether pushing alone would balance).
 
     Returns:
         NetMassDesign. E.g. masses of a net hung into its shape come back exactly when
@@ -257,19 +249,10 @@ def design_net_masses(target_positions, edges, lengths, mass_bounds, anchored, *
     if forces_only:
         keep = st.rows[:, 1] < 3
         st = NetStatics(st.A_T[keep], st.A_m[keep], st.b[keep], st.rows[keep], st.lengths)
-    return _design(net, st, bounds, allow_compression, explain)
-
-
-def _linprog(c: np.ndarray, m: int, **program):
-    """``scipy.optimize.linprog(c, **program)`` for a net of ``m`` rods: HiGHS's dual simplex
-    up to :data:`LP_SIMPLEX_RODS` rods, beyond that its interior point with presolve and, where
-    that does not end optimal or infeasible within :data:`LP_PRESOLVED_ITERATIONS`, without."""
-    if m <= LP_SIMPLEX_RODS:
-        return linprog(c, method="highs", **program)
-    lp = linprog(c, method="highs-ipm", options={"maxiter": LP_PRESOLVED_ITERATIONS}, **program)
-    if lp.status in (0, 2):
-        return lp
-    return linprog(c, method="highs-ipm", options={"presolve": False}, **program)
+    stiff = None
+    if stiff_hubs and np.ndim(allow_compression) and np.any(allow_compression):
+        stiff = hub_stiffness_rows(net, state, push_mask(allow_compression, m))
+    return _design(net, st, bounds, allow_compression, explain, stiff)
 
 
 def _fixed_solution(A: sp.csr_matrix, b: np.ndarray) -> np.ndarray | None:
@@ -297,8 +280,8 @@ def _scales(net: Net, st: NetStatics, bounds: np.ndarray):
     return m_ref, F, row
 
 
-def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: bool,
-            explain: bool = True) -> NetMassDesign:
+def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: bool | np.ndarray,
+            explain: bool = True, stiff=None) -> NetMassDesign:
     m = net.m
     m_ref, F, row = _scales(net, st, bounds)
     R = sp.diags(row)
@@ -307,15 +290,22 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     b = row * st.b
     lo_m, hi_m = bounds[:, 0] / m_ref, bounds[:, 1] / m_ref
     width = np.maximum(hi_m - lo_m, 1e-12 * hi_m)
-    lo_T = np.full(m, -np.inf if allow_compression else 0.0)
-    # LP: maximise t with m in [lo + t w, hi - t w] and T >= t (tension), t in [0, 1/2]
+    push = push_mask(allow_compression, m)
+    lo_T = np.where(push, -np.inf, 0.0)
+    # LP: maximise t with m in [lo + t w, hi - t w] and T >= t (the rods in tension), t in [0, 1/2]
     nv = 2 * m + 1
     c = np.zeros(nv)
     c[-1] = -1.0
-    A_ub, b_ub = _margin_rows(m, 0, lo_m, hi_m, width, allow_compression)
+    A_ub, b_ub = _margin_rows(m, 0, lo_m, hi_m, width, push)
+    if stiff is not None:  # (the hubs of rods that push kept from turning: their stiffness at least `need`)
+        G, need = stiff
+        A_ub = sp.vstack([A_ub, sp.hstack([-G, sp.csr_matrix((G.shape[0], m + 1))])]).tocsr()
+        b_ub = np.concatenate([b_ub, -need])
+    if np.ndim(allow_compression) and push.any():  # (a mask: the rods the hardware holds push no harder than they must)
+        lo_T = np.where(push, -least_push(A, b, m, lo_m, hi_m, push, stiff), 0.0)
     lp_args = dict(A_ub=A_ub, b_ub=b_ub,
                    A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(), b_eq=b,
-                   bounds=[(None, None)] * m + [(None, None)] * m + [(0.0, 0.5)])
+                   bounds=[(x, None) for x in np.where(push, lo_T, -np.inf)] + [(None, None)] * m + [(0.0, 0.5)])
     lp = _linprog(c, m, **lp_args)
     info = {"lp_status": int(lp.status)}
     x = _fixed_solution(A, b) if lp.status != 0 else None
@@ -325,13 +315,12 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
         # fixes the unknowns, its least squares solution has the last word
         tol_m = 1e-9 * width
         if float(np.max(np.abs(A @ x - b), initial=0.0)) <= LSQ_EXACT and np.all(x[m:] >= lo_m - tol_m) \
-                and np.all(x[m:] <= hi_m + tol_m) and (allow_compression or np.all(x[:m] >= -LSQ_EXACT)):
+                and np.all(x[m:] <= hi_m + tol_m) and np.all(x[:m] >= lo_T - LSQ_EXACT) and stiff_enough(stiff, x[:m]):
             info["lstsq"] = True
             x[m:] = np.clip(x[m:], lo_m, hi_m)
-            if not allow_compression:
-                x[:m] = np.maximum(x[:m], 0.0)
+            x[:m] = np.where(push, x[:m], np.maximum(x[:m], 0.0))
             t = float(min(np.min((x[m:] - lo_m) / width), np.min((hi_m - x[m:]) / width),
-                          np.inf if allow_compression else np.min(x[:m])))
+                          np.min(x[:m][~push], initial=np.inf)))
             return _finish(net, st, bounds, x[m:] * m_ref, x[:m] * F, True, t,
                            "least squares on the balance (the linear program failed numerically)", np.zeros(m),
                            np.zeros(0, int), info)
@@ -341,7 +330,7 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
         mid = 0.5 * (lo_m + hi_m)
         q = np.concatenate([np.full(m, 1e-6), 1.0 / width ** 2])
         cq = np.concatenate([np.zeros(m), -mid / width ** 2])
-        lo = np.concatenate([lo_T if allow_compression else np.full(m, s), lo_m + s * width])
+        lo = np.concatenate([np.where(push, lo_T, s), lo_m + s * width])
         hi = np.concatenate([np.full(m, np.inf), hi_m - s * width])
         qp = box_qp(q, cq, A, b, lo, hi)
         x = qp.x
@@ -349,7 +338,7 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
         resid_qp = float(np.max(np.abs(A @ x - b), initial=0.0))
         resid_lp = float(np.max(np.abs(A @ lp.x[:-1] - b), initial=0.0))
         if not qp.success or resid_qp > max(10 * resid_lp, 1e-12) or np.any(x[m:] < lo_m - 1e-12) \
-                or np.any(x[m:] > hi_m + 1e-12):
+                or np.any(x[m:] > hi_m + 1e-12) or not stiff_enough(stiff, x[:m]):
             x = lp.x[:-1]  # the LP's vertex: exact, less central
             method = "linear program (largest margin)"
         else:
@@ -368,7 +357,7 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     x = fit.x[:2 * m]
     info.update(fit_nit=fit.nit, fit_success=fit.success)
     if explain:
-        beyond, needs = _why(A, b, m, lo_m, hi_m, width, allow_compression)
+        beyond, needs = _why(A, b, m, lo_m, hi_m, width, push)
     else:
         beyond, needs = np.full(m, np.nan), np.zeros(0, int)
     masses, tensions = x[m:] * m_ref, x[:m] * F
@@ -378,8 +367,8 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
 
 
 def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, extra, *, node_masses=None,
-                    com=None, allow_compression: bool = False, g: float = 9.81, node_com=None, pivots=None,
-                    rotations=None, sag=None) -> tuple[np.ndarray, bool] | None:
+                    com=None, allow_compression: bool | np.ndarray = False, g: float = 9.81, node_com=None,
+                    pivots=None, rotations=None, sag=None) -> tuple[np.ndarray, bool] | None:
     """The least weight to add at the nodes (at each node's point, at most ``extra[k]``) for
     masses within their bounds to balance the nodes' forces at the target, keeping half the
     margin from the bounds (and from zero tension) that such weights allow at most; where no
@@ -431,8 +420,8 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
     A = sp.hstack([R @ st.A_T[force] * F, R @ st.A_m[force] * m_ref, Aw]).tocsr()[keep]
     b = (row * st.b[force])[keep]
     lo_m, hi_m = bounds[:, 0] / m_ref, bounds[:, 1] / m_ref
-    lo_T = -np.inf if allow_compression else 0.0
-    box = [(lo_T, None)] * m + list(zip(lo_m, hi_m)) + [(0.0, 1.0)] * nw
+    push = push_mask(allow_compression, m)
+    box = [(-np.inf if p else 0.0, None) for p in push] + list(zip(lo_m, hi_m)) + [(0.0, 1.0)] * nw
 
     def imbalance(cols: int) -> tuple[float, np.ndarray]:
         k = A.shape[0]
@@ -449,7 +438,7 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
         out[free] = np.clip(x[2 * m:], 0.0, 1.0) * extra[free]
         return out, False
     width = np.maximum(hi_m - lo_m, 1e-12 * hi_m)
-    A_ub, b_ub = _margin_rows(m, nw, lo_m, hi_m, width, allow_compression)
+    A_ub, b_ub = _margin_rows(m, nw, lo_m, hi_m, width, push)
     A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr()
     bnds = [(None, None)] * (2 * m) + [(0.0, 1.0)] * nw + [(0.0, 0.5)]
     c = np.zeros(2 * m + nw + 1)
@@ -466,26 +455,29 @@ def node_mass_needs(target_positions, edges, lengths, mass_bounds, anchored, ext
     return (out, True) if np.any(out > 0) else None
 
 
-def _margin_rows(m: int, nw: int, lo_m, hi_m, width, allow_compression: bool) -> tuple[sp.csr_matrix, np.ndarray]:
+def _margin_rows(m: int, nw: int, lo_m, hi_m, width, push: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
     """The margin linear program's inequalities over (T, m, ``nw`` more unknowns, t): every mass
-    ``t`` widths inside its bounds, and every tension at least ``t`` (unless rods may push)."""
+    ``t`` widths inside its bounds, and the tension of every rod that may not push (``push``,
+    (m,) bool) at least ``t``."""
     I = sp.identity(m, format="csr")
     Z = sp.csr_matrix((m, m))
     more = [sp.csr_matrix((m, nw))] if nw else []
     wcol = sp.csr_matrix(width[:, None])
     rows_ub = [sp.hstack([Z, -I, *more, wcol]), sp.hstack([Z, I, *more, wcol])]
     b_ub = [-lo_m, hi_m]
-    if not allow_compression:
-        rows_ub.append(sp.hstack([-I, Z, *more, sp.csr_matrix(np.ones((m, 1)))]))
-        b_ub.append(np.zeros(m))
+    pull = np.flatnonzero(~push)
+    if pull.size:
+        rows_ub.append(sp.hstack([-I[pull], Z[pull], *(x[pull] for x in more), sp.csr_matrix(np.ones((pull.size, 1)))]))
+        b_ub.append(np.zeros(pull.size))
     return sp.vstack(rows_ub).tocsr(), np.concatenate(b_ub)
 
 
-def _why(A, b, m, lo_m, hi_m, width, allow_compression):
-    """The least total excursion beyond the mass bounds (and into compression) that balances
-    the target exactly: (beyond per rod, relative to its width; rods that must push)."""
+def _why(A, b, m, lo_m, hi_m, width, push):
+    """The least total excursion beyond the mass bounds (and into compression, for the rods that
+    may not push: ``push`` False) that balances the target exactly: (beyond per rod, relative to
+    its width; rods that must push)."""
     # unknowns: T (m), masses (m), p >= 0 over hi, r >= 0 under lo, k >= 0 compression
-    c = np.concatenate([np.zeros(2 * m), np.ones(2 * m), np.full(m, 0.0 if allow_compression else 1.0)])
+    c = np.concatenate([np.zeros(2 * m), np.ones(2 * m), np.where(push, 0.0, 1.0)])
     I = sp.identity(m, format="csr")
     Z = sp.csr_matrix((m, m))
     W = sp.diags(width)
@@ -502,7 +494,7 @@ def _why(A, b, m, lo_m, hi_m, width, allow_compression):
         return np.full(m, np.nan), np.zeros(0, int)
     p, r, k = lp.x[2 * m:3 * m], lp.x[3 * m:4 * m], lp.x[4 * m:]
     beyond = np.where(p > 1e-9, p, np.where(r > 1e-9, -r, 0.0))
-    needs = np.flatnonzero(k > 1e-9) if not allow_compression else np.zeros(0, int)
+    needs = np.flatnonzero((k > 1e-9) & ~push)
     return beyond, needs
 
 
@@ -518,8 +510,10 @@ def _finish(net, st, bounds, masses, tensions, exact, margin, method, beyond, ne
     slack = np.flatnonzero(np.abs(tensions) <= 1e-9 * scale)
     compressed = np.flatnonzero(tensions < -1e-9 * scale)
     if exact:
+        rest = (f"{compressed.size} rod(s) pushing where they may, the others in tension" if compressed.size else
+                "every rod in tension")
         message = (f"Exact: the target balances with every mass within its bounds (margin {margin:.3g} of "
-                   "the bounds' width) and every rod in tension." if margin > 0 else
+                   f"the bounds' width) and {rest}." if margin > 0 else
                    "Exact, but only with masses on their bounds or rods at zero tension (no margin).")
     else:
         parts = []

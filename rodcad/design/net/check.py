@@ -21,15 +21,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from optimize import NetDesign, design_net, net_statics
+from optimize import NetDesign, design_net
 from rodcad.catalog.net.node import socket_centres
 from rodcad.design.fit import DEFAULT_TOLERANCE
 from rodcad.design.net.cones import widest_swing_limits
 from rodcad.design.net.hubs import buildable_bounds, orient_sockets
-from rodcad.design.net.plan import NetPlan, replan
+from rodcad.design.net.imbalance import imbalance
+from rodcad.design.net.plan import NetPlan
+from rodcad.design.net.pushing import held_rods
 
 __all__ = ["BUCKLING_SAFETY", "FULL_STARTS_NODES", "NET_STARTS", "NetCheck", "SLACK", "design_net_plan", "net_starts",
-           "settle_com", "with_multistart"]
+           "rank", "settle_com", "with_multistart"]
 
 
 #: After the rods' bounds are narrowed to buildable masses, the sockets are turned again
@@ -165,7 +167,8 @@ class NetCheck:
     def unheld(self) -> np.ndarray:
         """Rods that push where the hardware does not hold them (indices): with ``net.compression``
         unset, a rod may push if it is one rigid rod between two hubs (their ball sockets hold its
-        balls either way; a ball joint between two pushing rods folds) and pushes less than
+        balls either way; a ball joint between two pushing rods folds:
+        :func:`rodcad.design.net.pushing.held_rods`) and pushes less than
         1 / :data:`BUCKLING_SAFETY` of its buckling load
         (:meth:`rodcad.catalog.net.node.NodeHardware.buckling_load`); true: every rod may push;
         false, or point nodes: none may."""
@@ -176,9 +179,9 @@ class NetCheck:
         if t.compression is False or not hw.is_hub:
             return c
         T = self.equilibrium.tensions
-        at_joint = t.joint_mask[t.edges[c]].any(axis=1)
+        loose = ~held_rods(self.plan)[c]
         load = np.array([hw.buckling_load(float(L)) for L in self.plan.lengths[c]])
-        return c[at_joint | (-T[c] * BUCKLING_SAFETY > load)]
+        return c[loose | (-T[c] * BUCKLING_SAFETY > load)]
 
     @property
     def in_tension(self) -> bool:
@@ -317,6 +320,12 @@ def design_net_plan(plan: NetPlan, *, g: float = 9.81, seed: int = 0, tolerance:
         return _design_plan(plan, g=g, seed=seed, tolerance=tolerance, n_starts=n_starts, note=stage, fall=fall)
 
 
+def rank(check: NetCheck) -> tuple:
+    """Orders designs, better greater: within the tolerance, then a stable equilibrium, then the nearer fit."""
+    eq = check.equilibrium
+    return (check.ok, bool(eq.success and eq.stable), -check.rel_size)
+
+
 def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None, n_starts: int | None,
                  note, fall: bool) -> NetCheck:
     t0 = time.perf_counter()
@@ -342,7 +351,7 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
         plan, com_rounds = settle_com(plan, g=g)
     fn, fp, fit_ends = fit_of(plan)
     kw = dict(node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-              allow_compression=t.any_may_push, g=g, com=plan.statics_com, fit_nodes=fn, fit_points=fp,
+              allow_compression=plan.may_push, g=g, com=plan.statics_com, fit_nodes=fn, fit_points=fp,
               fit_ends=fit_ends)
     # a big net whose statics are far from balancing: the refinement gains about 1 % at seconds
     # a step (dense derivatives and a linear program on hundreds of masses), so the statics' best fit
@@ -415,8 +424,13 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     notes = [design.statics.message]
     why = ""
     if not design.statics.exact and np.all(~np.isfinite(design.statics.beyond)) and design.statics.residual > 1e-4:
-        why = _imbalance(plan, design, g, lines)
+        why = imbalance(plan, design, g, lines)
         notes.append(why)
+    if plan.pushing is not None:
+        notes.append(f"No masses balance this target with every rod in tension (a bowl hung from its rim pushes along "
+                     f"its hoops below the rim): the {int(plan.pushing.sum())} rigid rod(s) between hubs, whose ball "
+                     "sockets hold them either way, may push (the check holds each to a fifth of its buckling "
+                     f"load); {_pushing(eq)} of them push in the design.")
     if snapped:
         notes.append(f"{snapped} rod(s) would have weighed what neither their steel balls nor a cavity make (a short "
                      "rod has little room beside its balls): their mass bounds were narrowed to the nearest range "
@@ -445,6 +459,14 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
     return NetCheck(plan, design, masses, err, err / size if size > 0 else float("inf"), node_err, tol, sockets,
                     swing, time.perf_counter() - t0, notes, why, planned, solved_with=solved_with,
                     others_at=others_at)
+
+
+def _pushing(eq) -> int:
+    """How many rods push in the equilibrium ``eq`` (beyond :data:`SLACK` of its largest force)."""
+    T = eq.tensions
+    if not eq.success or not np.all(np.isfinite(T)):
+        return 0
+    return int(np.count_nonzero(T < -SLACK * float(np.max(np.abs(T), initial=0.0))))
 
 
 def fit_of(plan: NetPlan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -514,60 +536,10 @@ def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> t
     for used in range(1, rounds + 1):
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
-                               allow_compression=t.any_may_push, g=g, explain=False)
+                               allow_compression=plan.may_push, g=g, explain=False)
         new = plan.rod_com(st.masses)
         change = float(np.max(np.abs(new - com)))
         com = new
         if change <= COM_TOL * t.size:
             break
     return dataclasses.replace(plan, com=com), used
-
-
-def _imbalance(plan: NetPlan, design: NetDesign, g: float, lines: np.ndarray) -> str:
-    """Where the statics' best fit leaves the largest imbalance, when no masses at all (any
-    positive mass, rods pushing or not) balance the target; with hubs whose rods' pulls, their
-    sockets on the lines between the node points (``lines``), can hold every node, what fails
-    is the hubs' balance about their centres, and the text says so."""
-    t = plan.target
-    st = net_statics(t.positions, t.edges, plan.lengths, t.anchored, node_masses=plan.node_masses,
-                     node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com, g=g)
-    res = np.abs(st.residual(design.statics.tensions, design.statics.masses))
-    force = st.rows[:, 1] < 3
-    if plan.hardware.is_hub and _forces_balance(replan(plan, lines), g):
-        # the rods' pulls can hold every node: what fails is every hub balancing about its centre
-        worst = _worst(st.rows[~force, 0], res[~force], t.n)
-        return (f"No masses balance this target with the hubs' sockets as turned: the rods' pulls can hold every "
-                f"node, but no turn of the sockets was found that lets every hub balance about its centre as well "
-                f"within the rods' mass ranges (the largest moment imbalance is at node(s) {worst}). A target "
-                "nearer the shape such hubs hang in, or point nodes (the catalog's node kind: point), would "
-                "reach it.")
-    worst = _worst(st.rows[force, 0], res[force], t.n)
-    text = (f"No masses at all balance this target: some nodes' rods cannot pull them in every direction the "
-            f"load needs (the largest imbalance is at node(s) {worst}).")
-    if t.kind == "surface" and t.anchored_as in ("corners", "ends"):
-        text += (" A grid drawn over a rectangle and hung from its corners cannot hang in it: its straight border "
-                 "has nothing to pull it outward (a hanging net's border curves inward in plan); anchor the "
-                 "border (anchored: boundary), or give a target whose border curves.")
-    else:
-        text += " Move those nodes toward where their rods and the weights can hold them, or anchor them."
-    return text
-
-
-def _worst(nodes: np.ndarray, res: np.ndarray, n: int) -> list[int]:
-    """Up to 8 nodes with the largest residual, largest first."""
-    per_node = np.zeros(n)
-    np.maximum.at(per_node, nodes, res)
-    order = np.argsort(-per_node, kind="stable")[:8]
-    return [int(k) for k in order if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
-
-
-def _forces_balance(plan: NetPlan, g: float) -> bool:
-    """Whether some positive masses (within the bounds or beyond them), every rod in tension
-    unless the target allows compression, balance the nodes' forces at the target, leaving the hubs' moments aside."""
-    from optimize import design_net_masses
-
-    t = plan.target
-    fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
-                           node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
-                           allow_compression=t.any_may_push, g=g, forces_only=True)
-    return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

@@ -30,12 +30,14 @@ import functools
 import numpy as np
 
 from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
+from rodcad.design.net.check import rank as _rank
 from rodcad.design.net.cones import widen_cones
 from rodcad.design.net.inverted import lighten_inverted
 from rodcad.design.net.joints import SagLimit
 from rodcad.design.net.spacing import grow_tight_hubs
 from rodcad.design.net.weights import weigh_hubs
 from rodcad.design.net.plan import plan_net
+from rodcad.design.net.pushing import with_pushing
 from rodcad.design.net.target import NetTarget
 from rodcad.errors import DesignLimit
 
@@ -67,8 +69,28 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     # each way of building the net is solved from its target alone; the multi-start looks for
     # other stable shapes of the one kept (with_multistart: the same as if each had run it)
     design = functools.partial(design_net_plan, g=g, seed=seed, tolerance=tolerance, n_starts=1, note=note)
-    return with_multistart(_designed(target, catalog, design, g=g, tolerance=tolerance), n_starts, seed=seed,
-                           note=note)
+    check = _pushed(_designed(target, catalog, design, g=g, tolerance=tolerance), design, g)
+    return with_multistart(check, n_starts, seed=seed, note=note)
+
+
+def _pushed(check: NetCheck, design, g: float) -> NetCheck:
+    """``check``, or where no masses balance its net exactly with every rod in tension, the net
+    designed again with the rods its hubs hold let push (:mod:`rodcad.design.net.pushing`),
+    where that balances its nodes and hangs better (:func:`rank`). Last, on the plan the steps
+    above kept: a design in tension is kept wherever it hangs as well."""
+    planned = check.planned
+    if planned is None or (check.ok and check.design.statics.exact):
+        return check
+    pushed = with_pushing(planned, g)
+    if pushed.pushing is None:
+        return check
+    other = design(pushed)
+    if _rank(other) <= _rank(check):
+        return check
+    other.carry(check).chose(f"No masses balance the net exactly with every rod in tension (it hung "
+                             f"{100 * check.rel_size:.3g} % of its size off its target): the rigid rods between its "
+                             "hubs push where they must, each hub they push kept from turning.")
+    return other
 
 
 def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float | None) -> NetCheck:
@@ -247,12 +269,6 @@ def _in_line(t) -> np.ndarray:
             cos = float(u @ v) / float(np.linalg.norm(u) * np.linalg.norm(v))
             out[k] = cos < -np.cos(np.radians(1.0))
     return out
-
-
-def _rank(check: NetCheck) -> tuple:
-    """Better first: within the tolerance, then a stable equilibrium, then the nearer fit."""
-    eq = check.equilibrium
-    return (check.ok, bool(eq.success and eq.stable), -check.rel_size)
 
 
 def _weak(check: NetCheck) -> np.ndarray:

@@ -78,7 +78,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     for rounds in range(1, ORIENT_ROUNDS + 1):
         full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=t.any_may_push, g=g, explain=False)
+                                 com=plan.statics_com, allow_compression=plan.may_push, g=g, explain=False)
         if full.exact:
             return plan, rounds, full.residual
         if full.residual <= ORIENT_FINE:  # (this close, the joint solve below or the refinement finishes it)
@@ -86,7 +86,7 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
             break
         st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
                                node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                               com=plan.statics_com, allow_compression=t.any_may_push, g=g, forces_only=True,
+                               com=plan.statics_com, allow_compression=plan.may_push, g=g, forces_only=True,
                                explain=False)
         if full.residual < 0.9 * best_res:
             best, best_res, stall = plan, full.residual, 0
@@ -171,7 +171,7 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     def statics(p):
         return design_net_masses(t.positions, t.edges, p.lengths, p.bounds, t.anchored, node_masses=p.node_masses,
                                  node_com=p.node_com, pivots=p.pivots, com=p.statics_com,
-                                 allow_compression=t.any_may_push, g=g, explain=False)
+                                 allow_compression=plan.may_push, g=g, explain=False)
 
     st = statics(plan)
     if st.exact:
@@ -199,7 +199,7 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
             sb = balance_sockets(t.positions, t.edges, lines, cur.bounds, t.anchored, node_masses=cur.node_masses,
                                  start=start, max_turn_deg=turns, bound_slopes=slopes,
                                  socket_com=socket_com, masses0=st.masses, tensions0=st.tensions, com=cur.statics_com,
-                                 allow_compression=t.any_may_push, g=g,
+                                 allow_compression=plan.may_push, g=g,
                                  max_nfev=int(np.clip(JOINT_NFEV / t.m, 20, 200)))
             if not socket_clashes(dataclasses.replace(cur, pivots=sb.pivots)):
                 break
@@ -252,7 +252,7 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
     def statics(bounds):
         return design_net_masses(t.positions, t.edges, plan.lengths, bounds, t.anchored,
                                  node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=t.any_may_push, g=g, explain=False)
+                                 com=plan.statics_com, allow_compression=plan.may_push, g=g, explain=False)
 
     st = statics(plan.bounds)
     segs = [mass_segments(hw, float(L), int(k)) for L, k in zip(plan.fill_lengths, plan.rod_pieces)]

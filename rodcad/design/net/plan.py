@@ -70,6 +70,9 @@ class NetPlan:
             1: one piece), or None: every rod one piece.
         node_cone: (n,) each hub's socket cone (deg) within the catalog's ``cone_range``
             (:mod:`rodcad.design.net.cones`), or None: the catalog's ``cone_deg`` at every hub.
+        pushing: (m,) the rods the design lets push (rigid rods whose hubs hold them either way,
+            where no masses balance the net in tension: :mod:`rodcad.design.net.pushing`), or
+            None: as the target says (:attr:`may_push`).
     """
 
     target: NetTarget
@@ -92,6 +95,13 @@ class NetPlan:
     spread: list = field(default_factory=list)
     pieces: np.ndarray | None = None
     node_cone: np.ndarray | None = None
+    pushing: np.ndarray | None = None
+
+    @property
+    def may_push(self) -> bool | np.ndarray:
+        """The rods the designs let push: :attr:`pushing` where set, else every rod with
+        ``compression: true`` and none otherwise (the statics' ``allow_compression``)."""
+        return self.target.any_may_push if self.pushing is None else self.pushing
 
     def hub(self, k: int, pivot_radius: float | None = None) -> NodeHardware:
         """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`, or

@@ -59,7 +59,6 @@ def weighed_pivots(planned, g: float) -> np.ndarray | None:
     from optimize import node_mass_needs
 
     from rodcad.design.net.plan import node_directions
-    from rodcad.design.net.pushing import with_pushing
 
     t = planned.target
     rp = planned.node_pivot
@@ -74,8 +73,7 @@ def weighed_pivots(planned, g: float) -> np.ndarray | None:
         return None
     need = node_mass_needs(t.positions, t.edges, planned.lengths, planned.bounds, t.anchored, extra,
                            node_masses=planned.node_masses, node_com=planned.node_com, pivots=planned.pivots,
-                           com=planned.statics_com, allow_compression=with_pushing(planned, g).may_push, g=g,
-                           sag=t.joint_mask)
+                           com=planned.statics_com, allow_compression=t.any_may_push, g=g, sag=t.joint_mask)
     if need is None:
         return None
     need = need[0]

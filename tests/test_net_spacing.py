@@ -301,3 +301,34 @@ def test_a_hub_whose_rod_turns_too_far_for_any_cone_is_made_larger(designed):
     assert np.all(np.delete(p.node_pivot, k) == np.delete(one.node_pivot, k))
     # built: kept, with the reason; not built: the check as it was
     assert (out.ok and any("balances with its sockets turned less" in n for n in out.notes)) or out is over
+
+
+def test_a_hub_made_larger_for_a_rod_that_still_turns_too_far_gets_wider_cones_too(designed):
+    """Where no cone of the catalog holds a rod that turns too far, its hub is made larger; where
+    the larger hub's rods still turn a little too far, its cones are widened too (a larger hub
+    has room for wider cones between its sockets) before the try is given up."""
+    from rodcad.design.net.check import design_net_plan
+    from rodcad.design.net.cones import widen_cones
+
+    check = designed
+    k, e, c, swing = _turned_too_far(check)
+    over = dataclasses.replace(check, swing_deg=swing)
+    nominal = check.planned.hardware.cone_deg
+    tried = []
+
+    def design(p):  # (only the hub larger and its cones wider holds the rod)
+        tried.append(p)
+        out = design_net_plan(p)
+        grown = p.node_pivot[k] > check.planned.node_pivot[k] + 1e-9
+        wide = p.node_cone is not None and p.node_cone[k] > nominal + 1e-9
+        if grown and wide:
+            return out
+        s = out.swing_deg.copy()
+        s[e, c] = out.plan.end_swing_limits[e, c] + (1.0 if grown else 3.0)
+        return dataclasses.replace(out, swing_deg=s)
+
+    out = widen_cones(over, design)
+    assert out.ok, out.limit()
+    assert out.plan.node_pivot[k] > check.planned.node_pivot[k] and out.plan.node_cone[k] > nominal
+    assert any("balances with its sockets turned less" in n for n in out.notes)
+    assert len(tried) <= 2 + 2 * 3  # (the cones' rounds, the larger hub, its cones' rounds)

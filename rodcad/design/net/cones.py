@@ -17,7 +17,9 @@ the net is designed again with the new hubs, round after round (:data:`CONE_ROUN
 some rod still turns too far, each round widening from the last. Where no cone of the catalog
 builds (or it has one), the hubs whose rods turn too far are made larger within the family
 instead (:func:`rodcad.design.net.spacing.grown_hubs`): a larger hub balances with its sockets
-turned less, so its rods meet them nearer their axes.
+turned less, so its rods meet them nearer their axes; where they still turn further than its
+sockets let them, but less far, the larger hub's cones are widened too (it has room for wider
+ones between its sockets).
 """
 
 from __future__ import annotations
@@ -107,9 +109,10 @@ def _needed_cones(check, planned: NetPlan) -> np.ndarray | None:
 
 def _grown_for_swing(check, design: Callable[[NetPlan], object]):
     """The design with the hubs whose rods turn too far made larger within the catalog's family
-    (:func:`rodcad.design.net.spacing.grown_hubs`; their cones as planned), where that builds: a
-    larger hub balances with its sockets turned less, so its rods meet them nearer their axes.
-    None where the family has one size or that design does not build either."""
+    (:func:`rodcad.design.net.spacing.grown_hubs`; their cones as planned, then widened where the
+    rods turn less far but still too far), where that builds: a larger hub balances with its
+    sockets turned less, so its rods meet them nearer their axes. None where the family has one
+    size or that design does not build either."""
     from rodcad.design.net.plan import resized
     from rodcad.design.net.spacing import grown_hubs
 
@@ -121,6 +124,8 @@ def _grown_for_swing(check, design: Callable[[NetPlan], object]):
     if grown is None:
         return None
     cur = design(resized(planned, grown))
+    if not cur.ok and _swing_only(cur) and _excess(cur) < _excess(check):
+        cur = widen_cones(cur, design, grow=False)  # (nearer: the larger hubs' cones widened too)
     if not cur.ok:
         return None
     cur.carry(check).chose(f"{hubs.size} hub(s) are larger than their rods' angles need: a larger hub balances with "
@@ -129,7 +134,7 @@ def _grown_for_swing(check, design: Callable[[NetPlan], object]):
     return cur
 
 
-def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_ROUNDS):
+def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_ROUNDS, grow: bool = True):
     """The design with wider socket cones at the hubs whose rods turn too far (module
     docstring); where no cone of the catalog lets them (or it has one), with those hubs larger
     within the family (:func:`_grown_for_swing`); else ``check`` itself where the design fails
@@ -140,12 +145,13 @@ def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_R
         design: designs a plan (:func:`rodcad.design.net.check.design_net_plan` with the
             design's settings).
         rounds: rounds at most.
+        grow: where no cone lets them, try the hubs larger (False: cones only).
     """
     planned = check.planned
     if planned is None or not planned.hardware.is_hub:
         return check
     if planned.hardware.cone_limits[1] <= planned.hardware.cone_deg:  # (one cone: larger hubs, if any)
-        return _grown_for_swing(check, design) or check
+        return (_grown_for_swing(check, design) if grow else None) or check
     best, cur = check, check
     for _ in range(rounds):
         if not _swing_only(cur):
@@ -160,7 +166,7 @@ def widen_cones(check, design: Callable[[NetPlan], object], rounds: int = CONE_R
             break
         if _swing_only(cur) and _excess(cur) < _excess(best):
             best = cur
-    if not best.ok:
+    if not best.ok and grow:
         grown = _grown_for_swing(check, design)
         if grown is not None:
             return grown

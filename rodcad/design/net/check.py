@@ -427,10 +427,10 @@ def _design_plan(plan: NetPlan, *, g: float, seed: int, tolerance: float | None,
         why = imbalance(plan, design, g, lines)
         notes.append(why)
     if plan.pushing is not None:
-        notes.append(f"No masses balance this target with every rod in tension (a bowl hung from its rim pushes along "
-                     f"its hoops below the rim): the {int(plan.pushing.sum())} rigid rod(s) between hubs, whose ball "
-                     "sockets hold them either way, may push (the check holds each to a fifth of its buckling "
-                     f"load); {_pushing(eq)} of them push in the design.")
+        notes.append(f"No masses balance this target with every rod in tension (some rods must push, as a bowl's "
+                     f"hoops do below the rim it hangs from): the {int(plan.pushing.sum())} rigid rod(s) between hubs, "
+                     "whose ball sockets hold them either way, may push (the check holds each to a fifth of its "
+                     f"buckling load); {_pushing(eq)} of them push in the design.")
     if snapped:
         notes.append(f"{snapped} rod(s) would have weighed what neither their steel balls nor a cavity make (a short "
                      "rod has little room beside its balls): their mass bounds were narrowed to the nearest range "

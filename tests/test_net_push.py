@@ -130,6 +130,11 @@ def test_a_bowl_hung_from_its_rim_pushes_along_its_hoops_where_its_hubs_hold_the
     for e in check.compressed:
         assert -T[e] * BUCKLING_SAFETY <= hw.buckling_load(float(plan.lengths[e]))
     assert any("may push" in n for n in check.notes)
+    from rodcad.outputs.design_json import print_profile
+    from rodcad.outputs.net.design_json import net_json
+
+    block = net_json(check, name="bowl", seed=0, catalog=d.catalog, print_profile=print_profile(d.catalog))["net"]
+    assert block["pushing_designed"] == list(range(t.m)) and set(block["compressed"]) == set(check.compressed.tolist())
     # MuJoCo, released from another shape of the same rods, rests where rodcad's equilibrium is
     err, moved = settle_from_other_masses(check, 7)
     assert err < 1e-5 * t.size and moved > 20 * err

@@ -217,6 +217,9 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "compression": ("allowed" if t.compression else "not allowed" if t.compression is False or not hw.is_hub
                             else "where the hardware holds it"),
             "pushing_unheld": [int(x) for x in check.unheld],
+            # the rods the design let push where no masses balanced the net in tension (rodcad.design.net.pushing)
+            "pushing_designed": ([] if check.plan.pushing is None
+                                 else [int(x) for x in np.flatnonzero(check.plan.pushing)]),
             "rods_left_out": int(t.dropped),
             "statics": {"exact": bool(st.exact), "residual": _f(st.residual), "margin": _f(st.margin),
                         "message": st.message, "refined": bool(check.design.refined)},

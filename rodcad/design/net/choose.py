@@ -87,9 +87,9 @@ def _pushed(check: NetCheck, design, g: float) -> NetCheck:
     other = design(pushed)
     if _rank(other) <= _rank(check):
         return check
-    other.carry(check).chose(f"No masses balance the net exactly with every rod in tension (it hung "
-                             f"{100 * check.rel_size:.3g} % of its size off its target): the rigid rods between its "
-                             "hubs push where they must, each hub they push kept from turning.")
+    other.carry(check).chose(f"Designed with every rod in tension the net hung {100 * check.rel_size:.3g} % of its "
+                             "size off its target; it was designed again with the rigid rods between its hubs let "
+                             "push where they must, each hub they push kept from turning, and hangs nearer.")
     return other
 
 

@@ -109,8 +109,8 @@ def least_push(A, b, m, lo_m, hi_m, push, stiff=None) -> float:
     c = np.zeros(2 * m + 1)
     c[-1] = 1.0
     bnds = [(None, None) if q else (0.0, None) for q in push] + list(zip(lo_m, hi_m)) + [(0.0, None)]
-    lp = net_linprog(c, m, A_ub=A_ub, b_ub=b_ub, A_eq=sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr(),
-                  b_eq=b, bounds=bnds)
+    A_eq = sp.hstack([A, sp.csr_matrix((A.shape[0], 1))]).tocsr()
+    lp = net_linprog(c, m, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b, bounds=bnds)
     if lp.status != 0:
         return np.inf
     return float(lp.x[-1]) * (1 + PUSH_ROOM) + 1e-9

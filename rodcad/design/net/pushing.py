@@ -9,10 +9,12 @@ piece, or pieces spliced on dowel pins) is held by its ball sockets either way a
 rod at a ball joint between two rods (a planner's joint, or a drawn node of two rods) may not
 (two pushing rods fold there), and point nodes hold none.
 
-The designs keep every rod in tension where some masses balance the nodes' forces so; only
-where none do are the held rods let push (:func:`with_pushing`), and the check then judges
-each pushing rod against its buckling load and the net's stability
-(:attr:`rodcad.design.net.check.NetCheck.unheld`, the exact equilibrium's).
+The planner designs every net with its rods in tension; last, where the net it keeps does not
+balance exactly so, and its nodes' forces balance only with the held rods pushing
+(:func:`with_pushing`), the net is designed again with them let push and kept where it hangs
+better (:func:`rodcad.design.net.choose.design_drawn_net`). The check then judges each pushing
+rod against its buckling load, and the net's stability (the exact equilibrium's curvatures;
+:attr:`rodcad.design.net.check.NetCheck.unheld`).
 """
 
 from __future__ import annotations

@@ -183,3 +183,22 @@ def test_rods_that_may_push_are_a_mask_the_others_stay_in_tension():
     assert push_mask(np.array([1, 0, 1]), 3).tolist() == [True, False, True]
     with pytest.raises(ValueError, match="mask"):
         push_mask(np.ones(4, bool), 3)
+
+
+def test_the_rods_a_hub_holds_are_not_at_a_ball_joint_between_two_rods_nor_on_point_nodes():
+    from types import SimpleNamespace
+
+    from rodcad.design.net.pushing import held_rods
+
+    # a triangle 0-1-2 of free hubs, hub 3 anchored; node 4 free with two rods (a ball joint
+    # between two rods: they fold if both push); node 5 a planner's two-rod joint
+    edges = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 4], [4, 3], [2, 5], [5, 3]])
+    joint = np.zeros(6, bool)
+    joint[5] = True
+    anchored = np.zeros(6, bool)
+    anchored[3] = True
+    t = SimpleNamespace(edges=edges, n=6, m=len(edges), joint_mask=joint, anchored_mask=anchored)
+    hubs = SimpleNamespace(target=t, hardware=SimpleNamespace(is_hub=True))
+    assert held_rods(hubs).tolist() == [True] * 5 + [False] * 4
+    points = SimpleNamespace(target=t, hardware=SimpleNamespace(is_hub=False))
+    assert not held_rods(points).any()

@@ -8,6 +8,7 @@ import numpy as np
 
 from optimize import NetDesign, net_statics
 from rodcad.design.net.plan import NetPlan, replan
+from rodcad.design.net.pushing import held_rods
 
 __all__ = ["imbalance"]
 
@@ -51,18 +52,10 @@ def _pushing_would(plan: NetPlan, g: float) -> bool:
     """Whether the rods the hubs hold (:func:`rodcad.design.net.pushing.held_rods`), let push as
     hard as it takes with their hubs' turning left aside, balance the nodes' forces where the
     design kept them in tension (``compression`` unset)."""
-    from optimize import design_net_masses
-
-    from rodcad.design.net.pushing import held_rods
-
-    t = plan.target
     held = held_rods(plan)
-    if t.compression is not None or plan.pushing is not None or not held.any():
+    if plan.target.compression is not None or plan.pushing is not None or not held.any():
         return False
-    fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
-                           node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com, allow_compression=held,
-                           g=g, forces_only=True, stiff_hubs=False)
-    return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))
+    return _forces_balance(plan, g, push=held, stiff_hubs=False)
 
 
 def _worst(nodes: np.ndarray, res: np.ndarray, n: int) -> list[int]:
@@ -73,13 +66,16 @@ def _worst(nodes: np.ndarray, res: np.ndarray, n: int) -> list[int]:
     return [int(k) for k in order if per_node[k] > 1e-6 * max(per_node.max(), 1e-300)]
 
 
-def _forces_balance(plan: NetPlan, g: float) -> bool:
-    """Whether some positive masses (within the bounds or beyond them), every rod in tension
-    unless the target allows compression, balance the nodes' forces at the target, leaving the hubs' moments aside."""
+def _forces_balance(plan: NetPlan, g: float, push=None, stiff_hubs: bool = True) -> bool:
+    """Whether some positive masses (within the bounds or beyond them), every rod in tension but
+    those that may push (``push``: a mask, or None: the plan's :attr:`~rodcad.design.net.plan.
+    NetPlan.may_push`), balance the nodes' forces at the target, leaving the hubs' moments aside
+    (and, ``stiff_hubs`` False, how a pushed hub turns: :func:`optimize.design_net_masses`)."""
     from optimize import design_net_masses
 
     t = plan.target
     fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
                            node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
-                           allow_compression=plan.may_push, g=g, forces_only=True)
+                           allow_compression=plan.may_push if push is None else push, g=g, forces_only=True,
+                           stiff_hubs=stiff_hubs)
     return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

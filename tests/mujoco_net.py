@@ -78,8 +78,11 @@ def _frame_of_rod(p0, p1, roll_y=None):
 class _Tree:
     """The spanning tree of bodies and the loop closures (world frame poses)."""
 
-    def __init__(self, x, R, edges, anchored, pivots, body_nodes, rod_y=None):
+    def __init__(self, x, R, edges, anchored, pivots, body_nodes, rod_y=None, welded=()):
         n, m = x.shape[0], edges.shape[0]
+        welded = set((int(e), int(k)) for e, k in welded)
+        self.fixed = set()      # bodies welded to their parent (no joint)
+        self.welds = []         # (rod body, the body its end is welded to) by an equality
         self.x, self.R, self.edges = x, R, edges
         self.P = np.stack([x[edges[:, k]] + np.einsum("mab,mb->ma", R[edges[:, k]], pivots[:, k]) for k in (0, 1)], 1)
         self.rod_R = [_frame_of_rod(self.P[e, 0], self.P[e, 1], None if rod_y is None else rod_y[e]) for e in range(m)]
@@ -121,13 +124,19 @@ class _Tree:
                 par = carrier(node)
                 name = f"rod{e}"
                 self._add(name, par, self.P[e, k])
+                if (e, k) in welded:
+                    self.fixed.add(name)
                 other = int(edges[e, 1 - k])
                 end_site = f"s_{name}_{1 - k}"
                 self.sites.setdefault(name, []).extend([(f"s_{name}_0", self.P[e, 0]), (f"s_{name}_1", self.P[e, 1])])
                 if other in located:
                     self.closures.append((end_site, pivot_site(other, e, 1 - k)))
+                    if (e, 1 - k) in welded:
+                        self.welds.append((name, carrier(other)))
                 elif other in body_nodes:
                     self._add(f"node{other}", name, self.P[e, 1 - k])
+                    if (e, 1 - k) in welded:
+                        self.fixed.add(f"node{other}")
                     located.add(other)
                     queue.append(other)
                 else:
@@ -174,7 +183,8 @@ def build_net_mjcf(tree: _Tree, masses, com, node_masses, node_com, g, inertia, 
             rel = Rp.T @ (p - pp)
             Rrel = Rp.T @ Rw
             out.append(f'{indent}<body name="{name}" pos="{_v(rel)}" quat="{_v(_quat(Rrel))}">')
-            out.append(f'{indent}  <joint name="j_{name}" type="ball" pos="{_v(Rw.T @ (point - p))}"/>')
+            if name not in tree.fixed:  # (a rod end glued in its socket: welded to its parent)
+                out.append(f'{indent}  <joint name="j_{name}" type="ball" pos="{_v(Rw.T @ (point - p))}"/>')
             if name.startswith("rod"):
                 e = int(name[3:])
                 mass, c = masses[e], np.asarray(com[e], float)
@@ -205,14 +215,17 @@ def build_net_mjcf(tree: _Tree, masses, com, node_masses, node_com, g, inertia, 
         out.append("  <equality>")
         for a, b in tree.closures:
             out.append(f'    <connect site1="{a}" site2="{b}" solref="{sref}" solimp="{simp}"/>')
+        for a, b in tree.welds:  # (relpose all zeros: as the bodies are in the model's configuration)
+            other = "" if b == "world" else f' body2="{b}"'
+            out.append(f'    <weld body1="{a}"{other} relpose="0 0 0 0 0 0 0" solref="{sref}" solimp="{simp}"/>')
         out.append("  </equality>")
     out.append("</mujoco>")
     return "\n".join(out)
 
 
 def settle_net(positions0, edges, lengths, masses, anchored, *, node_masses=None, com=None, node_com=None,
-               pivots=None, rotations0=None, body_nodes=None, rod_y=None, g=9.81, tol=1e-8, max_time=200.0,
-               **options) -> dict:
+               pivots=None, rotations0=None, body_nodes=None, rod_y=None, welded=(), g=9.81, tol=1e-8,
+               max_time=200.0, **options) -> dict:
     """Simulate the net in MuJoCo from ``positions0`` until it rests; return the rest state.
 
     Args:
@@ -224,6 +237,8 @@ def settle_net(positions0, edges, lengths, masses, anchored, *, node_masses=None
         body_nodes: nodes simulated as rigid bodies (default: those with a pivot off the
             node point or an off-centre mass).
         rod_y: (m, 3) each rod's start y axis (its roll), default straight down.
+        welded: (rod, end) pairs glued in their sockets: the rod end is welded to its node's
+            body (to the world at an anchored node) instead of turning on its ball joint.
         tol: rest when max |qvel| (scaled units) stays below tol for three checks.
         max_time: simulated seconds (scaled) at most.
 
@@ -261,7 +276,7 @@ def settle_net(positions0, edges, lengths, masses, anchored, *, node_masses=None
     mref = float(np.mean(masses))
     origin = x0[anchored[0]].copy()
     xs = (x0 - origin) / size
-    tree = _Tree(xs, R0, edges, anchored, pivots / size, body_nodes, rod_y)
+    tree = _Tree(xs, R0, edges, anchored, pivots / size, body_nodes, rod_y, welded)
     dist = np.linalg.norm(tree.P[:, 1] - tree.P[:, 0], axis=1) * size
     if np.max(np.abs(dist - lengths) / lengths) > 1e-6:
         raise ValueError("positions0 is not a configuration of the rods (lengths differ)")

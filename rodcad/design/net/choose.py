@@ -21,6 +21,9 @@ lengthen or shorten out of the catalog's lengths by a little have their hubs res
 them back (:func:`in_window`). Where the net still misses its tolerance because its hubs, sized
 for their rods, weigh too unevenly for the rods' masses to make up, the light ones are made larger
 to weigh what the balance asks (:mod:`rodcad.design.net.weights`) and the last steps run again.
+Last of all, where no masses balance the net in tension, the rods its hubs hold are let push
+(:mod:`rodcad.design.net.pushing`), and where none balance it still, the hubs next to its anchors
+are held by rods glued at both ends (:mod:`rodcad.design.net.glued`).
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ import numpy as np
 from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
 from rodcad.design.net.check import rank as _rank
 from rodcad.design.net.cones import widen_cones
+from rodcad.design.net.glued import GLUE_RINGS, glued_plan
 from rodcad.design.net.inverted import lighten_inverted
 from rodcad.design.net.joints import SagLimit
 from rodcad.design.net.spacing import grow_tight_hubs
@@ -70,6 +74,7 @@ def design_drawn_net(target: NetTarget, catalog, *, g: float = 9.81, seed: int =
     # other stable shapes of the one kept (with_multistart: the same as if each had run it)
     design = functools.partial(design_net_plan, g=g, seed=seed, tolerance=tolerance, n_starts=1, note=note)
     check = _pushed(_designed(target, catalog, design, g=g, tolerance=tolerance), design, g)
+    check = _glued(check, design, g)
     return with_multistart(check, n_starts, seed=seed, note=note)
 
 
@@ -91,6 +96,38 @@ def _pushed(check: NetCheck, design, g: float) -> NetCheck:
                              "size off its target; it was designed again with the rigid rods between its hubs let "
                              "push where they must, each hub they push kept from turning, and hangs nearer.")
     return other
+
+
+def _glued(check: NetCheck, design, g: float) -> NetCheck:
+    """``check``, or where no masses balance its net (its statics are not exact), the first band of
+    hubs held by rods glued toward the anchors (:mod:`rodcad.design.net.glued`: one ring of hubs,
+    then two) with which the net, designed again, passes every check. Last, on the plan the steps
+    above kept."""
+    planned = check.planned
+    if check.ok or check.design.statics.exact or planned is None or not planned.hardware.is_hub:
+        return check
+    tried = []
+    for rings in range(1, GLUE_RINGS + 1):
+        plan = glued_plan(planned, rings)
+        if plan is None:
+            break
+        other = _pushed(_fallen(_hardware_fitted(design(plan), design, g), design), design, g)
+        if other.ok:
+            t = other.plan.target
+            other.carry(check).chose(
+                f"Hung from its anchors alone the net {check.limit().rstrip('.')}. The {t.glued.size} hub(s) within "
+                f"{rings} drawn edge(s) of the anchors are held by gluing the {t.glued_rods.size} rod(s) that join "
+                "them toward the anchors into their sockets at both ends (a rigid band that holds each such hub as "
+                "an anchor does), and the rest of the net hangs.")
+            return other
+        tried.append(f"{rings} ring(s) of hubs ({plan.target.glued.size}): {other.limit().rstrip('.')}")
+    if tried:
+        check.notes.append("Held by rods glued at both ends toward the anchors (rodcad.design.net.glued), the net still "
+                           "missed: with " + "; with ".join(tried) + ".")
+        if check.why:
+            check.why += (f" The hubs next to the anchors held by rods glued at both ends (up to {len(tried)} ring(s)) "
+                          "did not bring it within the tolerance either (report.md).")
+    return check
 
 
 def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float | None) -> NetCheck:

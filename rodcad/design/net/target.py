@@ -58,6 +58,9 @@ class NetTarget:
             of explicit nodes and edges).
         node_of_drawn: (drawn n,) the node each drawn node became where the planner collapsed
             short edges (:mod:`rodcad.design.net.collapse`), or None.
+        glued: nodes the planner has held by rods glued into their sockets toward the anchors
+            (:mod:`rodcad.design.net.glued`; in ``anchored`` too: held as an anchor is), or None.
+        glued_rods: the rods glued at both ends that hold them, or None.
     """
 
     kind: str
@@ -78,6 +81,8 @@ class NetTarget:
     drawn: Any = None
     refine_edges: int = 1
     node_of_drawn: np.ndarray | None = None
+    glued: np.ndarray | None = None
+    glued_rods: np.ndarray | None = None
 
     @property
     def fit_pairs(self) -> tuple[np.ndarray, np.ndarray]:
@@ -140,9 +145,23 @@ class NetTarget:
 
     @property
     def anchored_mask(self) -> np.ndarray:
+        """(n,) the nodes held: the anchors and the nodes glued rods hold (:attr:`glued`)."""
         mask = np.zeros(self.n, dtype=bool)
         mask[self.anchored] = True
         return mask
+
+    @property
+    def glued_mask(self) -> np.ndarray:
+        """(n,) the nodes held by glued rods (:attr:`glued`), not hung on the frame."""
+        mask = np.zeros(self.n, dtype=bool)
+        if self.glued is not None:
+            mask[self.glued] = True
+        return mask
+
+    @property
+    def hung_from(self) -> np.ndarray:
+        """The anchors the net is hung from on its frame: :attr:`anchored` less :attr:`glued`."""
+        return self.anchored[~self.glued_mask[self.anchored]]
 
 
 def _expr(text: str, variables: dict[str, np.ndarray], what: str, key: str, v: Any) -> np.ndarray | None:

@@ -23,6 +23,11 @@ def _f(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
+def _ints(a) -> list[int]:
+    """A list of ints from an index array or None (empty)."""
+    return [] if a is None else [int(x) for x in a]
+
+
 def _v(a) -> list[float | None]:
     return [_f(x) for x in np.asarray(a, float).ravel()]
 
@@ -100,6 +105,8 @@ def net_bill(check, catalog) -> dict[str, Any]:
         out["hub_plastic_g"] = float(plan.node_masses[held].sum())
         joint = plan.target.joint_mask & held
         out["two_rod_joints"] = int(np.count_nonzero(joint))
+        if plan.target.glued_rods is not None:  # (rodcad.design.net.glued: both balls glued in their sockets)
+            out["glued_rods"] = int(plan.target.glued_rods.size)
         sizes: dict[str, int] = {}
         for k in np.flatnonzero(held):
             h = plan.hub(int(k))
@@ -123,7 +130,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
     t, hw = plan.target, plan.hardware
     per_node = pivots_by_node(t.edges, plan.pivots, t.n) if hw.is_hub else [None] * t.n
     sock = pivots_by_node(t.edges, check.sockets, t.n) if hw.is_hub else [None] * t.n
-    mask = t.anchored_mask
+    mask, glued, glued_rods = t.anchored_mask, t.glued_mask, set(_ints(t.glued_rods))
     nodes = []
     for k in range(t.n):
         nodes.append({
@@ -131,6 +138,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "target": _v(t.positions[k]),
             "simulated": _v(eq.positions[k]),
             "anchored": bool(mask[k]),
+            "glued": bool(glued[k]),
             "mass": _f(plan.node_masses[k]),
             "pivots": per_node[k],
             "rotation": np.asarray(eq.rotations[k]).tolist() if hw.is_hub else None,
@@ -168,6 +176,7 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "mass": _f(check.masses[e]),
             "com": _v(com[e]),
             "tension": _f(eq.tensions[e]),
+            "glued": e in glued_rods,
             "ends": [_v(eq.ends[e, 0]), _v(eq.ends[e, 1])],
             "target_ends": [_v(target_ends[e, 0]), _v(target_ends[e, 1])],
             "mass_range": [rn.mass_range[0], rn.mass_range[1]],
@@ -212,6 +221,11 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
             "compressed": [int(x) for x in check.compressed],
             "generated": t.kind,
             "anchored": [int(x) for x in t.anchored],
+            # the nodes held by rods glued toward the anchors, and those rods (rodcad.design.net.glued): held,
+            # and so anchored, but not hung on the frame (hung_from)
+            "glued": _ints(t.glued),
+            "glued_rods": sorted(glued_rods),
+            "hung_from": _ints(t.hung_from),
             "anchored_as": t.anchored_as or None,
             "compression_allowed": t.any_may_push,
             "compression": ("allowed" if t.compression else "not allowed" if t.compression is False or not hw.is_hub
@@ -225,7 +239,8 @@ def net_json(check, *, name: str, seed: int, catalog, print_profile: dict[str, A
                         "message": st.message, "refined": bool(check.design.refined)},
             "alternatives": {"count": len(alts), "lower": bool(eq.lower), "starts": int(eq.n_starts),
                              "energies": [_f(a.energy) for a in alts], "energy": _f(eq.energy)},
-            "reactions": [{"node": int(a), "force": _v(f)} for a, f in zip(eq.anchors, eq.reactions)],
+            "reactions": [{"node": int(a), "force": _v(f), "glued": bool(glued[a])}
+                          for a, f in zip(eq.anchors, eq.reactions)],
             "notes": list(check.notes),
         },
         "hardware": {

@@ -49,8 +49,11 @@ def plot_net(check, title: str, *paths: Path) -> None:
                                                     offset_transform=ax.transData, facecolors="0.85", edgecolors="0.3",
                                                     linewidths=0.6, alpha=0.45, zorder=3))
             ax.plot(x[:, a], x[:, b], ".", color="0.2", ms=3, zorder=4)
-            anch = x[t.anchored]
+            anch = x[t.hung_from]
             ax.plot(anch[:, a], anch[:, b], "v", color="k", ms=8, zorder=5, label="anchored")
+            if t.glued is not None:
+                ax.plot(x[t.glued, a], x[t.glued, b], "s", mfc="none", mec="k", ms=6, zorder=5,
+                        label="held by glued rods")
         ax.plot(t.positions[:, a], t.positions[:, b], "o", mfc="none", mec="0.45", ms=5, zorder=1,
                 label="target nodes")
         ax.set_aspect("equal")

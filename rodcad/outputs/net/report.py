@@ -115,7 +115,9 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     fit = (f"the simulated net hangs **{check.error_mm:.3g} mm** ({100 * check.rel_size:.3g} % of its {t.size:.4g} mm "
            f"size) from its target at worst (tolerance {100 * check.tolerance:.3g} %)." if check.ok else
            f"the simulated net {check.limit()}.")
-    lines += [f"A net of {t.m} rods and {t.n} nodes ({t.anchored.size} anchored), generated from "
+    held = (f"{t.hung_from.size} anchored, {t.glued.size} held by glued rods" if t.glued is not None
+            else f"{t.anchored.size} anchored")
+    lines += [f"A net of {t.m} rods and {t.n} nodes ({held}), generated from "
               f"'{t.kind}'. It {verdict} its tolerance: {fit}", "",
               "![from above and from the side](preview.png)", "", view_line(), "", "## Fit and equilibrium", ""]
     lines += [f"- Statics at the target: {check.design.statics.message}",
@@ -187,7 +189,8 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     lines += ["", "## Nodes", "", "| node | anchored | rods | mass (g) | error (mm) |", "|---:|---|---:|---:|---:|"]
     for nd in net["nodes"]:
         err = nd["error_mm"]
-        lines.append(f"| {nd['index']} | {'yes' if nd['anchored'] else ''} | {nd['rods']} | {nd['mass']:.3f} | "
+        held = "glued" if nd.get("glued") else "yes" if nd["anchored"] else ""
+        lines.append(f"| {nd['index']} | {held} | {nd['rods']} | {nd['mass']:.3f} | "
                      f"{err:.3g} |" if err is not None else f"| {nd['index']} | | {nd['rods']} | {nd['mass']:.3f} | - |")
     lines += ["", "## Bill of materials", ""]
     lines.append(f"- {bom['rods']} rods ({bom['rod_plastic_g']:.1f} g of {bom['material']})")
@@ -199,6 +202,9 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                      + ", ".join(f"{c} x {k}" for k, c in bom.get("hub_sizes", {}).items()))
     else:
         lines.append(f"- {bom['point_parts']} x {bom['point_part']}")
+    if bom.get("glued_rods"):
+        lines.append(f"- glue for the {bom['glued_rods']} glued rods' {2 * bom['glued_rods']} balls in their sockets "
+                     "(the hubs' glue)")
     if bom.get("dowel_pins"):
         pin = bom["dowel_pin"]
         lines.append(f"- {bom['dowel_pins']} steel dowel pins, {pin['diameter']:g} x {pin['length']:g} mm (e.g. ISO "
@@ -234,7 +240,15 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     lines += ["Hang the anchored hubs first, then work outward layer by layer, closing each hub on its rods "
               "(rod numbers are in design.json and on the rods' files).", ""]
     for k, (nodes, rods) in enumerate(assembly_layers(t.edges, t.anchored, t.n)):
-        if k == 0:
+        if k == 0 and t.glued is not None:
+            glued = set(int(x) for x in t.glued)
+            lines.append(f"{k + 1}. Anchored nodes {_list([x for x in nodes if x not in glued])} at their anchors, "
+                         f"and the band of nodes {_list(sorted(glued))} held by glued rods "
+                         f"{_list([int(x) for x in t.glued_rods])}: put a drop of glue in each of those rods' "
+                         "sockets before its ball goes in, close those hubs, and let the glue set with the band "
+                         "on its anchors before hanging the rest (the band is then rigid and holds its hubs "
+                         "where drawn)" + (f"; rods {_list(rods)} join held nodes." if rods else "."))
+        elif k == 0:
             lines.append(f"{k + 1}. Anchored nodes {_list(nodes)} at their anchors"
                          + (f", with rods {_list(rods)} between them." if rods else "."))
         else:

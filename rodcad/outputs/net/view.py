@@ -88,12 +88,15 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
                                   else "hub", balls[d], m, GREY))
     hanger = cylinder([0, 0, 0.4 * node_d], [0, 0, 0.4 * node_d + 1.2 * max(node_d, 10.0)], max(0.1 * node_d, 1.2), 10)
     for k, nd in enumerate(nodes):
-        if nd.get("anchored") and nd.get("rods", 1):  # (an anchor no rod reaches holds nothing)
+        # (an anchor no rod reaches holds nothing; a node glued rods hold hangs on no frame)
+        if nd.get("anchored") and nd.get("rods", 1) and not nd.get("glued"):
             m = np.eye(4)
             m[:3, 3] = pos[k]
             parts.append(ViewPart(f"anchor-{k:03d}", "anchors", "anchor", hanger, m, ANCHOR))
     err = net.get("error") or {}
-    summary = [["nodes", f"{len(nodes)} ({sum(bool(nd.get('anchored')) for nd in nodes)} anchored)"],
+    glued = sum(bool(nd.get("glued")) for nd in nodes)
+    held = sum(bool(nd.get("anchored")) for nd in nodes) - glued
+    summary = [["nodes", f"{len(nodes)} ({held} anchored" + (f", {glued} held by glued rods)" if glued else ")")],
                ["rods", str(len(rods))], ["size", mm(net.get("size"))],
                ["off its target", f"{mm(err.get('max_mm'))} ({pct(err.get('max_rel_size'))} of its size)"],
                ["tolerance", f"{pct(net.get('tolerance'))}: {'met' if net.get('meets_tolerance') else 'MISSED'}"],
@@ -130,9 +133,11 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
         {"id": "nodes", "title": "Nodes (hubs)" if hub else "Nodes", "columns": [
             {"label": "#"}, {"label": "anchored"}, {"label": "rods"}, {"label": "mass g", "digits": 3},
             {"label": "off target mm", "digits": 3}],
-         "rows": [[nd["index"], "yes" if nd.get("anchored") else "", nd.get("rods"), nd.get("mass"),
+         "rows": [[nd["index"], "glued" if nd.get("glued") else "yes" if nd.get("anchored") else "", nd.get("rods"),
+                   nd.get("mass"),
                    nd.get("error_mm")] for nd in nodes],
-         "parts": [half[nd["index"]] + ([f"anchor-{nd['index']:03d}"] if nd.get("anchored") else [])
+         "parts": [half[nd["index"]] + ([f"anchor-{nd['index']:03d}"] if nd.get("anchored") and not nd.get("glued")
+                                         else [])
                    for nd in nodes]}]
     shown = "as built (the solids)" if built else ("the solids, where the design hangs" if b.solids is not None
                                                    else "simulated (no CAD: simple shapes)")

@@ -116,3 +116,22 @@ def test_rings_are_counted_in_drawn_edges_so_a_planners_joint_is_half_an_edge_aw
                         anchored=np.array([0]))
     assert rings_from_anchors(t).tolist() == [0.0, 1.0, 2.0, 3.0, 1.5]
     assert rings_from_anchors(SimpleNamespace(**{**t.__dict__, "source": None})).tolist() == [0, 1, 3, 4, 2]
+    # a second rod between nodes 0 and 1 is another way there, not a longer one
+    twice = SimpleNamespace(n=5, m=5, edges=np.vstack([t.edges, [[1, 0]]]), source=np.append(t.source, 3),
+                            anchored=t.anchored)
+    assert rings_from_anchors(twice).tolist() == [0.0, 1.0, 2.0, 3.0, 1.5]
+
+
+def test_glue_holds_hubs_that_turn_not_a_shape_that_cannot_hang(glued):
+    """The bowl's nodes balance with its held rods pushing (what fails is its rim band's hubs
+    turning): glued. A grid drawn over a square and hung from its corners (examples/dome.yaml)
+    has nothing to pull its straight border outward: no glue, the honest exit stays."""
+    from pathlib import Path
+
+    from rodcad.design.net.imbalance import hubs_fail
+    from rodcad.design.net.plan import plan_net
+
+    d, _ = glued
+    assert hubs_fail(plan_net(d.net, d.catalog), 9.81)
+    dome = load_design(Path(__file__).parent.parent / "examples" / "dome.yaml")
+    assert not hubs_fail(plan_net(dome.net, dome.catalog), 9.81)

@@ -36,6 +36,7 @@ from rodcad.design.net.check import NetCheck, design_net_plan, with_multistart
 from rodcad.design.net.check import rank as _rank
 from rodcad.design.net.cones import widen_cones
 from rodcad.design.net.glued import GLUE_RINGS, glued_plan
+from rodcad.design.net.imbalance import hubs_fail
 from rodcad.design.net.inverted import lighten_inverted
 from rodcad.design.net.joints import SagLimit
 from rodcad.design.net.spacing import grow_tight_hubs
@@ -99,12 +100,13 @@ def _pushed(check: NetCheck, design, g: float) -> NetCheck:
 
 
 def _glued(check: NetCheck, design, g: float) -> NetCheck:
-    """``check``, or where no masses balance its net (its statics are not exact), the first band of
-    hubs held by rods glued toward the anchors (:mod:`rodcad.design.net.glued`: one ring of hubs,
-    then two) with which the net, designed again, passes every check. Last, on the plan the steps
-    above kept."""
+    """``check``, or where no masses balance its net (its statics are not exact) though its nodes'
+    forces balance (what fails is its hubs turning: :func:`rodcad.design.net.imbalance.hubs_fail`),
+    the first band of hubs held by rods glued toward the anchors (:mod:`rodcad.design.net.glued`:
+    one ring of hubs, then two) with which the net, designed again, passes every check. Last, on
+    the plan the steps above kept."""
     planned = check.planned
-    if check.ok or check.design.statics.exact or planned is None or not planned.hardware.is_hub:
+    if check.ok or check.design.statics.exact or planned is None or not hubs_fail(planned, g):
         return check
     tried = []
     for rings in range(1, GLUE_RINGS + 1):

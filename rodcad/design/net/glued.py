@@ -8,9 +8,11 @@ anchors below the rim would hold it. Rods glued into their sockets at both ends 
 an anchor does: a glued rod from a hub held rigidly is a rigid arm, and the hub at its far end,
 glued to it, is held, position and orientation.
 
-So, last, where the net the planner kept misses its tolerance, the hubs within one ring of the
-anchors (rods counted per drawn edge), then two, are held by gluing the rods that join each of
-them toward the anchors (:func:`glued_plan`), and the net designed again; the first that hangs
+So, last, where no masses balance the net the planner kept though its nodes' forces balance with
+the held rods pushing (what fails is its hubs turning: :func:`rodcad.design.net.imbalance.
+hubs_fail`; glue holds hubs, it does not stand in for the anchors a shape needs), the hubs within
+one ring of the anchors (rods counted per drawn edge), then two, are held by gluing the rods that
+join each of them toward the anchors (:func:`glued_plan`), and the net designed again; the first that hangs
 within its tolerance, every check passing, is kept (:func:`rodcad.design.net.choose.
 design_drawn_net`). The band stays a small part of the net (:data:`GLUE_SHARE`): the rest
 hangs, its shape the design's. The glued hubs are not hung on the frame; the report and
@@ -40,7 +42,12 @@ def rings_from_anchors(t) -> np.ndarray:
     first ring is the drawn nodes one edge from the anchors and the joints before them."""
     src = np.arange(t.m) if t.source is None else np.asarray(t.source)
     share = 1.0 / np.bincount(src, minlength=int(src.max()) + 1)[src]
-    graph = sp.coo_matrix((share, (t.edges[:, 0], t.edges[:, 1])), shape=(t.n, t.n)).tocsr()
+    a, b = np.sort(t.edges, axis=1).T
+    order = np.lexsort((share, b, a))  # (two rods between the same nodes: the shorter step, not the sum)
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = (np.diff(a[order]) != 0) | (np.diff(b[order]) != 0)
+    keep = order[first]
+    graph = sp.csr_matrix((share[keep], (a[keep], b[keep])), shape=(t.n, t.n))
     return np.asarray(dijkstra(graph, directed=False, indices=t.anchored, min_only=True))
 
 

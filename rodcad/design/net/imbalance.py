@@ -10,7 +10,7 @@ from optimize import NetDesign, net_statics
 from rodcad.design.net.plan import NetPlan, replan
 from rodcad.design.net.pushing import held_rods
 
-__all__ = ["imbalance"]
+__all__ = ["hubs_fail", "imbalance"]
 
 
 def imbalance(plan: NetPlan, design: NetDesign, g: float, lines: np.ndarray) -> str:
@@ -56,6 +56,16 @@ def _pushing_would(plan: NetPlan, g: float) -> bool:
     if plan.target.compression is not None or plan.pushing is not None or not held.any():
         return False
     return _forces_balance(plan, g, push=held, stiff_hubs=False)
+
+
+def hubs_fail(plan: NetPlan, g: float) -> bool:
+    """Whether the nodes' forces balance at the target with the rods the hardware lets push
+    (those the hubs hold, :func:`rodcad.design.net.pushing.held_rods`, where ``compression`` is
+    unset), the hubs' turning left aside: where no masses balance such a net, what fails is its
+    hubs turning on their ball sockets, not its shape (:mod:`rodcad.design.net.glued`)."""
+    t = plan.target
+    push = held_rods(plan) if t.compression is None else bool(t.compression)
+    return plan.hardware.is_hub and _forces_balance(plan, g, push=push, stiff_hubs=False)
 
 
 def _worst(nodes: np.ndarray, res: np.ndarray, n: int) -> list[int]:

@@ -165,7 +165,9 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
             if bent else "Straight round rods printed to order")
     spliced = [r for r in net["rods"] if r.get("splice")]
     lines += ["## Rods", "",
-              f"{what} ({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls).", ""]
+              f"{what} ({hw.rod_diameter:g} mm), lengths pivot to pivot, tension in mN (g x m/s^2; > 0 pulls)"
+              + ("; a glued rod holds its hubs rigidly (its force is the band's, not a pull)." if t.glued is not None
+                 else "."), ""]
     if spliced:
         pin = spliced[0]["splice"]["pin"]
         lines += [f"{len(spliced)} rod(s) longer than the catalog prints are spliced: each is printed in the 'pieces' "
@@ -185,7 +187,7 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
             extra += f" {r.get('pieces', 1)} |"
         lines.append(f"| {r['index']} | {r['nodes'][0]}-{r['nodes'][1]} | {r['length']:.2f} | {r['mass']:.3f} | "
                      f"{r['mass_range'][0]:.2f}-{r['mass_range'][1]:.2f} | {r['steel_balls']} | "
-                     f"{r['tension']:.3g} |{extra}")
+                     + ("glued |" if r.get("glued") else f"{r['tension']:.3g} |") + extra)
     lines += ["", "## Nodes", "", "| node | anchored | rods | mass (g) | error (mm) |", "|---:|---|---:|---:|---:|"]
     for nd in net["nodes"]:
         err = nd["error_mm"]

@@ -126,9 +126,12 @@ def net_scene(b, data: dict[str, Any]) -> ViewScene:
     tables = [{"id": "rods", "title": "Rods", "columns": [
         {"label": "#"}, {"label": "nodes"}, {"label": "length mm", "digits": 2}, {"label": "mass g", "digits": 3},
         {"label": f"tension {force}", "digits": 1}, {"label": "shape"}],
-        "rows": [[r["index"], "{}-{}".format(*r["nodes"]), r["length"], r["mass"], r.get("tension"),
+        # (a glued rod holds its hubs rigidly: it carries more than a pull, none of it computed)
+        "rows": [[r["index"], "{}-{}".format(*r["nodes"]), r["length"], r["mass"],
+                  None if r.get("glued") else r.get("tension"),
                   (r.get("shape") or "straight") + (f", {r['pieces']} pieces" if (r.get("pieces") or 1) > 1
-                                                    else "")] for r in rods],
+                                                    else "") + (", glued" if r.get("glued") else "")]
+                 for r in rods],
         "parts": [[f"rod-{r['index']:03d}"] for r in rods]},
         {"id": "nodes", "title": "Nodes (hubs)" if hub else "Nodes", "columns": [
             {"label": "#"}, {"label": "anchored"}, {"label": "rods"}, {"label": "mass g", "digits": 3},

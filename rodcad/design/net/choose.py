@@ -103,26 +103,27 @@ def _glued(check: NetCheck, design, g: float) -> NetCheck:
     """``check``, or where no masses balance its net (its statics are not exact) though its nodes'
     forces balance (what fails is its hubs turning: :func:`rodcad.design.net.imbalance.hubs_fail`),
     the first band of hubs held by rods glued toward the anchors (:mod:`rodcad.design.net.glued`:
-    one ring of hubs, then two) with which the net, designed again, passes every check. Last, on
-    the plan the steps above kept."""
+    one ring of hubs, then two) with which the net, designed again, passes every check. Each band
+    is designed first as planned, and only where neither passes so are they fitted (the steps
+    above: hubs resized, cones widened, rods let push) in the same order. Last, on the plan the
+    steps above kept."""
     planned = check.planned
     if check.ok or check.design.statics.exact or planned is None or not hubs_fail(planned, g):
         return check
-    tried = []
+    bands = []
     for rings in range(1, GLUE_RINGS + 1):
         plan = glued_plan(planned, rings)
         if plan is None:
             break
-        other = _pushed(_fallen(_hardware_fitted(design(plan), design, g), design), design, g)
+        bands.append((rings, design(plan)))
+        if bands[-1][1].ok:
+            return _kept_glued(bands[-1][1], rings, check)
+    tried = []
+    for rings, first in bands:
+        other = _pushed(_fallen(_hardware_fitted(first, design, g), design), design, g)
         if other.ok:
-            t = other.plan.target
-            other.carry(check).chose(
-                f"Hung from its anchors alone the net {check.limit().rstrip('.')}. The {t.glued.size} hub(s) within "
-                f"{rings} drawn edge(s) of the anchors are held by gluing the {t.glued_rods.size} rod(s) that join "
-                "them toward the anchors into their sockets at both ends (a rigid band that holds each such hub as "
-                "an anchor does), and the rest of the net hangs.")
-            return other
-        tried.append(f"{rings} ring(s) of hubs ({plan.target.glued.size}): {other.limit().rstrip('.')}")
+            return _kept_glued(other, rings, check)
+        tried.append(f"{rings} ring(s) of hubs ({other.plan.target.glued.size}): {other.limit().rstrip('.')}")
     if tried:
         check.notes.append("Held by rods glued at both ends toward the anchors (rodcad.design.net.glued), the net still "
                            "missed: with " + "; with ".join(tried) + ".")
@@ -130,6 +131,16 @@ def _glued(check: NetCheck, design, g: float) -> NetCheck:
             check.why += (f" The hubs next to the anchors held by rods glued at both ends (up to {len(tried)} ring(s)) "
                           "did not bring it within the tolerance either (report.md).")
     return check
+
+
+def _kept_glued(other: NetCheck, rings: int, check: NetCheck) -> NetCheck:
+    t = other.plan.target
+    other.carry(check).chose(
+        f"Hung from its anchors alone the net {check.limit().rstrip('.')}. The {t.glued.size} hub(s) within {rings} "
+        f"drawn edge(s) of the anchors are held by gluing the {t.glued_rods.size} rod(s) that join them toward the "
+        "anchors into their sockets at both ends (a rigid band that holds each such hub as an anchor does), and the "
+        "rest of the net hangs.")
+    return other
 
 
 def _designed(target: NetTarget, catalog, design, *, g: float, tolerance: float | None) -> NetCheck:

@@ -93,13 +93,17 @@ class NetTarget:
             return np.arange(self.n), self.positions
         return self.fit_nodes, self.fit_points
 
+    def _mask(self, nodes: np.ndarray | None) -> np.ndarray:
+        """(n,) True at ``nodes`` (None: none)."""
+        mask = np.zeros(self.n, dtype=bool)
+        if nodes is not None:
+            mask[nodes] = True
+        return mask
+
     @property
     def joint_mask(self) -> np.ndarray:
         """(n,) the two-rod joints the planner added on long edges."""
-        mask = np.zeros(self.n, dtype=bool)
-        if self.joints is not None:
-            mask[self.joints] = True
-        return mask
+        return self._mask(self.joints)
 
     @property
     def bends(self) -> np.ndarray:
@@ -146,17 +150,12 @@ class NetTarget:
     @property
     def anchored_mask(self) -> np.ndarray:
         """(n,) the nodes held: the anchors and the nodes glued rods hold (:attr:`glued`)."""
-        mask = np.zeros(self.n, dtype=bool)
-        mask[self.anchored] = True
-        return mask
+        return self._mask(self.anchored)
 
     @property
     def glued_mask(self) -> np.ndarray:
         """(n,) the nodes held by glued rods (:attr:`glued`), not hung on the frame."""
-        mask = np.zeros(self.n, dtype=bool)
-        if self.glued is not None:
-            mask[self.glued] = True
-        return mask
+        return self._mask(self.glued)
 
     @property
     def hung_from(self) -> np.ndarray:

@@ -285,3 +285,35 @@ def test_an_as_built_net_the_solver_stops_short_on_is_read_there_or_said_to_be_r
     data = json.loads((tmp_path / "w.best-fit" / "design.json").read_text())
     assert data["as_built"]["error"] == {"max_mm": None, "max_rel_size": None}
     assert data["as_built"]["converged"] is False
+
+
+def test_a_hub_half_of_six_sockets_passes_its_step_check_on_volumes_integrated_to_1e_9(tmp_path):
+    """A hub half of a bowl hung from its equator (its first-ring hub: six sockets, 30.3 mm) whose
+    STEP build123d's fixed-rule volume read 1.5e-6 off the solid's own (a build stopped with a
+    FabricationError): the check compares volumes integrated to 1e-9, which agree to 1e-8."""
+    import dataclasses
+
+    import numpy as np
+
+    from rodcad.cad.export import check_files, export_step, export_stl, import_step
+    from rodcad.cad.net.hub import split_hub, split_plane
+    from rodcad.cad.net.solids import hub_solid
+    from rodcad.cad.solids import precise_volume
+
+    hw = dataclasses.replace(load_catalog("pla-parametric").node, diameter=30.33130363084774,
+                             pivot_radius=10.66565181542387)
+    socks = np.array([(8.527433893411, -5.294539224859, 3.135241170584),
+                      (9.686830399831, 4.079693375057, 0.317075157124),
+                      (-8.527447681824, -5.294528604929, 3.135221657626),
+                      (-9.686825990987, 4.079704852927, 0.317061293361),
+                      (4.0105926e-05, -9.611827000594, 4.265676288842),
+                      (1.9606561e-05, 10.411911544461, -1.473740865782)])
+    sp = split_hub(hub_solid(hw, socks, "hub-043", pole=split_plane(socks)[0]), socks, hw, "hub-043")
+    assert sp.split
+    for part in sp.parts:
+        step, stl = tmp_path / f"{part.label}.step", tmp_path / f"{part.label}.stl"
+        export_step(part, step, name=part.label)
+        export_stl(part, stl, tolerance=0.05, angular_tolerance=0.3)
+        v = precise_volume(part)
+        assert precise_volume(import_step(step)) == pytest.approx(v, rel=1e-8)
+        check_files(step, stl, v, deflection=0.05, coarse=True, precise=True)

@@ -31,7 +31,7 @@ from rodcad.cad.net.parts import (REL_TOL, HubSpec, PartResult, PartTask, RodSpe
                                   group_parts, signature)
 from rodcad.cad.net.solids import AS_BUILT_KKT, NetPart, NetSolids, hub_solid, net_rod_solid, whole_hub
 from rodcad.cad.net.splice import spliced_rod, spliced_rod_solids
-from rodcad.cad.solids import GeometryError
+from rodcad.cad.solids import GeometryError, precise_volume
 from rodcad.catalog.net.splice import splice_fill
 from rodcad.design.net.frames import place, rod_matrix
 
@@ -216,7 +216,7 @@ def _files(solid, label: str, deflection: tuple[float, float]) -> tuple[dict[str
         step, stl = Path(tmp) / f"{label}.step", Path(tmp) / f"{label}.stl"
         export_step(solid, step, name=label)
         export_stl(solid, stl, tolerance=deflection[0], angular_tolerance=deflection[1])
-        check_files(step, stl, solid.volume, deflection=deflection[0], coarse=True)
+        check_files(step, stl, precise_volume(solid), deflection=deflection[0], coarse=True, precise=True)
         vol = float(trimesh.load(str(stl), force="mesh").volume)
         return {".step": step.read_bytes(), ".stl": stl.read_bytes()}, vol
 

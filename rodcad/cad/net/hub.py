@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from build123d import Keep, Plane, Solid
 
-from rodcad.cad.solids import GeometryError, one_solid
+from rodcad.cad.solids import GeometryError, one_solid, precise_volume
 
 __all__ = ["MARGIN", "MAX_CLEARANCE", "HubSplit", "precise_volume", "split_hub", "split_plane", "splittable_sockets"]
 
@@ -61,17 +61,6 @@ class HubSplit:
     @property
     def split(self) -> bool:
         return not self.reason
-
-
-def precise_volume(solid: Solid, eps: float = 1e-9) -> float:
-    """The solid's volume integrated by OCC to a relative accuracy ``eps`` (mm^3); build123d's
-    ``volume`` integrates coarser (about 1e-6 of a hub's volume off)."""
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
-
-    props = GProp_GProps()
-    BRepGProp.VolumeProperties_s(solid.wrapped, props, eps, True)
-    return float(props.Mass())
 
 
 def split_plane(sockets: np.ndarray) -> tuple[np.ndarray, float, float]:

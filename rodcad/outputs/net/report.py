@@ -248,8 +248,9 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
                          f"and the band of nodes {_list(sorted(glued))} held by glued rods "
                          f"{_list([int(x) for x in t.glued_rods])}: put a drop of glue in each of those rods' "
                          "sockets before its ball goes in, close those hubs, and let the glue set with the band "
-                         "on its anchors before hanging the rest (the band is then rigid and holds its hubs "
-                         "where drawn)" + (f"; rods {_list(rods)} join held nodes." if rods else "."))
+                         "on its anchors and each of its hubs held at its target (design.json's nodes[].target; "
+                         "a band of triangles holds itself there) before hanging the rest: the band is then "
+                         "rigid and holds its hubs where drawn" + (f"; rods {_list(rods)} join held nodes." if rods else "."))
         elif k == 0:
             lines.append(f"{k + 1}. Anchored nodes {_list(nodes)} at their anchors"
                          + (f", with rods {_list(rods)} between them." if rods else "."))

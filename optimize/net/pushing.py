@@ -16,9 +16,10 @@ import scipy.sparse as sp
 
 from optimize.net.deriv import evaluate
 from optimize.net.lp import net_linprog
-from optimize.net.model import Net
+from optimize.net.model import Net, skew
 
-__all__ = ["AXES", "HUB_STIFFNESS", "PUSH_ROOM", "hub_stiffness_rows", "least_push", "push_mask", "stiff_enough"]
+__all__ = ["AXES", "HUB_STIFFNESS", "PUSH_ROOM", "hub_stiffness_rows", "least_push", "push_mask", "stiff_enough",
+           "stiffness_ub"]
 
 #: Where only some rods may push, each pushes at most the least largest push that balances the
 #: target, and this share more (:func:`least_push`): a rod pushing against a hub's ball socket
@@ -64,7 +65,7 @@ def hub_stiffness_rows(net: Net, state, push: np.ndarray):
             for e in np.flatnonzero(net.edges[:, end] == k):
                 q = off[e, end]
                 u = ev.u[e] if end == 0 else -ev.u[e]
-                Q = np.array([[0.0, -q[2], q[1]], [q[2], 0.0, -q[0]], [-q[1], q[0], 0.0]])
+                Q = skew(q)
                 Gk = Q.T @ (np.eye(3) - np.outer(u, u)) @ Q / net.lengths[e] + (u @ q) * np.eye(3) \
                     - 0.5 * (np.outer(u, q) + np.outer(q, u))
                 rows.append(h * len(AXES) + np.arange(len(AXES)))
@@ -87,6 +88,16 @@ def push_mask(allow_compression, m: int) -> np.ndarray:
     return mask
 
 
+def stiffness_ub(A_ub: sp.csr_matrix, b_ub: np.ndarray, stiff, m: int) -> tuple[sp.csr_matrix, np.ndarray]:
+    """A linear program's inequalities over (T (m), masses (m), one more unknown) with the rows
+    of :func:`hub_stiffness_rows` (``stiff``; None: none) below them: ``G T >= need``."""
+    if stiff is None:
+        return A_ub, b_ub
+    G, need = stiff
+    return (sp.vstack([A_ub, sp.hstack([-G, sp.csr_matrix((G.shape[0], m + 1))])]).tocsr(),
+            np.concatenate([b_ub, -need]))
+
+
 def stiff_enough(stiff, T: np.ndarray) -> bool:
     """The scaled tensions ``T`` keep the hubs of rods that push as stiff as ``stiff`` asks
     (:func:`optimize.net.pushing.hub_stiffness_rows`; None: nothing asked)."""
@@ -101,11 +112,7 @@ def least_push(A, b, m, lo_m, hi_m, push, stiff=None) -> float:
     k = np.flatnonzero(push)
     rows = sp.csr_matrix((-np.ones(k.size), (np.arange(k.size), k)), shape=(k.size, 2 * m))
     A_ub = sp.hstack([rows, sp.csr_matrix(-np.ones((k.size, 1)))]).tocsr()  # -T_k - s <= 0
-    b_ub = np.zeros(k.size)
-    if stiff is not None:
-        G, need = stiff
-        A_ub = sp.vstack([A_ub, sp.hstack([-G, sp.csr_matrix((G.shape[0], m + 1))])]).tocsr()
-        b_ub = np.concatenate([b_ub, -need])
+    A_ub, b_ub = stiffness_ub(A_ub, np.zeros(k.size), stiff, m)
     c = np.zeros(2 * m + 1)
     c[-1] = 1.0
     bnds = [(None, None) if q else (0.0, None) for q in push] + list(zip(lo_m, hi_m)) + [(0.0, None)]

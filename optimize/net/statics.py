@@ -38,7 +38,7 @@ from optimize.boxqp import box_qp
 from optimize.net.deriv import evaluate
 from optimize.net.model import Net, cross
 from optimize.net.lp import net_linprog as _linprog
-from optimize.net.pushing import hub_stiffness_rows, least_push, push_mask, stiff_enough
+from optimize.net.pushing import hub_stiffness_rows, least_push, push_mask, stiff_enough, stiffness_ub
 
 __all__ = ["NetStatics", "NetMassDesign", "design_net_masses", "net_statics", "node_mass_needs", "statics_of"]
 
@@ -296,11 +296,8 @@ def _design(net: Net, st: NetStatics, bounds: np.ndarray, allow_compression: boo
     nv = 2 * m + 1
     c = np.zeros(nv)
     c[-1] = -1.0
-    A_ub, b_ub = _margin_rows(m, 0, lo_m, hi_m, width, push)
-    if stiff is not None:  # (the hubs of rods that push kept from turning: their stiffness at least `need`)
-        G, need = stiff
-        A_ub = sp.vstack([A_ub, sp.hstack([-G, sp.csr_matrix((G.shape[0], m + 1))])]).tocsr()
-        b_ub = np.concatenate([b_ub, -need])
+    # (and the hubs of rods that push kept from turning: their stiffness at least `need`)
+    A_ub, b_ub = stiffness_ub(*_margin_rows(m, 0, lo_m, hi_m, width, push), stiff, m)
     if np.ndim(allow_compression) and push.any():  # (a mask: the rods the hardware holds push no harder than they must)
         lo_T = np.where(push, -least_push(A, b, m, lo_m, hi_m, push, stiff), 0.0)
     lp_args = dict(A_ub=A_ub, b_ub=b_ub,

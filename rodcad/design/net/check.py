@@ -528,15 +528,11 @@ def settle_com(plan: NetPlan, *, g: float = 9.81, rounds: int = COM_ROUNDS) -> t
     masses and the centres of mass they imply are iterated to a fixed point (the centres of
     mass move by fractions of a mm for grams: a few rounds). Returns (the plan with ``com``,
     rounds used)."""
-    from optimize import design_net_masses
-
     t = plan.target
     com = plan.statics_com
     used = 0
     for used in range(1, rounds + 1):
-        st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
-                               node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots, com=com,
-                               allow_compression=plan.may_push, g=g, explain=False)
+        st = plan.mass_design(g, com=com, explain=False)
         new = plan.rod_com(st.masses)
         change = float(np.max(np.abs(new - com)))
         com = new

@@ -61,8 +61,6 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
         (the plan with its pivots, lengths, bounds and hub centres of mass; rounds used; the
         statics' residual there, over the force scale; NaN for point nodes).
     """
-    from optimize import design_net_masses
-
     t, hw = plan.target, plan.hardware
     if not hw.is_hub:
         return plan, 0, float("nan")
@@ -76,18 +74,13 @@ def orient_sockets(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, int, flo
     xs: list[np.ndarray] = []
     gs: list[np.ndarray] = []
     for rounds in range(1, ORIENT_ROUNDS + 1):
-        full = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
-                                 node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=plan.may_push, g=g, explain=False)
+        full = plan.mass_design(g, explain=False)
         if full.exact:
             return plan, rounds, full.residual
         if full.residual <= ORIENT_FINE:  # (this close, the joint solve below or the refinement finishes it)
             best, best_res = plan, full.residual
             break
-        st = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
-                               node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                               com=plan.statics_com, allow_compression=plan.may_push, g=g, forces_only=True,
-                               explain=False)
+        st = plan.mass_design(g, forces_only=True, explain=False)
         if full.residual < 0.9 * best_res:
             best, best_res, stall = plan, full.residual, 0
         else:
@@ -163,15 +156,12 @@ def balance_jointly(plan: NetPlan, *, g: float = 9.81) -> tuple[NetPlan, float]:
     there: where turning each hub by its least turn needs masses the rods cannot be built at,
     other turns may balance within them. Returns (the plan, the statics' residual there over
     the force scale); the plan as it was when the joint solve does not improve it."""
-    from optimize import design_net_masses
     from optimize.net.sockets import FIXED_TURN, balance_sockets
 
     t = plan.target
 
     def statics(p):
-        return design_net_masses(t.positions, t.edges, p.lengths, p.bounds, t.anchored, node_masses=p.node_masses,
-                                 node_com=p.node_com, pivots=p.pivots, com=p.statics_com,
-                                 allow_compression=plan.may_push, g=g, explain=False)
+        return p.mass_design(g, allow_compression=plan.may_push, explain=False)
 
     st = statics(plan)
     if st.exact:
@@ -245,14 +235,10 @@ def buildable_bounds(plan: NetPlan, g: float) -> tuple[NetPlan, int]:
     again; a rod that then rests on a bound facing a gap moves to the segment across it (a
     few rounds, keeping the best). Returns (the plan, rods whose design fell in a gap: 0 leaves
     the bounds as they were)."""
-    from optimize import design_net_masses
-
-    t, hw = plan.target, plan.hardware
+    hw = plan.hardware
 
     def statics(bounds):
-        return design_net_masses(t.positions, t.edges, plan.lengths, bounds, t.anchored,
-                                 node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=plan.may_push, g=g, explain=False)
+        return plan.mass_design(g, bounds=bounds, explain=False)
 
     st = statics(plan.bounds)
     segs = [mass_segments(hw, float(L), int(k)) for L, k in zip(plan.fill_lengths, plan.rod_pieces)]

@@ -52,10 +52,9 @@ def _pushing_would(plan: NetPlan, g: float) -> bool:
     """Whether the rods the hubs hold (:func:`rodcad.design.net.pushing.held_rods`), let push as
     hard as it takes with their hubs' turning left aside, balance the nodes' forces where the
     design kept them in tension (``compression`` unset)."""
-    held = held_rods(plan)
-    if plan.target.compression is not None or plan.pushing is not None or not held.any():
+    if plan.target.compression is not None or plan.pushing is not None or not held_rods(plan).any():
         return False
-    return _forces_balance(plan, g, push=held, stiff_hubs=False)
+    return hubs_fail(plan, g)
 
 
 def hubs_fail(plan: NetPlan, g: float) -> bool:
@@ -81,11 +80,6 @@ def _forces_balance(plan: NetPlan, g: float, push=None, stiff_hubs: bool = True)
     those that may push (``push``: a mask, or None: the plan's :attr:`~rodcad.design.net.plan.
     NetPlan.may_push`), balance the nodes' forces at the target, leaving the hubs' moments aside
     (and, ``stiff_hubs`` False, how a pushed hub turns: :func:`optimize.design_net_masses`)."""
-    from optimize import design_net_masses
-
-    t = plan.target
-    fo = design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored, node_masses=plan.node_masses,
-                           node_com=plan.node_com, pivots=plan.pivots, com=plan.statics_com,
-                           allow_compression=plan.may_push if push is None else push, g=g, forces_only=True,
-                           stiff_hubs=stiff_hubs)
+    fo = plan.mass_design(g, allow_compression=plan.may_push if push is None else push, forces_only=True,
+                          stiff_hubs=stiff_hubs)
     return bool(fo.exact or (np.all(np.isfinite(fo.beyond)) and fo.needs_compression.size == 0))

@@ -103,6 +103,19 @@ class NetPlan:
         ``compression: true`` and none otherwise (the statics' ``allow_compression``)."""
         return self.target.any_may_push if self.pushing is None else self.pushing
 
+    def mass_design(self, g: float, **kw):
+        """:func:`optimize.design_net_masses` at the target with this plan's lengths, mass bounds,
+        hubs (masses, centres of mass, pivots), rods' centres of mass for the statics and the
+        rods it lets push (:attr:`may_push`); ``kw`` sets any of them otherwise (``bounds``,
+        ``com``, ``allow_compression``) and the rest of that function's keywords."""
+        from optimize import design_net_masses
+
+        t = self.target
+        bounds = kw.pop("bounds", self.bounds)
+        args = dict(node_masses=self.node_masses, node_com=self.node_com, pivots=self.pivots, com=self.statics_com,
+                    allow_compression=self.may_push, g=g)
+        return design_net_masses(t.positions, t.edges, self.lengths, bounds, t.anchored, **{**args, **kw})
+
     def hub(self, k: int, pivot_radius: float | None = None) -> NodeHardware:
         """Node ``k``'s hub: the family's size with its pivot radius (:attr:`node_pivot`, or
         ``pivot_radius``: the size it would be) and its sockets' cone (:attr:`node_cone`)."""

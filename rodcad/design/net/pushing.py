@@ -44,8 +44,6 @@ def with_pushing(plan, g: float = 9.81):
     but some do with those rods pushing; ``plan`` unchanged where the target says
     (``compression`` true or false), on point nodes, and where tension balances or pushing does
     not help. The hubs' moments are left aside (their sockets are turned for them afterwards)."""
-    from optimize import design_net_masses
-
     t = plan.target
     if t.compression is not None or not plan.hardware.is_hub:
         return plan
@@ -54,10 +52,7 @@ def with_pushing(plan, g: float = 9.81):
         return dataclasses.replace(plan, pushing=None)
 
     def forces(push) -> bool:
-        return design_net_masses(t.positions, t.edges, plan.lengths, plan.bounds, t.anchored,
-                                 node_masses=plan.node_masses, node_com=plan.node_com, pivots=plan.pivots,
-                                 com=plan.statics_com, allow_compression=push, g=g, forces_only=True,
-                                 explain=False).exact
+        return plan.mass_design(g, allow_compression=push, forces_only=True, explain=False).exact
 
     if forces(False) or not forces(held):
         return dataclasses.replace(plan, pushing=None)

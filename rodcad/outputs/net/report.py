@@ -191,8 +191,8 @@ def net_report(check, data: dict[str, Any], *, title: str) -> str:
     lines += ["", "## Nodes", "", "| node | anchored | rods | mass (g) | error (mm) |", "|---:|---|---:|---:|---:|"]
     for nd in net["nodes"]:
         err = nd["error_mm"]
-        held = "glued" if nd.get("glued") else "yes" if nd["anchored"] else ""
-        lines.append(f"| {nd['index']} | {held} | {nd['rods']} | {nd['mass']:.3f} | "
+        mark = "glued" if nd.get("glued") else "yes" if nd["anchored"] else ""
+        lines.append(f"| {nd['index']} | {mark} | {nd['rods']} | {nd['mass']:.3f} | "
                      f"{err:.3g} |" if err is not None else f"| {nd['index']} | | {nd['rods']} | {nd['mass']:.3f} | - |")
     lines += ["", "## Bill of materials", ""]
     lines.append(f"- {bom['rods']} rods ({bom['rod_plastic_g']:.1f} g of {bom['material']})")
